@@ -1,0 +1,42 @@
+#pragma once
+// A replayable dataset folder (EuRoC ASL or SCube), loaded and validated in one place.
+#include "ov_core/cam/camera_calib.h"
+#include "ov_core/types/sensor_data.h"
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ov_core {
+
+struct Dataset {
+  std::string root;               ///< folder the user named
+  std::string kind;               ///< "euroc" or "scube"
+  std::vector<ImageEntry> images; ///< cam0, time-ordered, camera clock
+  std::vector<ImuData> imu;       ///< time-ordered, IMU clock
+  CameraCalib cam;
+  ImuCalib imu_calib;
+  std::vector<StateSample> groundtruth; ///< empty when absent; may be position-only (SCube RTK)
+  std::vector<TdSample> td_truth;       ///< empty when absent
+  double td_prior_s = 0.0;              ///< offset from calibration (Kalibr timeshift_cam_imu), 0 for EuRoC
+
+  bool has_groundtruth() const { return !groundtruth.empty(); }
+  bool has_td_truth() const { return !td_truth.empty(); }
+  /// True offset at a camera stamp, linearly interpolated (clamped at the ends). Throws when there is no truth.
+  double td_truth_at(int64_t t_cam_ns) const;
+};
+
+struct LoadOptions {
+  bool check_images_exist = true; ///< stat every listed image (cheap; reading them is the front end's job)
+};
+
+/// Loads `dir` (either the folder holding mav0/ or mav0/ itself). Detects EuRoC vs SCube by layout.
+/// Throws DataError naming the file and line of the first problem found.
+Dataset load_dataset(const std::string &dir, const LoadOptions &opt = {});
+Dataset load_euroc(const std::string &dir, const LoadOptions &opt = {});
+Dataset load_scube(const std::string &dir, const LoadOptions &opt = {});
+
+/// EuRoC sensor.yaml readers (also used by the simulator to copy calibration).
+CameraCalib load_euroc_camera_yaml(const std::string &file);
+ImuCalib load_euroc_imu_yaml(const std::string &file);
+
+} // namespace ov_core

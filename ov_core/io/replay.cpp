@@ -1,0 +1,31 @@
+#include "ov_core/io/replay.h"
+#include "ov_core/io/dataset.h"
+
+namespace ov_core {
+
+ReplayStats Replay::run(ReplayConsumer &c, const std::function<bool(size_t, size_t)> &progress) const {
+  ReplayStats st;
+  size_t k = 0;
+  for (size_t i = 0; i < images_.size(); ++i) {
+    const ImageEntry &img = images_[i];
+    const int64_t t_imu_ns = img.t_cam_ns + s_to_ns(c.current_td_s());
+    // Feed every reading up to and including the image's IMU-clock time; one more if the image falls between two
+    // readings, so the consumer can interpolate to the image time instead of extrapolating.
+    while (k < imu_.size() && imu_[k].t_imu_ns <= t_imu_ns)
+      c.on_imu(imu_[k++]);
+    if (k < imu_.size() && (k == 0 || imu_[k - 1].t_imu_ns < t_imu_ns))
+      c.on_imu(imu_[k++]);
+    st.imu_fed = k;
+    if (k == 0 || imu_[k - 1].t_imu_ns < t_imu_ns) {
+      ++st.images_skipped; // no IMU covers this image: it cannot be used
+    } else {
+      c.on_image(img);
+      ++st.images_fed;
+    }
+    if (progress && !progress(i + 1, images_.size()))
+      break;
+  }
+  return st;
+}
+
+} // namespace ov_core

@@ -1,0 +1,52 @@
+#pragma once
+// Sensor messages. Every stamp is int64 nanoseconds; the clock is in the name (see ARCHITECTURE.md).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+
+namespace ov_core {
+
+/// One IMU reading, stamped in the IMU clock. EuRoC order: gyro [rad/s] first, then accel [m/s^2].
+struct ImuData {
+  int64_t t_imu_ns = 0;
+  Eigen::Vector3d wm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d am = Eigen::Vector3d::Zero();
+};
+
+/// One image as listed in cam0/data.csv, stamped in the camera clock (t_imu = t_cam + t_d).
+struct ImageEntry {
+  int64_t t_cam_ns = 0;
+  std::string path; ///< absolute or dataset-relative path of the image file
+};
+
+/// A full navigation state sample (ground truth or estimate), stamped in the IMU clock.
+/// Velocity and biases are optional: position-only sources (RTK) leave has_orientation false.
+struct StateSample {
+  int64_t t_ns = 0;
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity(); ///< Hamilton, body -> world
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  Eigen::Vector3d bg = Eigen::Vector3d::Zero();
+  Eigen::Vector3d ba = Eigen::Vector3d::Zero();
+  double td_s = 0.0;
+  double td_sigma_s = 0.0;
+  bool has_orientation = true;
+  bool has_velocity = false;
+  bool has_td = false;
+};
+
+/// True time offset at one image, from td_truth/data.csv: t_imu = t_cam + td.
+struct TdSample {
+  int64_t t_cam_ns = 0;
+  double td_s = 0.0;
+};
+
+inline double ns_to_s(int64_t ns) {
+  return static_cast<double>(ns) * 1e-9;
+}
+inline int64_t s_to_ns(double s) {
+  return static_cast<int64_t>(s >= 0 ? s * 1e9 + 0.5 : s * 1e9 - 0.5);
+}
+
+} // namespace ov_core

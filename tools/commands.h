@@ -1,0 +1,16 @@
+#pragma once
+// Subcommands of `ovton`. Each parses its own flags (Boost.Program_options) and returns an exit code;
+// library errors (ov_core::DataError, UsageError) propagate to main(), which prints them.
+#include <string>
+#include <vector>
+
+namespace ovton {
+
+using Args = std::vector<std::string>; ///< arguments after the subcommand name
+
+int cmd_eval(const Args &args);
+int cmd_info(const Args &args);
+int cmd_simulate(const Args &args);
+int cmd_perturb(const Args &args);
+
+} // namespace ovton

@@ -1,0 +1,67 @@
+// ovton: the command-line front of ov_msckf_ton. Only this file turns exceptions into exit codes.
+#include "ov_core/types/errors.h"
+#include "tools/commands.h"
+
+#include <boost/program_options/errors.hpp>
+#include <functional>
+#include <iostream>
+#include <map>
+
+namespace {
+
+struct Command {
+  std::function<int(const ovton::Args &)> run;
+  const char *help;
+};
+
+const std::map<std::string, Command> &commands() {
+  static const std::map<std::string, Command> cmds = {
+      {"info", {ovton::cmd_info, "load a dataset folder, validate it and print what it holds"}},
+      {"eval", {ovton::cmd_eval, "APE/ARE/RPE/TPE/CIT of a trajectory against ground truth"}},
+      {"simulate", {ovton::cmd_simulate, "write a synthetic EuRoC-format folder with a known time offset"}},
+      {"perturb", {ovton::cmd_perturb, "rewrite a real folder's image stamps with a time-offset model"}},
+  };
+  return cmds;
+}
+
+void usage(std::ostream &os) {
+  os << "usage: ovton <command> [options]   (ovton <command> --help for its options)\n\ncommands:\n";
+  for (const auto &[name, c] : commands())
+    os << "  " << name << std::string(10 - name.size(), ' ') << c.help << "\n";
+}
+
+} // namespace
+
+int main(int argc, char **argv) {
+  if (argc < 2) {
+    usage(std::cerr);
+    return 2;
+  }
+  const std::string name = argv[1];
+  if (name == "-h" || name == "--help" || name == "help") {
+    usage(std::cout);
+    return 0;
+  }
+  auto it = commands().find(name);
+  if (it == commands().end()) {
+    std::cerr << "ovton: unknown command '" << name << "'\n";
+    usage(std::cerr);
+    return 2;
+  }
+  ovton::Args args(argv + 2, argv + argc);
+  try {
+    return it->second.run(args);
+  } catch (const ov_core::DataError &e) {
+    std::cerr << "ovton " << name << ": data error: " << e.what() << "\n";
+    return 3;
+  } catch (const ov_core::UsageError &e) {
+    std::cerr << "ovton " << name << ": " << e.what() << "\n";
+    return 2;
+  } catch (const boost::program_options::error &e) {
+    std::cerr << "ovton " << name << ": " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception &e) {
+    std::cerr << "ovton " << name << ": error: " << e.what() << "\n";
+    return 1;
+  }
+}
