@@ -1,0 +1,149 @@
+#include "ov_msckf_ton/state/propagator.h"
+#include "ov_core/math/so3.h"
+#include "ov_core/types/errors.h"
+#include "ov_msckf_ton/state/state_helper.h"
+
+#include <algorithm>
+
+namespace ov_msckf_ton {
+
+using ov_core::skew;
+using ov_core::so3_exp;
+using ov_core::so3_jr;
+
+void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt,
+              const Eigen::Vector3d &gravity, const ImuNoise &noise, ImuState &out, Mat15 *Phi, Mat15 *Q) {
+  const Eigen::Vector3d w = wm - x.bg, a = am - x.ba;
+  const Eigen::Matrix3d dR = so3_exp(w * dt), dR_half = so3_exp(0.5 * w * dt);
+  const Eigen::Matrix3d R_mid = x.R * dR_half;
+  const Eigen::Vector3d acc_W = R_mid * a + gravity;
+  out = x;
+  out.R = x.R * dR;
+  out.v = x.v + acc_W * dt;
+  out.p = x.p + x.v * dt + 0.5 * acc_W * dt * dt;
+  if (!Phi && !Q)
+    return;
+
+  // d(R_mid a)/dδθ = −R_mid [a]× Exp(−ω dt/2);  d(R_mid a)/dδb_g = R_mid [a]× Jr(ω dt/2) dt/2;  d/dδb_a = −R_mid.
+  const Eigen::Matrix3d Ra_x = R_mid * skew(a);
+  const Eigen::Matrix3d dAcc_dth = -Ra_x * dR_half.transpose();
+  const Eigen::Matrix3d dAcc_dbg = Ra_x * so3_jr(0.5 * w * dt) * (0.5 * dt);
+  const Eigen::Matrix3d dAcc_dba = -R_mid;
+  const Eigen::Matrix3d Jr_dt = so3_jr(w * dt) * dt;
+  constexpr int T = ImuState::kTheta, P = ImuState::kPos, V = ImuState::kVel, G = ImuState::kBg, A = ImuState::kBa;
+
+  Mat15 F = Mat15::Identity();
+  F.block<3, 3>(T, T) = dR.transpose();
+  F.block<3, 3>(T, G) = -Jr_dt;
+  F.block<3, 3>(V, T) = dAcc_dth * dt;
+  F.block<3, 3>(V, G) = dAcc_dbg * dt;
+  F.block<3, 3>(V, A) = dAcc_dba * dt;
+  F.block<3, 3>(P, V) = Eigen::Matrix3d::Identity() * dt;
+  F.block<3, 3>(P, T) = 0.5 * dAcc_dth * dt * dt;
+  F.block<3, 3>(P, G) = 0.5 * dAcc_dbg * dt * dt;
+  F.block<3, 3>(P, A) = 0.5 * dAcc_dba * dt * dt;
+  if (Phi)
+    *Phi = F;
+  if (Q) {
+    // Sample noise enters exactly where the bias errors do (n_g like δb_g, n_a like δb_a).
+    Eigen::Matrix<double, 15, 6> Gn;
+    Gn.leftCols<3>() = F.block<15, 3>(0, G);
+    Gn.rightCols<3>() = F.block<15, 3>(0, A);
+    Eigen::Matrix<double, 6, 6> Qc = Eigen::Matrix<double, 6, 6>::Zero();
+    Qc.topLeftCorner<3, 3>().diagonal().setConstant(noise.sigma_w * noise.sigma_w / dt);
+    Qc.bottomRightCorner<3, 3>().diagonal().setConstant(noise.sigma_a * noise.sigma_a / dt);
+    *Q = Gn * Qc * Gn.transpose();
+    Q->block<3, 3>(G, G).diagonal().array() += noise.sigma_wb * noise.sigma_wb * dt;
+    Q->block<3, 3>(A, A).diagonal().array() += noise.sigma_ab * noise.sigma_ab * dt;
+  }
+}
+
+Propagator::Propagator(const ImuNoise &noise, double gravity_mag) : noise_(noise), gravity_(0, 0, -gravity_mag) {}
+
+void Propagator::feed_imu(const ov_core::ImuData &m) {
+  if (!buf_.empty() && m.t_imu_ns <= buf_.back().t_imu_ns)
+    throw ov_core::UsageError("IMU readings must arrive in increasing time order");
+  buf_.push_back(m);
+  // Keep a bounded history: 5 s is far more than any window of clones needs for interpolation.
+  while (buf_.size() > 2 && buf_.back().t_imu_ns - buf_[1].t_imu_ns > 5000000000LL)
+    buf_.pop_front();
+}
+
+bool Propagator::reading_at(int64_t t_ns, ov_core::ImuData &out) const {
+  if (buf_.empty() || t_ns < buf_.front().t_imu_ns || t_ns > buf_.back().t_imu_ns)
+    return false;
+  auto it = std::lower_bound(buf_.begin(), buf_.end(), t_ns,
+                             [](const ov_core::ImuData &m, int64_t t) { return m.t_imu_ns < t; });
+  if (it->t_imu_ns == t_ns) {
+    out = *it;
+    return true;
+  }
+  const auto &b = *it, &a = *(it - 1);
+  const double u = static_cast<double>(t_ns - a.t_imu_ns) / static_cast<double>(b.t_imu_ns - a.t_imu_ns);
+  out.t_imu_ns = t_ns;
+  out.wm = (1 - u) * a.wm + u * b.wm;
+  out.am = (1 - u) * a.am + u * b.am;
+  return true;
+}
+
+template <typename StepFn> bool Propagator::integrate(int64_t t_from, int64_t t_to, StepFn &&step) const {
+  if (t_to <= t_from)
+    return t_to == t_from;
+  ov_core::ImuData prev;
+  if (!reading_at(t_from, prev) || buf_.back().t_imu_ns < t_to)
+    return false;
+  auto it = std::upper_bound(buf_.begin(), buf_.end(), t_from,
+                             [](int64_t t, const ov_core::ImuData &m) { return t < m.t_imu_ns; });
+  while (true) {
+    ov_core::ImuData next;
+    if (it != buf_.end() && it->t_imu_ns < t_to) {
+      next = *it++;
+    } else {
+      reading_at(t_to, next);
+    }
+    const double dt = ov_core::ns_to_s(next.t_imu_ns - prev.t_imu_ns);
+    if (dt > 0)
+      step(0.5 * (prev.wm + next.wm), 0.5 * (prev.am + next.am), dt);
+    prev = next;
+    if (next.t_imu_ns >= t_to)
+      return true;
+  }
+}
+
+bool Propagator::propagate(State &s, int64_t t_to_ns, double td_rate) {
+  ImuState x = s.imu;
+  Mat15 Phi_total = Mat15::Identity(), Q_total = Mat15::Zero();
+  Eigen::Vector3d w_last = last_w_B_;
+  const bool ok = integrate(s.t_imu_ns, t_to_ns, [&](const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt) {
+    Mat15 Phi, Q;
+    ImuState next;
+    imu_step(x, wm, am, dt, gravity_, noise_, next, &Phi, &Q);
+    Phi_total = Phi * Phi_total;
+    Q_total = Phi * Q_total * Phi.transpose() + Q;
+    w_last = wm - x.bg;
+    x = next;
+  });
+  if (!ok)
+    return false;
+  const double dt_total = ov_core::ns_to_s(t_to_ns - s.t_imu_ns);
+  state_helper::propagate_covariance(s, Phi_total, Q_total, noise_.sigma_td * noise_.sigma_td * dt_total);
+  s.imu = x;
+  s.t_imu_ns = t_to_ns;
+  s.td += td_rate * dt_total;
+  last_w_B_ = w_last;
+  return true;
+}
+
+bool Propagator::predict_mean(const State &s, int64_t t_to_ns, ImuState &out) const {
+  ImuState x = s.imu;
+  const bool ok = integrate(s.t_imu_ns, t_to_ns, [&](const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt) {
+    ImuState next;
+    imu_step(x, wm, am, dt, gravity_, noise_, next, nullptr, nullptr);
+    x = next;
+  });
+  if (ok)
+    out = x;
+  return ok;
+}
+
+} // namespace ov_msckf_ton

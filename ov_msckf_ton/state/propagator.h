@@ -1,0 +1,60 @@
+#pragma once
+// IMU propagation of the mean and the error-state covariance between IMU-clock times.
+#include "ov_core/types/sensor_data.h"
+#include "ov_msckf_ton/state/state.h"
+
+#include <deque>
+
+namespace ov_msckf_ton {
+
+/// Continuous-time IMU noise (EuRoC imu0/sensor.yaml units) and the t_d random walk.
+struct ImuNoise {
+  double sigma_w = 1.6968e-04;  ///< gyro white noise, rad/s/sqrt(Hz)
+  double sigma_a = 2.0e-3;      ///< accel white noise, m/s^2/sqrt(Hz)
+  double sigma_wb = 1.9393e-05; ///< gyro bias random walk, rad/s^2/sqrt(Hz)
+  double sigma_ab = 3.0e-3;     ///< accel bias random walk, m/s^3/sqrt(Hz)
+  double sigma_td = 0.0;        ///< t_d random walk, s/sqrt(s) (0: t_d is a constant)
+};
+
+using Mat15 = Eigen::Matrix<double, 15, 15>;
+
+/// One propagation step over dt with gyro/accel readings held constant (the caller passes the mean of the two
+/// readings that bound the interval). Mean, with ω = ω_m − b_g, a = a_m − b_a, R_mid = R·Exp(ω dt/2):
+///   R' = R·Exp(ω dt),  v' = v + (R_mid a + g) dt,  p' = p + v dt + ½ (R_mid a + g) dt²
+/// Phi is the exact first-order Jacobian of this discrete map in the error-state convention of state.h; Q the
+/// discrete noise (white noise as variance density/dt per sample, bias random walks as density²·dt).
+void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt,
+              const Eigen::Vector3d &gravity, const ImuNoise &noise, ImuState &out, Mat15 *Phi, Mat15 *Q);
+
+class Propagator {
+public:
+  Propagator(const ImuNoise &noise, double gravity_mag = 9.81);
+
+  void feed_imu(const ov_core::ImuData &m);
+
+  /// Propagates the state (mean, covariance and t_d) from s.t_imu_ns to t_to_ns (IMU clock). Readings are
+  /// interpolated at both ends. td_rate [s/s] drives the t_d mean (TPN's J_td; 0 for a constant offset).
+  /// Returns false (state untouched) when the IMU buffer does not reach t_to_ns.
+  bool propagate(State &s, int64_t t_to_ns, double td_rate = 0.0);
+
+  /// Mean-only propagation of a copy (no covariance), e.g. to predict a pose.
+  bool predict_mean(const State &s, int64_t t_to_ns, ImuState &out) const;
+
+  /// Bias-corrected body angular velocity and raw accel at the end of the last propagation.
+  const Eigen::Vector3d &last_w_B() const { return last_w_B_; }
+  const Eigen::Vector3d &gravity() const { return gravity_; }
+  const ImuNoise &noise() const { return noise_; }
+  /// Interpolated reading at t (IMU clock); false when t is outside the buffer.
+  bool reading_at(int64_t t_ns, ov_core::ImuData &out) const;
+  const std::deque<ov_core::ImuData> &buffer() const { return buf_; }
+
+private:
+  template <typename StepFn> bool integrate(int64_t t_from, int64_t t_to, StepFn &&step) const;
+
+  ImuNoise noise_;
+  Eigen::Vector3d gravity_;
+  std::deque<ov_core::ImuData> buf_;
+  Eigen::Vector3d last_w_B_ = Eigen::Vector3d::Zero();
+};
+
+} // namespace ov_msckf_ton

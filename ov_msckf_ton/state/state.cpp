@@ -1,0 +1,27 @@
+#include "ov_msckf_ton/state/state.h"
+#include "ov_core/math/so3.h"
+
+namespace ov_msckf_ton {
+
+State::State(bool estimate_td) {
+  const int n = ImuState::kSize + (estimate_td ? 1 : 0);
+  P = Eigen::MatrixXd::Zero(n, n);
+  if (estimate_td)
+    td_index = ImuState::kSize;
+}
+
+void State::boxplus(const Eigen::VectorXd &dx) {
+  imu.R = imu.R * ov_core::so3_exp(dx.segment<3>(ImuState::kTheta));
+  imu.p += dx.segment<3>(ImuState::kPos);
+  imu.v += dx.segment<3>(ImuState::kVel);
+  imu.bg += dx.segment<3>(ImuState::kBg);
+  imu.ba += dx.segment<3>(ImuState::kBa);
+  if (td_index >= 0)
+    td += dx(td_index);
+  for (auto &[key, c] : clones) {
+    c.R = c.R * ov_core::so3_exp(dx.segment<3>(c.index));
+    c.p += dx.segment<3>(c.index + 3);
+  }
+}
+
+} // namespace ov_msckf_ton

@@ -1,0 +1,61 @@
+#pragma once
+// The filter state: IMU navigation state, the time offset t_d, and a window of cloned poses, with one dense
+// covariance whose blocks the variables index.
+//
+// Error-state convention (the only place it is written; every Jacobian test checks it numerically):
+//   R_WB = R̂_WB · Exp(δθ)          rotation: right (body-frame) perturbation, Hamilton, body -> world
+//   p = p̂ + δp,  v = v̂ + δv        world-frame position and velocity of the IMU/body
+//   b_g = b̂_g + δb_g,  b_a = b̂_a + δb_a
+//   t_d = t̂_d + δt_d               t_imu = t_cam + t_d
+// Clones use the same rotation and position convention.
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <map>
+
+namespace ov_msckf_ton {
+
+/// IMU state; the error block [δθ δp δv δb_g δb_a] sits at covariance index `index` (always 0).
+struct ImuState {
+  static constexpr int kSize = 15;
+  static constexpr int kTheta = 0, kPos = 3, kVel = 6, kBg = 9, kBa = 12;
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  Eigen::Vector3d bg = Eigen::Vector3d::Zero();
+  Eigen::Vector3d ba = Eigen::Vector3d::Zero();
+  int index = 0;
+};
+
+/// A cloned IMU pose [δθ δp] at the IMU-clock time of one image; keyed in the window by the image's camera stamp.
+struct CloneState {
+  static constexpr int kSize = 6;
+  int64_t t_cam_ns = 0;
+  int64_t t_imu_ns = 0; ///< t_cam + t̂_d at cloning time
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  int index = -1;
+};
+
+class State {
+public:
+  /// estimate_td: t_d gets a covariance entry (modes sr, sir, fvon, tpn, ton); otherwise it is a fixed parameter.
+  explicit State(bool estimate_td = true);
+
+  ImuState imu;
+  int64_t t_imu_ns = 0; ///< time the IMU state refers to
+  double td = 0.0;
+  int td_index = -1; ///< -1 when t_d is not estimated
+  std::map<int64_t, CloneState> clones;
+  Eigen::MatrixXd P;
+
+  int dim() const { return static_cast<int>(P.rows()); }
+  bool estimates_td() const { return td_index >= 0; }
+  double td_sigma() const { return estimates_td() ? std::sqrt(std::max(0.0, P(td_index, td_index))) : 0.0; }
+
+  /// Applies an error-state correction dx (size dim()) with the convention above.
+  void boxplus(const Eigen::VectorXd &dx);
+};
+
+} // namespace ov_msckf_ton

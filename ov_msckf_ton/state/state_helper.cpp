@@ -1,0 +1,101 @@
+#include "ov_msckf_ton/state/state_helper.h"
+#include "ov_core/types/errors.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <vector>
+
+namespace ov_msckf_ton {
+namespace state_helper {
+
+void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q,
+                          double td_var_increment) {
+  const int n = s.dim();
+  constexpr int I = ImuState::kSize;
+  const Eigen::Matrix<double, 15, 15> Pii = s.P.topLeftCorner<I, I>();
+  s.P.topLeftCorner<I, I>() = Phi * Pii * Phi.transpose() + Q;
+  if (n > I) {
+    const Eigen::MatrixXd Pix = Phi * s.P.topRightCorner(I, n - I);
+    s.P.topRightCorner(I, n - I) = Pix;
+    s.P.bottomLeftCorner(n - I, I) = Pix.transpose();
+  }
+  if (s.estimates_td())
+    s.P(s.td_index, s.td_index) += td_var_increment;
+  s.P = 0.5 * (s.P + s.P.transpose());
+}
+
+void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w_B, const Eigen::Vector3d &v_W) {
+  if (s.clones.count(t_cam_ns))
+    throw ov_core::UsageError("clone for image " + std::to_string(t_cam_ns) + " already exists");
+  const int n = s.dim();
+  // J maps the current error state to the clone's error [δθ_c δp_c].
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(6, n);
+  J.block<3, 3>(0, ImuState::kTheta).setIdentity();
+  J.block<3, 3>(3, ImuState::kPos).setIdentity();
+  if (td_coupled && s.estimates_td()) {
+    J.block<3, 1>(0, s.td_index) = w_B;
+    J.block<3, 1>(3, s.td_index) = v_W;
+  }
+  const Eigen::MatrixXd PJt = s.P * J.transpose();
+  Eigen::MatrixXd Pn(n + 6, n + 6);
+  Pn.topLeftCorner(n, n) = s.P;
+  Pn.topRightCorner(n, 6) = PJt;
+  Pn.bottomLeftCorner(6, n) = PJt.transpose();
+  Pn.bottomRightCorner(6, 6) = J * PJt;
+  s.P = 0.5 * (Pn + Pn.transpose());
+
+  CloneState c;
+  c.t_cam_ns = t_cam_ns;
+  c.t_imu_ns = s.t_imu_ns;
+  c.R = s.imu.R;
+  c.p = s.imu.p;
+  c.index = n;
+  s.clones[t_cam_ns] = c;
+}
+
+void marginalize_clone(State &s, int64_t t_cam_ns) {
+  auto it = s.clones.find(t_cam_ns);
+  if (it == s.clones.end())
+    throw ov_core::UsageError("no clone for image " + std::to_string(t_cam_ns));
+  const int idx = it->second.index, n = s.dim(), k = CloneState::kSize;
+  std::vector<int> keep;
+  keep.reserve(n - k);
+  for (int i = 0; i < n; ++i)
+    if (i < idx || i >= idx + k)
+      keep.push_back(i);
+  Eigen::MatrixXd Pn(n - k, n - k);
+  for (int r = 0; r < n - k; ++r)
+    for (int c = 0; c < n - k; ++c)
+      Pn(r, c) = s.P(keep[r], keep[c]);
+  s.P = std::move(Pn);
+  s.clones.erase(it);
+  for (auto &[key, c] : s.clones)
+    if (c.index > idx)
+      c.index -= k;
+  if (s.td_index > idx)
+    s.td_index -= k;
+}
+
+double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, double sigma2) {
+  const Eigen::MatrixXd PHt = s.P * H.transpose();
+  Eigen::MatrixXd S = H * PHt;
+  S.diagonal().array() += sigma2;
+  const Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success)
+    throw ov_core::UsageError("innovation covariance is not positive definite");
+  const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();
+  const Eigen::VectorXd dx = K * r;
+  // Joseph-free form with explicit symmetrisation; S is small after measurement compression.
+  s.P -= K * PHt.transpose();
+  s.P = 0.5 * (s.P + s.P.transpose());
+  s.boxplus(dx);
+  return r.dot(llt.solve(r));
+}
+
+double min_eigenvalue(const State &s) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(s.P, Eigen::EigenvaluesOnly);
+  return es.eigenvalues().minCoeff();
+}
+
+} // namespace state_helper
+} // namespace ov_msckf_ton

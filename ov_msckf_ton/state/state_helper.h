@@ -1,0 +1,29 @@
+#pragma once
+// Stateless operations on a State's covariance: propagation, stochastic cloning, marginalisation, EKF update.
+#include "ov_msckf_ton/state/state.h"
+
+namespace ov_msckf_ton {
+namespace state_helper {
+
+/// P_II <- Φ P_II Φᵀ + Q, cross terms P_IX <- Φ P_IX; t_d's variance grows by td_var_increment (random walk).
+void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q,
+                          double td_var_increment);
+
+/// Clones the current IMU pose for the image stamped t_cam_ns (camera clock) at IMU time s.t_imu_ns.
+/// In state-relevant mode the clone depends on t_d: the true image time is t̂_imu + δt_d, so
+///   δθ_c = δθ + ω_B δt_d,   δp_c = δp + v_W δt_d      (ω_B bias-corrected body rate, v_W world velocity)
+/// td_coupled = false gives the plain clone (δθ_c = δθ, δp_c = δp) used when t_d acts on the image plane instead.
+void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w_B, const Eigen::Vector3d &v_W);
+
+/// Removes a clone and its rows/columns from the covariance.
+void marginalize_clone(State &s, int64_t t_cam_ns);
+
+/// EKF update with a dense Jacobian H (m × dim), residual r = z − h(x̂), and isotropic noise sigma².
+/// Keeps P symmetric; returns the Mahalanobis distance rᵀS⁻¹r.
+double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, double sigma2);
+
+/// Forces symmetry and reports whether P is positive semi-definite within tolerance (smallest eigenvalue).
+double min_eigenvalue(const State &s);
+
+} // namespace state_helper
+} // namespace ov_msckf_ton
