@@ -300,7 +300,7 @@ struct RecordingConsumer : ReplayConsumer {
   std::vector<std::pair<char, int64_t>> events;
   void on_imu(const ImuData &m) override { events.push_back({'i', m.t_imu_ns}); }
   void on_image(const ImageEntry &e) override { events.push_back({'c', e.t_cam_ns}); }
-  double current_td_s() const override { return td; }
+  double td_for_image_s(int64_t) const override { return td; }
 };
 } // namespace
 

@@ -8,7 +8,7 @@ ReplayStats Replay::run(ReplayConsumer &c, const std::function<bool(size_t, size
   size_t k = 0;
   for (size_t i = 0; i < images_.size(); ++i) {
     const ImageEntry &img = images_[i];
-    const int64_t t_imu_ns = img.t_cam_ns + s_to_ns(c.current_td_s());
+    const int64_t t_imu_ns = img.t_cam_ns + s_to_ns(c.td_for_image_s(img.t_cam_ns));
     // Feed every reading up to and including the image's IMU-clock time; one more if the image falls between two
     // readings, so the consumer can interpolate to the image time instead of extrapolating.
     while (k < imu_.size() && imu_[k].t_imu_ns <= t_imu_ns)

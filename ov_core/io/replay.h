@@ -9,14 +9,14 @@
 
 namespace ov_core {
 
-/// What the replay feeds. current_td_s() is asked before each image: the consumer's current estimate of t_d
+/// What the replay feeds. td_for_image_s(t_cam) is asked before each image: the consumer's current t_d for it
 /// decides how much IMU it needs (t_imu = t_cam + t_d), so the replay never hands it an image it cannot propagate to.
 class ReplayConsumer {
 public:
   virtual ~ReplayConsumer() = default;
   virtual void on_imu(const ImuData &imu) = 0;
   virtual void on_image(const ImageEntry &img) = 0;
-  virtual double current_td_s() const = 0;
+  virtual double td_for_image_s(int64_t t_cam_ns) const = 0;
 };
 
 struct ReplayStats {

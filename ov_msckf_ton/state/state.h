@@ -33,6 +33,7 @@ struct CloneState {
   static constexpr int kSize = 6;
   int64_t t_cam_ns = 0;
   int64_t t_imu_ns = 0; ///< t_cam + t̂_d at cloning time
+  double td_ref = 0.0;  ///< t̂_d used to place the clone (image-plane modes shift observations by V·(t_d − td_ref))
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   int index = -1;

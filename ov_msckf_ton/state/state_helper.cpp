@@ -47,6 +47,7 @@ void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w
   CloneState c;
   c.t_cam_ns = t_cam_ns;
   c.t_imu_ns = s.t_imu_ns;
+  c.td_ref = s.td;
   c.R = s.imu.R;
   c.p = s.imu.p;
   c.index = n;

@@ -1,0 +1,52 @@
+#pragma once
+// Every option of the estimator, with defaults; one YAML loader that prints what it loaded.
+#include "ov_core/track/track_klt.h"
+#include "ov_msckf_ton/core/td_mode.h"
+#include "ov_msckf_ton/state/propagator.h"
+
+#include <iosfwd>
+#include <string>
+
+namespace ov_msckf_ton {
+
+enum class InitMode { Static, GroundTruth };
+
+struct VioOptions {
+  // Time offset (t_imu = t_cam + t_d).
+  TdMode td_mode = TdMode::Sr;
+  double td_init_s = 0.0;           ///< initial / fixed (off) value
+  double td_sigma_init_s = 0.01;    ///< prior sigma when t_d is estimated
+  double td_random_walk = 0.0;      ///< s/sqrt(s); 0 treats t_d as a constant (sr, sir, fvon)
+  double td_random_walk_tpn = 2e-4; ///< s/sqrt(s) for tpn/ton: the offset is allowed to move (paper §IV-C)
+
+  // Window and update.
+  int max_clones = 11;
+  int min_track_length = 3;     ///< observations (at clones) a feature needs to enter an MSCKF update
+  double sigma_px = 1.0;        ///< pixel noise of a KLT observation
+  double chi2_multiplier = 1.0; ///< scales the 95% chi-square gate
+  int max_features_per_update = 80;
+
+  // Front end.
+  ov_core::TrackKLTOptions track;
+
+  // IMU noise: from the dataset's sensor.yaml, multiplied by these (inflation is common practice for real IMUs).
+  double imu_noise_multiplier = 1.0;
+  double gravity_mag = 9.81;
+
+  // Initialisation.
+  InitMode init_mode = InitMode::Static;
+  double init_window_s = 1.0;      ///< still IMU data averaged for gravity and gyro bias
+  double init_max_accel_std = 1.0; ///< m/s^2: above this the platform is not still (EuRoC rotors idle: ~0.5)
+  double init_max_gyro_std = 0.1;  ///< rad/s (EuRoC idle: ~0.04)
+  double init_sigma_rollpitch = 0.01, init_sigma_yaw = 1e-4, init_sigma_pos = 1e-4, init_sigma_vel = 0.01;
+  double init_sigma_bg = 0.005, init_sigma_ba = 0.05;
+
+  std::string source; ///< file the options came from, "" for defaults
+};
+
+/// Loads a VioOptions YAML (keys as the struct members; unknown keys are an error naming the file).
+/// When `print` is set, writes every loaded value there.
+VioOptions load_vio_options(const std::string &file, std::ostream *print = nullptr);
+void print_vio_options(const VioOptions &o, std::ostream &os);
+
+} // namespace ov_msckf_ton
