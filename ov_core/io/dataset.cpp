@@ -190,6 +190,29 @@ std::vector<ImuData> read_imu_csv(const std::string &csv, double rate_hz) {
   return out;
 }
 
+/// cam0/features.csv (`timestamp_ns,feature_id,u,v`, grouped by stamp) attached to the listed images.
+void read_features_csv(const std::string &csv, std::vector<ImageEntry> &images) {
+  TextTableReader r(csv, ',');
+  std::vector<std::string> f;
+  size_t k = 0;
+  std::vector<std::vector<PointObservation>> per_image(images.size());
+  while (r.next(f)) {
+    if (f.size() != 4)
+      r.fail("expected 4 columns (timestamp_ns, feature_id, u, v), found " + std::to_string(f.size()));
+    const int64_t t = r.to_int64(f[0], "timestamp");
+    while (k < images.size() && images[k].t_cam_ns < t)
+      ++k;
+    if (k == images.size() || images[k].t_cam_ns != t)
+      r.fail("timestamp " + f[0] + " is not an image listed in cam0/data.csv (or rows are out of order)");
+    const int64_t id = r.to_int64(f[1], "feature id");
+    if (id < 0)
+      r.fail("negative feature id");
+    per_image[k].push_back({static_cast<size_t>(id), Eigen::Vector2d(r.to_double(f[2], "u"), r.to_double(f[3], "v"))});
+  }
+  for (size_t i = 0; i < images.size(); ++i)
+    images[i].features = std::make_shared<const std::vector<PointObservation>>(std::move(per_image[i]));
+}
+
 std::string optional_file(const std::string &path) {
   std::error_code ec;
   return fs::exists(path, ec) ? path : std::string();
@@ -253,7 +276,14 @@ Dataset load_euroc(const std::string &dir, const LoadOptions &opt) {
   d.kind = "euroc";
   d.cam = load_euroc_camera_yaml(join_path(mav0, "cam0/sensor.yaml"));
   d.imu_calib = load_euroc_imu_yaml(join_path(mav0, "imu0/sensor.yaml"));
-  d.images = read_image_list(join_path(mav0, "cam0/data.csv"), join_path(mav0, "cam0/data"), opt);
+  // Feature-level folders (ovton simulate --features-only) list stamps whose images were never rendered.
+  const std::string features = optional_file(join_path(mav0, "cam0/features.csv"));
+  LoadOptions list_opt = opt;
+  if (!features.empty())
+    list_opt.check_images_exist = false;
+  d.images = read_image_list(join_path(mav0, "cam0/data.csv"), join_path(mav0, "cam0/data"), list_opt);
+  if (!features.empty())
+    read_features_csv(features, d.images);
   d.imu = read_imu_csv(join_path(mav0, "imu0/data.csv"), d.imu_calib.rate_hz);
   if (auto gt = optional_file(join_path(mav0, "state_groundtruth_estimate0/data.csv")); !gt.empty())
     d.groundtruth = read_trajectory(gt);

@@ -3,7 +3,9 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace ov_core {
 
@@ -14,10 +16,18 @@ struct ImuData {
   Eigen::Vector3d am = Eigen::Vector3d::Zero();
 };
 
+/// A feature point seen in one frame, as a feature-level dataset (cam0/features.csv) lists it.
+struct PointObservation {
+  size_t id = 0;
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero(); ///< distorted pixel
+};
+
 /// One image as listed in cam0/data.csv, stamped in the camera clock (t_imu = t_cam + t_d).
 struct ImageEntry {
   int64_t t_cam_ns = 0;
   std::string path; ///< absolute or dataset-relative path of the image file
+  /// Feature-level datasets: the frame's observations instead of pixels (the image file need not exist).
+  std::shared_ptr<const std::vector<PointObservation>> features;
 };
 
 /// A full navigation state sample (ground truth or estimate), stamped in the IMU clock.
