@@ -1,0 +1,19 @@
+#pragma once
+// The EuRoC MAV sensors (VI-Sensor cam0 MT9M034, ADIS16448), typed from mav0/{cam0,imu0}/sensor.yaml of the
+// EuRoC sequences. Built in so that `ovton simulate` works without any input file; config/sim/ carries the
+// same values in EuRoC sensor.yaml format, and a test checks the two agree.
+#include "ov_core/cam/camera_calib.h"
+#include <string>
+
+namespace ov_core {
+namespace sim {
+
+CameraCalib euroc_cam0_calib();
+ImuCalib euroc_imu0_calib();
+
+/// EuRoC-format sensor.yaml text (the layout of the original files, `%YAML:1.0` header included).
+std::string euroc_camera_yaml(const CameraCalib &c, const std::string &comment);
+std::string euroc_imu_yaml(const ImuCalib &c, const std::string &comment);
+
+} // namespace sim
+} // namespace ov_core

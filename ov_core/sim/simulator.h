@@ -1,0 +1,69 @@
+#pragma once
+// Writes a synthetic EuRoC-format folder: mav0/{cam0,imu0,state_groundtruth_estimate0,td_truth} + sim.yaml.
+#include "ov_core/cam/camera_calib.h"
+#include "ov_core/sim/feature_sim.h"
+#include "ov_core/sim/imu_synth.h"
+#include "ov_core/sim/renderer.h"
+#include "ov_core/sim/scene.h"
+#include "ov_core/sim/td_model.h"
+#include "ov_core/sim/trajectory.h"
+#include <functional>
+#include <memory>
+#include <string>
+
+namespace ov_core {
+namespace sim {
+
+struct SimOptions {
+  std::string out_dir;
+  std::string gt_file;  ///< ground truth to follow; empty: the built-in Lissajous flight
+  double start_s = 0.0; ///< from the first ground-truth pose
+  double duration_s = 20.0;
+  double knot_dt_s = 0.1;     ///< B-spline knot spacing of the trajectory fit
+  double first_image_s = 0.1; ///< first image this long after the first IMU sample (IMU clock)
+  uint64_t seed = 1;
+  CameraCalib cam; ///< defaults to euroc_cam0_calib()
+  ImuCalib imu;    ///< defaults to euroc_imu0_calib()
+  std::string cam_source = "builtin EuRoC cam0", imu_source = "builtin EuRoC imu0 (ADIS16448)";
+  bool imu_noise = true;
+  bool imu_bias_walk = true;
+  std::string imu_from; ///< semi-real: copy imu0/data.csv of this folder instead of synthesising
+  TdModelOptions td;    ///< its seed is derived from `seed`
+  SceneOptions scene;   ///< its seed is derived from `seed`
+  RenderOptions render;
+  FeatureSimOptions features; ///< its seed is derived from `seed`
+  bool features_only = false; ///< write cam0/features.csv instead of images
+  bool no_images = false;     ///< write neither images nor features (IMU, ground truth, stamps only)
+  bool overwrite = false;     ///< replace an existing OUT/mav0 (otherwise refuse: stale images would mix in)
+
+  SimOptions();
+};
+
+struct SimReport {
+  size_t n_imu = 0, n_images = 0, n_observations = 0;
+  double render_seconds = 0.0; ///< time spent rendering (excluding PNG encoding and disk)
+  double total_seconds = 0.0;
+  std::string trajectory;
+};
+
+/// Progress: (stage, done, total). Called often; the caller decides how much to print.
+using SimProgress = std::function<void(const std::string &stage, size_t done, size_t total)>;
+
+/// Trajectory from the options (ground-truth fit or built-in); throws UsageError/DataError on bad input.
+std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt);
+
+/// Camera pose in the world at a body sample: R_WC = R_WB R_BC, p_WC = p_WB + R_WB p_BC.
+void camera_pose(const TrajectorySample &s, const Eigen::Matrix4d &T_BC, Eigen::Matrix3d &R_WC, Eigen::Vector3d &p_WC);
+
+/// Scene around the trajectory (uses the options' scene seed).
+Scene make_scene(const Trajectory &traj, const SimOptions &opt);
+
+/// Writes the whole folder. Files are written stream-wise (rows flushed), so an interrupted run keeps every
+/// image already listed in cam0/data.csv.
+SimReport write_simulation(const SimOptions &opt, const SimProgress &progress = nullptr);
+
+/// Text of sim.yaml for these options (every parameter and the seed).
+std::string sim_yaml(const SimOptions &opt, const Trajectory &traj);
+
+} // namespace sim
+} // namespace ov_core

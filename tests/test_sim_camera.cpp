@@ -1,0 +1,59 @@
+// Camera model: projection / undistortion round trip and the analytic Jacobians against finite differences.
+#include "ov_core/cam/camera_model.h"
+#include "ov_core/sim/euroc_calib.h"
+#include <gtest/gtest.h>
+
+using namespace ov_core;
+
+namespace {
+CameraCalib equidistant_calib() {
+  CameraCalib c = sim::euroc_cam0_calib();
+  c.distortion = DistortionModel::Equidistant;
+  c.dist_coeffs << -0.01, 0.02, -0.005, 0.001;
+  return c;
+}
+} // namespace
+
+TEST(SimCameraModel, UndistortInvertsDistortAcrossTheImage) {
+  for (const CameraCalib &c : {sim::euroc_cam0_calib(), equidistant_calib()}) {
+    CameraModel cam(c);
+    for (int v = 0; v < c.height; v += 37)
+      for (int u = 0; u < c.width; u += 41) {
+        const Eigen::Vector2d uv(u, v);
+        const Eigen::Vector3d ray = cam.unproject(uv);
+        Eigen::Vector2d back;
+        ASSERT_TRUE(cam.project(ray, back));
+        EXPECT_LT((back - uv).norm(), 1e-6) << "pixel " << u << "," << v << " " << to_string(c.distortion);
+      }
+  }
+}
+
+TEST(SimCameraModel, ProjectionJacobianMatchesFiniteDifferences) {
+  for (const CameraCalib &c : {sim::euroc_cam0_calib(), equidistant_calib()}) {
+    CameraModel cam(c);
+    for (const Eigen::Vector3d &p :
+         {Eigen::Vector3d(0.3, -0.2, 1.5), Eigen::Vector3d(-0.9, 0.5, 1.2), Eigen::Vector3d(0.01, 0.02, 3.0)}) {
+      Eigen::Vector2d uv;
+      Eigen::Matrix<double, 2, 3> J;
+      ASSERT_TRUE(cam.project(p, uv, &J));
+      for (int i = 0; i < 3; ++i) {
+        const double h = 1e-6;
+        Eigen::Vector3d pp = p, pm = p;
+        pp(i) += h;
+        pm(i) -= h;
+        Eigen::Vector2d up, um;
+        cam.project(pp, up);
+        cam.project(pm, um);
+        const Eigen::Vector2d num = (up - um) / (2 * h);
+        EXPECT_LT((num - J.col(i)).norm(), 1e-4 * (1.0 + num.norm())) << to_string(c.distortion) << " col " << i;
+      }
+    }
+  }
+}
+
+TEST(SimCameraModel, PointsBehindTheCameraDoNotProject) {
+  CameraModel cam(sim::euroc_cam0_calib());
+  Eigen::Vector2d uv(-7, -7);
+  EXPECT_FALSE(cam.project(Eigen::Vector3d(0.1, 0.1, -1.0), uv));
+  EXPECT_EQ(uv, Eigen::Vector2d(-7, -7));
+}

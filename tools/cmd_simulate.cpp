@@ -1,0 +1,164 @@
+// `ovton simulate`: synthetic EuRoC-format folder with a known camera-IMU time offset (see docs/simulate.md).
+#include "ov_core/io/dataset.h"
+#include "ov_core/sim/simulator.h"
+#include "ov_core/types/errors.h"
+#include "tools/commands.h"
+
+#include <boost/program_options.hpp>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+
+namespace po = boost::program_options;
+namespace fs = std::filesystem;
+
+namespace ovton {
+
+namespace {
+
+/// Prints a progress line on stderr at most twice a second, and always at the end of a stage.
+class ProgressPrinter {
+public:
+  explicit ProgressPrinter(bool quiet) : quiet_(quiet), t0_(std::chrono::steady_clock::now()) {}
+  void operator()(const std::string &stage, size_t done, size_t total) {
+    if (quiet_)
+      return;
+    const auto now = std::chrono::steady_clock::now();
+    const double el = std::chrono::duration<double>(now - t0_).count();
+    if (stage != stage_ || done == total || el - last_ > 0.5) {
+      std::fprintf(stderr, "\r%-14s %6zu/%zu  (%.1f s)", stage.c_str(), done, total, el);
+      if (done == total)
+        std::fprintf(stderr, "\n");
+      std::fflush(stderr);
+      last_ = el;
+      stage_ = stage;
+    }
+  }
+
+private:
+  bool quiet_;
+  std::chrono::steady_clock::time_point t0_;
+  double last_ = -1.0;
+  std::string stage_;
+};
+
+std::map<std::string, uintmax_t> sizes_by_part(const fs::path &mav0) {
+  std::map<std::string, uintmax_t> s;
+  for (const auto &e : fs::recursive_directory_iterator(mav0))
+    if (e.is_regular_file()) {
+      const fs::path rel = fs::relative(e.path(), mav0);
+      std::string part = rel.begin()->string();
+      if (part == "cam0")
+        part = rel.string().rfind("cam0/data/", 0) == 0 ? "cam0 images" : "cam0 lists";
+      s[part] += e.file_size();
+    }
+  return s;
+}
+
+} // namespace
+
+int cmd_simulate(const Args &args) {
+  po::options_description desc(
+      "ovton simulate: write a synthetic EuRoC-format folder (images or features, IMU, ground truth, true offset)\n"
+      "Convention: t_imu = t_cam + td; image k shows the scene at IMU time t_k and is stamped t_k - td(k)");
+  ov_core::sim::SimOptions o;
+  std::string out, gt, td_model = "constant", cam_yaml, imu_yaml;
+  double td0_ms = 10.0, td_bias = 0.1, td_noise = 0.1;
+  int bench_frames = 100;
+  desc.add_options()("help,h", "this help")                                                                   //
+      ("out,o", po::value(&out), "output folder (mav0/ and sim.yaml are written inside)")                     //
+      ("gt", po::value(&gt), "ground-truth trajectory to follow (EuRoC .txt/.csv, project CSV)")              //
+      ("builtin", "follow the built-in Lissajous flight in a 6x6x3 m room (default when --gt is absent)")     //
+      ("start-s", po::value(&o.start_s)->default_value(0.0), "start, seconds after the first gt pose")        //
+      ("duration-s", po::value(&o.duration_s)->default_value(20.0), "length [s]")                             //
+      ("seed", po::value(&o.seed)->default_value(1), "random seed (same seed, same bytes)")                   //
+      ("td-model", po::value(&td_model)->default_value("constant"), "constant | drift")                       //
+      ("td0-ms", po::value(&td0_ms)->default_value(10.0), "offset at the first image [ms]")                   //
+      ("td-bias-ms-per-s", po::value(&td_bias)->default_value(0.1), "drift: growth [ms/s]")                   //
+      ("td-noise-ms-per-sqrt-s", po::value(&td_noise)->default_value(0.1), "drift: random walk [ms/sqrt(s)]") //
+      ("imu-from", po::value(&o.imu_from), "semi-real: take imu0/data.csv from this EuRoC folder")            //
+      ("features-only", "write mav0/cam0/features.csv (timestamp_ns,feature_id,u,v) instead of images")       //
+      ("no-images", "write no images and no features (IMU, ground truth, stamps)")                            //
+      ("no-imu-noise", "noise-free IMU (no white noise, no bias walk)")                                       //
+      ("knot-dt-s", po::value(&o.knot_dt_s)->default_value(0.1), "B-spline knot spacing of the gt fit [s]")   //
+      ("cam-yaml", po::value(&cam_yaml), "EuRoC cam0/sensor.yaml to use (default: built-in EuRoC cam0)")      //
+      ("imu-yaml", po::value(&imu_yaml), "EuRoC imu0/sensor.yaml to use (default: built-in ADIS16448)")       //
+      ("pixel-noise", po::value(&o.features.pixel_noise)->default_value(1.0), "features-only: noise [px]")    //
+      ("max-tracks", po::value(&o.features.max_tracks)->default_value(200), "features-only: live tracks")     //
+      ("benchmark", "measure render speed (one core) and disk size per minute; --out optional")               //
+      ("benchmark-frames", po::value(&bench_frames)->default_value(100), "frames rendered by --benchmark")    //
+      ("force", "replace OUT/mav0 if it exists")                                                              //
+      ("quiet,q", "no progress output");
+  po::variables_map vm;
+  po::store(po::command_line_parser(args).options(desc).run(), vm);
+  if (vm.count("help")) {
+    std::cout << desc << "\n";
+    return 0;
+  }
+  po::notify(vm);
+  const bool bench = vm.count("benchmark") > 0;
+  if (out.empty() && !bench)
+    throw ov_core::UsageError("--out is required");
+  if (vm.count("builtin") && !gt.empty())
+    throw ov_core::UsageError("--gt and --builtin are exclusive");
+  if (vm.count("features-only") && vm.count("no-images"))
+    throw ov_core::UsageError("--features-only and --no-images are exclusive");
+  if (!o.imu_from.empty() && gt.empty())
+    throw ov_core::UsageError("--imu-from needs --gt with the ground truth of the same sequence");
+  o.gt_file = gt;
+  o.features_only = vm.count("features-only") > 0;
+  o.overwrite = vm.count("force") > 0;
+  o.no_images = vm.count("no-images") > 0;
+  o.imu_noise = o.imu_bias_walk = vm.count("no-imu-noise") == 0;
+  o.td.kind = ov_core::sim::parse_td_model(td_model);
+  o.td.td0_s = td0_ms * 1e-3;
+  o.td.bias_s_per_s = td_bias * 1e-3;
+  o.td.noise_s_per_sqrt_s = td_noise * 1e-3;
+  if (!cam_yaml.empty()) {
+    o.cam = ov_core::load_euroc_camera_yaml(cam_yaml);
+    o.cam_source = cam_yaml;
+  }
+  if (!imu_yaml.empty()) {
+    o.imu = ov_core::load_euroc_imu_yaml(imu_yaml);
+    o.imu_source = imu_yaml;
+  }
+
+  ProgressPrinter progress(vm.count("quiet") > 0);
+  if (!bench) {
+    o.out_dir = out;
+    const auto rep = ov_core::sim::write_simulation(o, std::ref(progress));
+    std::cout << "wrote " << out << ": " << rep.n_images << " frames, " << rep.n_imu << " IMU readings"
+              << (o.features_only ? ", " + std::to_string(rep.n_observations) + " feature observations" : "")
+              << " along " << rep.trajectory << " in " << rep.total_seconds << " s\n";
+    return 0;
+  }
+
+  // Benchmark: a real run of bench_frames frames, timed, then sized.
+  const bool tmp = out.empty();
+  o.out_dir = tmp ? (fs::temp_directory_path() / ("ovton_sim_bench_" + std::to_string(o.seed))).string() : out;
+  if (tmp)
+    o.overwrite = true;
+  o.duration_s = o.first_image_s + (bench_frames - 0.5) / o.cam.rate_hz;
+  const auto rep = ov_core::sim::write_simulation(o, std::ref(progress));
+  const auto sizes = sizes_by_part(fs::path(o.out_dir) / "mav0");
+  const double minutes = o.duration_s / 60.0;
+  uintmax_t total = 0;
+  std::printf("render      %zu frames %dx%d in %.2f s: %.1f frames/s on one core (%.1f x real time at %.0f Hz)\n",
+              rep.n_images, o.cam.width, o.cam.height, rep.render_seconds, rep.n_images / rep.render_seconds,
+              rep.n_images / rep.render_seconds / o.cam.rate_hz, o.cam.rate_hz);
+  std::printf("end to end  %.2f s including scene build, IMU, PNG encoding and disk (%.1f frames/s)\n",
+              rep.total_seconds, rep.n_images / rep.total_seconds);
+  std::printf("disk per minute of data:\n");
+  for (const auto &[part, bytes] : sizes) {
+    std::printf("  %-28s %9.2f MB/min\n", part.c_str(), bytes / minutes / 1e6);
+    total += bytes;
+  }
+  std::printf("  %-28s %9.2f MB/min\n", "total", total / minutes / 1e6);
+  if (tmp)
+    fs::remove_all(o.out_dir);
+  return 0;
+}
+
+} // namespace ovton
