@@ -1,0 +1,55 @@
+#pragma once
+// How the camera-IMU time offset t_d enters a feature measurement (t_imu = t_cam + t_d), and where the image-plane
+// velocity of an observation comes from.
+#include "ov_core/track/feature_database.h"
+
+#include <Eigen/Core>
+#include <cstddef>
+
+namespace ov_msckf_ton {
+
+/// The role t_d plays in the MSCKF measurement of one update.
+enum class TdObservation {
+  /// t_d does not appear (mode `off`, `oracle`): z = h(clone).
+  None,
+  /// Mode `sr`: z = h(clone) as well; the clone itself depends on t_d through its cloning Jacobian, which the
+  /// covariance already carries, so the measurement adds nothing.
+  StateRelevant,
+  /// Modes `sir`, `fvon`, `tpn`, `ton` (TON-VIO paper eq. 1): the image was taken at IMU time t_cam + t_d but the
+  /// clone sits at t_cam + td_ref, so the feature has moved by V·(t_d − td_ref) on the image plane:
+  ///   z = h(clone) + V·(t_d − td_ref) + n.
+  /// Equivalently the shifted measurement z(t_d) = z − V·(t_d − td_ref) is compared with h(clone) (paper eq. 1 with
+  /// ∂z(t_d)/∂t_d = −V).
+  ImagePlane,
+};
+
+/// Where an observation's image-plane velocity came from; the residual log and the update statistics count by it.
+enum VelocitySource : int {
+  kVelocityNone = 0,
+  kVelocityTracked = 1, ///< constant-speed difference with the previous observation (paper eq. 2)
+  kVelocityItsFvon = 2, ///< predicted by ITS-FVON from later velocities of the same track
+  kVelocityF2fFvon = 3, ///< predicted by F2F-FVON from the feature's 3D position
+};
+constexpr int kNumVelocitySources = 4;
+
+/// Supplies the image-plane velocity of one observation in undistorted normalised coordinates per second.
+/// The default is the constant-speed model of the front end (paper eq. 2); FVON overrides it for observations
+/// without a previous one.
+class VelocityProvider {
+public:
+  virtual ~VelocityProvider() = default;
+  /// Returns false when the observation has no usable velocity: its measurement row then carries no t_d entry
+  /// and does not constrain t_d. `source` is one of VelocitySource.
+  virtual bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy, int &source) const {
+    const ov_core::FeatureObservation &o = feature.obs[obs_index];
+    if (!o.vel_valid) {
+      source = kVelocityNone;
+      return false;
+    }
+    vel_xy = o.vel_xy;
+    source = kVelocityTracked;
+    return true;
+  }
+};
+
+} // namespace ov_msckf_ton

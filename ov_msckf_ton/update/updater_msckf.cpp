@@ -1,0 +1,352 @@
+#include "ov_msckf_ton/update/updater_msckf.h"
+#include "ov_core/types/errors.h"
+#include "ov_msckf_ton/state/state_helper.h"
+#include "ov_msckf_ton/update/feature_jacobians.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/QR>
+#include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
+#include <cmath>
+
+namespace ov_msckf_ton {
+
+namespace {
+
+/// Degrees of freedom precomputed at construction: 2m − 3 rows for a window of tens of clones stays well below.
+constexpr int kChi2TableSize = 500;
+
+double chi2_quantile(double confidence, int dof) {
+  const boost::math::chi_squared_distribution<double> dist(static_cast<double>(dof));
+  return boost::math::quantile(dist, confidence);
+}
+
+} // namespace
+
+UpdaterMSCKF::UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKFOptions &options)
+    : calib_(calib), opt_(options) {
+  const double fu = calib.intrinsics(0), fv = calib.intrinsics(1);
+  if (!(fu > 0) || !(fv > 0))
+    throw ov_core::UsageError("UpdaterMSCKF: focal lengths must be positive");
+  if (!(opt_.sigma_px > 0))
+    throw ov_core::UsageError("UpdaterMSCKF: sigma_px must be positive");
+  if (!(opt_.chi2_confidence > 0 && opt_.chi2_confidence < 1))
+    throw ov_core::UsageError("UpdaterMSCKF: chi2_confidence must be in (0, 1)");
+  if (!(opt_.chi2_multiplier > 0))
+    throw ov_core::UsageError("UpdaterMSCKF: chi2_multiplier must be positive");
+  if (opt_.min_observations < 2)
+    throw ov_core::UsageError("UpdaterMSCKF: min_observations must be at least 2 (two views leave one row)");
+  if (!(opt_.min_depth > 0) || !(opt_.max_depth > opt_.min_depth))
+    throw ov_core::UsageError("UpdaterMSCKF: need 0 < min_depth < max_depth");
+  if (opt_.max_features < 0)
+    throw ov_core::UsageError("UpdaterMSCKF: max_features must be >= 0 (0 = no limit)");
+  R_BC_ = calib.T_BC.topLeftCorner<3, 3>();
+  p_BC_ = calib.T_BC.topRightCorner<3, 1>();
+  // Normalised coordinates are pixels divided by the focal length; one isotropic sigma needs one focal length.
+  sigma_norm_ = opt_.sigma_px / (0.5 * (fu + fv));
+  chi2_table_.resize(kChi2TableSize + 1, 0.0);
+  for (int d = 1; d <= kChi2TableSize; ++d)
+    chi2_table_[d] = opt_.chi2_multiplier * chi2_quantile(opt_.chi2_confidence, d);
+}
+
+double UpdaterMSCKF::chi2_threshold(int dof) const {
+  if (dof <= 0)
+    throw ov_core::UsageError("chi2_threshold: dof must be positive");
+  if (dof <= kChi2TableSize)
+    return chi2_table_[dof];
+  return opt_.chi2_multiplier * chi2_quantile(opt_.chi2_confidence, dof);
+}
+
+void UpdaterMSCKF::usable_observations(const State &state, const ov_core::Feature &feature,
+                                       std::vector<std::pair<size_t, const CloneState *>> &out) const {
+  out.clear();
+  for (size_t i = 0; i < feature.obs.size(); ++i) {
+    const auto it = state.clones.find(feature.obs[i].t_cam_ns);
+    if (it != state.clones.end())
+      out.emplace_back(i, &it->second);
+  }
+}
+
+TriangulationResult UpdaterMSCKF::triangulate_feature(const State &state, const ov_core::Feature &feature,
+                                                      TdObservation td_obs, const VelocityProvider &velocities) const {
+  usable_observations(state, feature, usable_);
+  poses_.clear();
+  xy_.clear();
+  for (const auto &[i, c] : usable_) {
+    CameraPose cp;
+    cp.R_WC = c->R * R_BC_;
+    cp.p_WC = c->p + c->R * p_BC_;
+    poses_.push_back(cp);
+    Eigen::Vector2d z = feature.obs[i].xy;
+    Eigen::Vector2d v;
+    int src = 0;
+    if (td_obs == TdObservation::ImagePlane && velocities.velocity(feature, i, v, src))
+      z -= v * (state.td - c->td_ref);
+    xy_.push_back(z);
+  }
+  TriangulationOptions to;
+  to.min_depth = opt_.min_depth;
+  to.max_depth = opt_.max_depth;
+  to.min_parallax_deg = opt_.min_parallax_deg;
+  to.max_reproj_rms = opt_.max_reproj_px / (0.5 * (calib_.intrinsics(0) + calib_.intrinsics(1)));
+  to.max_iterations = opt_.triangulation_max_iterations;
+  // The newest observation anchors the inverse depth: it is the view the current state knows best.
+  return triangulate(poses_, xy_, poses_.empty() ? 0 : poses_.size() - 1, to);
+}
+
+bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature, const Eigen::Vector3d &p_f,
+                             TdObservation td_obs, const VelocityProvider &velocities,
+                             FeatureLinearization &out) const {
+  const std::vector<std::pair<size_t, const CloneState *>> &usable = usable_;
+  usable_observations(state, feature, usable_);
+  const int m = static_cast<int>(usable.size());
+  out.obs.resize(m);
+  bool any_td = false;
+  for (int k = 0; k < m; ++k) {
+    FeatureLinearization::Obs &o = out.obs[k];
+    o.obs_index = usable[k].first;
+    o.clone = usable[k].second;
+    o.vel_xy.setZero();
+    o.vel_source = kVelocityNone;
+    // Queried in every mode: the residual log needs the velocity to diagnose a time offset the model lacks.
+    if (!velocities.velocity(feature, o.obs_index, o.vel_xy, o.vel_source)) {
+      o.vel_xy.setZero();
+      o.vel_source = kVelocityNone;
+    }
+    o.td_column = td_obs == TdObservation::ImagePlane && o.vel_source != kVelocityNone && state.estimates_td();
+    any_td = any_td || o.td_column;
+  }
+  const int nc = 6 * m + (any_td ? 1 : 0);
+  out.cols.resize(nc);
+  for (int k = 0; k < m; ++k)
+    for (int j = 0; j < 6; ++j)
+      out.cols[6 * k + j] = out.obs[k].clone->index + j;
+  if (any_td)
+    out.cols[6 * m] = state.td_index;
+  out.H_x.setZero(2 * m, nc);
+  out.H_f.resize(2 * m, 3);
+  out.r.resize(2 * m);
+
+  CloneMeasurementJacobians J;
+  Eigen::Vector2d zhat;
+  Eigen::Vector3d p_C;
+  for (int k = 0; k < m; ++k) {
+    FeatureLinearization::Obs &o = out.obs[k];
+    const CloneState &c = *o.clone;
+    if (!project_in_clone(c.R, c.p, R_BC_, p_BC_, p_f, zhat, &p_C, &J))
+      return false;
+    o.depth = p_C.z();
+    Eigen::Vector2d z = feature.obs[o.obs_index].xy;
+    if (td_obs == TdObservation::ImagePlane && o.vel_source != kVelocityNone)
+      z -= o.vel_xy * (state.td - c.td_ref);
+    out.r.segment<2>(2 * k) = z - zhat;
+    out.H_x.block<2, 3>(2 * k, 6 * k) = J.H_theta;
+    out.H_x.block<2, 3>(2 * k, 6 * k + 3) = J.H_p;
+    out.H_f.block<2, 3>(2 * k, 0) = J.H_f;
+    if (o.td_column)
+      out.H_x.block<2, 1>(2 * k, 6 * m) = o.vel_xy;
+  }
+  return true;
+}
+
+void UpdaterMSCKF::nullspace_project(const Eigen::Matrix<double, Eigen::Dynamic, 3> &H_f, Eigen::MatrixXd &H_x,
+                                     Eigen::VectorXd &r) {
+  const Eigen::Index rows = H_f.rows();
+  if (rows <= 3 || H_x.rows() != rows || r.size() != rows)
+    throw ov_core::UsageError("nullspace_project: need matching blocks with more than 3 rows");
+  const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(H_f);
+  // Qᵀ applied by its Householder reflectors, never forming the 2m × 2m Q.
+  H_x.applyOnTheLeft(qr.householderQ().adjoint());
+  r.applyOnTheLeft(qr.householderQ().adjoint());
+  H_x = H_x.bottomRows(rows - 3).eval();
+  r = r.tail(rows - 3).eval();
+}
+
+void UpdaterMSCKF::compress(Eigen::MatrixXd &H, Eigen::VectorXd &r) {
+  const Eigen::Index rows = H.rows(), cols = H.cols();
+  if (rows <= cols)
+    return;
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(H);
+  r.applyOnTheLeft(qr.householderQ().adjoint());
+  H = qr.matrixQR().topRows(cols).triangularView<Eigen::Upper>();
+  r = r.head(cols).eval();
+}
+
+void UpdaterMSCKF::append_records(const State &state, const ov_core::Feature &feature, const FeatureLinearization *lin,
+                                  const std::vector<std::pair<size_t, const CloneState *>> &usable,
+                                  TdObservation td_obs, const VelocityProvider &velocities, const Eigen::Vector3d &p_f,
+                                  double chi2, double threshold, ResidualStatus status,
+                                  std::vector<ResidualRecord> &log) const {
+  const double fu = calib_.intrinsics(0), fv = calib_.intrinsics(1);
+  for (size_t k = 0; k < usable.size(); ++k) {
+    const size_t i = usable[k].first;
+    const CloneState &c = *usable[k].second;
+    const ov_core::FeatureObservation &o = feature.obs[i];
+    ResidualRecord rec;
+    rec.update_id = update_count_;
+    rec.t_cam_ns = o.t_cam_ns;
+    rec.feature_id = feature.id;
+    rec.obs_index = static_cast<int>(i);
+    rec.track_length = static_cast<int>(feature.obs.size());
+    rec.u_px = o.uv.x();
+    rec.v_px = o.uv.y();
+    rec.x_norm = o.xy.x();
+    rec.y_norm = o.xy.y();
+    rec.radius_norm = o.xy.norm();
+    rec.td_s = state.td;
+    rec.td_ref_s = c.td_ref;
+    rec.chi2 = chi2;
+    rec.chi2_threshold = threshold;
+    rec.status = status;
+    rec.accepted = status == ResidualStatus::Accepted ? 1 : 0;
+    Eigen::Vector2d vel = Eigen::Vector2d::Zero();
+    int src = kVelocityNone;
+    if (lin) {
+      vel = lin->obs[k].vel_xy;
+      src = lin->obs[k].vel_source;
+      rec.td_column = lin->obs[k].td_column ? 1 : 0;
+      rec.depth_m = lin->obs[k].depth;
+      rec.res_u_px = lin->r(2 * k) * fu;
+      rec.res_v_px = lin->r(2 * k + 1) * fv;
+    } else {
+      if (!velocities.velocity(feature, i, vel, src)) {
+        vel.setZero();
+        src = kVelocityNone;
+      }
+      // A rejected point can still say how wrong it was, when it is in front of the camera.
+      Eigen::Vector2d zhat;
+      Eigen::Vector3d p_C;
+      if (p_f.allFinite() && project_in_clone(c.R, c.p, R_BC_, p_BC_, p_f, zhat, &p_C)) {
+        Eigen::Vector2d z = o.xy;
+        if (td_obs == TdObservation::ImagePlane && src != kVelocityNone)
+          z -= vel * (state.td - c.td_ref);
+        rec.depth_m = p_C.z();
+        rec.res_u_px = (z.x() - zhat.x()) * fu;
+        rec.res_v_px = (z.y() - zhat.y()) * fv;
+      }
+    }
+    rec.vel_u_px_s = vel.x() * fu;
+    rec.vel_v_px_s = vel.y() * fv;
+    rec.vel_source = src;
+    Eigen::Vector3d w;
+    if (rate_lookup_ && rate_lookup_(o.t_cam_ns, w)) {
+      rec.w_x = w.x();
+      rec.w_y = w.y();
+      rec.w_z = w.z();
+      rec.w_valid = 1;
+    }
+    log.push_back(rec);
+  }
+}
+
+UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::Feature *> &features,
+                                 TdObservation td_obs, const VelocityProvider &velocities,
+                                 std::vector<ResidualRecord> *log) {
+  ++update_count_;
+  UpdateStats st;
+  st.features_in = static_cast<int>(features.size());
+  st.td_before = st.td_after = state.td;
+  const int dim = state.dim();
+
+  // Longest usable tracks first: they carry the most information when max_features cuts the list.
+  std::vector<std::pair<int, const ov_core::Feature *>> order;
+  order.reserve(features.size());
+  for (const ov_core::Feature *f : features) {
+    if (!f)
+      throw ov_core::UsageError("UpdaterMSCKF::update: null feature");
+    usable_observations(state, *f, usable_);
+    if (static_cast<int>(usable_.size()) < opt_.min_observations) {
+      ++st.too_few_observations;
+      continue;
+    }
+    order.emplace_back(static_cast<int>(usable_.size()), f);
+  }
+  std::stable_sort(order.begin(), order.end(), [](const auto &a, const auto &b) {
+    return a.first != b.first ? a.first > b.first : a.second->id < b.second->id;
+  });
+  if (opt_.max_features > 0 && static_cast<int>(order.size()) > opt_.max_features) {
+    st.over_limit = static_cast<int>(order.size()) - opt_.max_features;
+    order.resize(opt_.max_features);
+  }
+
+  const double sigma2 = sigma_norm_ * sigma_norm_;
+  size_t n_acc = 0;
+  std::vector<std::pair<size_t, const CloneState *>> usable;
+  for (const auto &[count, fp] : order) {
+    const ov_core::Feature &f = *fp;
+    const TriangulationResult tri = triangulate_feature(state, f, td_obs, velocities);
+    if (!tri.ok() || !linearize(state, f, tri.p_W, td_obs, velocities, lin_)) {
+      ++st.rejected_triangulation;
+      if (log) {
+        usable_observations(state, f, usable);
+        append_records(state, f, nullptr, usable, td_obs, velocities, tri.p_W, ResidualRecord::kNaN,
+                       ResidualRecord::kNaN, ResidualStatus::TriangulationFailed, *log);
+      }
+      continue;
+    }
+    if (n_acc == accepted_.size())
+      accepted_.emplace_back();
+    Accepted &a = accepted_[n_acc];
+    a.cols = lin_.cols;
+    a.H = lin_.H_x;
+    a.r = lin_.r;
+    // Projected copies: lin_ keeps the pre-projection residuals that the log reports.
+    nullspace_project(lin_.H_f, a.H, a.r);
+
+    // S = H P Hᵀ + σ²I over the involved columns only.
+    const int nc = static_cast<int>(a.cols.size());
+    Eigen::MatrixXd P_sub(nc, nc);
+    for (int i = 0; i < nc; ++i)
+      for (int j = 0; j < nc; ++j)
+        P_sub(i, j) = state.P(a.cols[i], a.cols[j]);
+    Eigen::MatrixXd S = a.H * P_sub * a.H.transpose();
+    S.diagonal().array() += sigma2;
+    const double chi2 = a.r.dot(S.ldlt().solve(a.r));
+    const int dof = static_cast<int>(a.r.size());
+    const double thr = chi2_threshold(dof);
+    const bool pass = std::isfinite(chi2) && chi2 < thr;
+    if (log) {
+      usable.clear();
+      for (const auto &o : lin_.obs)
+        usable.emplace_back(o.obs_index, o.clone);
+      append_records(state, f, &lin_, usable, td_obs, velocities, tri.p_W, chi2, thr,
+                     pass ? ResidualStatus::Accepted : ResidualStatus::GatedChi2, *log);
+    }
+    if (!pass) {
+      ++st.gated_chi2;
+      continue;
+    }
+    ++n_acc;
+    ++st.features_used;
+    st.rows_stacked += dof;
+    bool any = false;
+    for (const auto &o : lin_.obs)
+      if (o.td_column) {
+        ++st.td_obs_used[o.vel_source];
+        any = true;
+      }
+    st.td_features_used += any ? 1 : 0;
+  }
+  if (n_acc == 0)
+    return st;
+
+  // Scatter the compact blocks into one dense system over the full state.
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(st.rows_stacked, dim);
+  Eigen::VectorXd r(st.rows_stacked);
+  int row = 0;
+  for (size_t k = 0; k < n_acc; ++k) {
+    const Accepted &a = accepted_[k];
+    const int rows = static_cast<int>(a.r.size());
+    for (size_t j = 0; j < a.cols.size(); ++j)
+      H.block(row, a.cols[j], rows, 1) = a.H.col(static_cast<Eigen::Index>(j));
+    r.segment(row, rows) = a.r;
+    row += rows;
+  }
+  compress(H, r);
+  st.rows_update = static_cast<int>(r.size());
+  st.mahalanobis = state_helper::ekf_update(state, H, r, sigma2);
+  st.td_after = state.td;
+  return st;
+}
+
+} // namespace ov_msckf_ton

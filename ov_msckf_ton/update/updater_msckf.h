@@ -1,0 +1,141 @@
+#pragma once
+// The MSCKF update (Mourikis & Roumeliotis 2007, as in OpenVINS): triangulate each feature from the clone poses,
+// linearise its measurements w.r.t. the clones (and t_d), remove the feature by projecting onto the left nullspace
+// of its Jacobian, gate by chi-square, stack, compress and apply one EKF update.
+#include "ov_core/cam/camera_calib.h"
+#include "ov_core/track/feature_database.h"
+#include "ov_msckf_ton/state/state.h"
+#include "ov_msckf_ton/update/residual_log.h"
+#include "ov_msckf_ton/update/td_observation.h"
+#include "ov_msckf_ton/update/triangulation.h"
+
+#include <Eigen/Core>
+#include <array>
+#include <functional>
+#include <vector>
+
+namespace ov_msckf_ton {
+
+struct UpdaterMSCKFOptions {
+  double sigma_px = 1.0;         ///< measurement noise [px], converted by the mean focal length
+  double chi2_multiplier = 1.0;  ///< scales the chi-square threshold (OpenVINS' chi2_multipler)
+  double chi2_confidence = 0.95; ///< quantile of the chi-square gate
+  int min_observations = 3;      ///< observations with a clone a feature needs to be used
+  double min_depth = 0.1;        ///< [m]
+  double max_depth = 60.0;       ///< [m]
+  int max_features = 50;         ///< per update, longest tracks first; 0 = no limit
+  double min_parallax_deg = 0.2; ///< triangulation: below this the depth is noise
+  double max_reproj_px = 10.0;   ///< triangulation: RMS reprojection error
+  int triangulation_max_iterations = 20;
+};
+
+struct UpdateStats {
+  int features_in = 0;
+  int too_few_observations = 0; ///< fewer than min_observations observations with a clone
+  int over_limit = 0;           ///< dropped by max_features
+  int rejected_triangulation = 0;
+  int gated_chi2 = 0;
+  int features_used = 0;
+  int rows_stacked = 0; ///< rows of the accepted features after nullspace projection
+  int rows_update = 0;  ///< rows of the EKF update after compression
+  /// Observations of used features whose row carried a t_d entry, by VelocitySource (index 0 stays 0).
+  std::array<int, kNumVelocitySources> td_obs_used{};
+  int td_features_used = 0; ///< used features with at least one t_d entry
+  double td_before = 0.0, td_after = 0.0;
+  double mahalanobis = 0.0; ///< rᵀS⁻¹r of the final stacked update
+};
+
+/// The stacked measurement of one feature before nullspace projection. H_x is compact: its columns are the state
+/// indices in `cols` (six per observing clone, then t_d when a row carries it), so the cost does not grow with the
+/// window.
+struct FeatureLinearization {
+  struct Obs {
+    size_t obs_index = 0;
+    const CloneState *clone = nullptr; ///< points into State::clones: valid until the state changes
+    Eigen::Vector2d vel_xy = Eigen::Vector2d::Zero();
+    int vel_source = kVelocityNone;
+    bool td_column = false;
+    double depth = 0.0;
+  };
+  std::vector<int> cols;
+  Eigen::MatrixXd H_x;                          ///< 2m × cols.size()
+  Eigen::Matrix<double, Eigen::Dynamic, 3> H_f; ///< 2m × 3, w.r.t. the world feature position
+  Eigen::VectorXd r;                            ///< 2m, z − h(x̂, p̂_f) in normalised units
+  std::vector<Obs> obs;
+};
+
+/// Not thread-safe: const methods share scratch buffers. Use one updater per filter.
+class UpdaterMSCKF {
+public:
+  /// Body angular rate at a clone's image, for the residual log only. Returns false when unknown.
+  using AngularRateLookup = std::function<bool(int64_t t_cam_ns, Eigen::Vector3d &w_B)>;
+
+  explicit UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKFOptions &options = {});
+
+  /// One MSCKF update with the given features (typically lost ones and those observed in the clone that leaves the
+  /// window). Observations without a clone are ignored. Appends one ResidualRecord per observation of each feature
+  /// that reached triangulation to `log` when given. Throws ov_core::UsageError on inconsistent input.
+  UpdateStats update(State &state, const std::vector<const ov_core::Feature *> &features, TdObservation td_obs,
+                     const VelocityProvider &velocities, std::vector<ResidualRecord> *log = nullptr);
+
+  /// Triangulates a feature from the current clone estimates, shifting image-plane observations by V·(t̂_d − td_ref)
+  /// in ImagePlane mode so that the point agrees with the model it will be linearised in.
+  TriangulationResult triangulate_feature(const State &state, const ov_core::Feature &feature, TdObservation td_obs,
+                                          const VelocityProvider &velocities) const;
+
+  /// Residuals and Jacobians of every observation of `feature` that has a clone, at the feature position p_f:
+  ///   r_i = z_i − h(clone_i, p_f) − V_i·(t̂_d − td_ref_i)     (the V term only in ImagePlane mode with a velocity)
+  ///   H_x: [∂h/∂δθ_i  ∂h/∂δp_i] per clone (feature_jacobians.h), and +V_i in the t_d column (paper eq. 1: the
+  ///        shifted measurement z − V·(t_d − td_ref) has Jacobian −V, so the model z = h + V·(t_d − td_ref) has +V).
+  /// Returns false when the point is behind a camera.
+  bool linearize(const State &state, const ov_core::Feature &feature, const Eigen::Vector3d &p_f, TdObservation td_obs,
+                 const VelocityProvider &velocities, FeatureLinearization &out) const;
+
+  /// Multiplies H_x and r on the left by Q₂ᵀ, where [Q₁ Q₂] is the Householder QR of H_f (2m × 3, full column rank),
+  /// so that Q₂ᵀH_f = 0: the result no longer depends on the feature error. Rows become 2m − 3. Noise stays σ²I
+  /// because Q₂ has orthonormal columns.
+  static void nullspace_project(const Eigen::Matrix<double, Eigen::Dynamic, 3> &H_f, Eigen::MatrixXd &H_x,
+                                Eigen::VectorXd &r);
+  /// When H has more rows than columns, replaces (H, r) by (R, Q₁ᵀr) of H's QR: the same information in at most
+  /// dim rows, noise still σ²I.
+  static void compress(Eigen::MatrixXd &H, Eigen::VectorXd &r);
+
+  /// chi2_multiplier × the chi-square quantile at chi2_confidence for `dof` degrees of freedom (cached table).
+  double chi2_threshold(int dof) const;
+  /// Measurement standard deviation in normalised units.
+  double sigma_normalized() const { return sigma_norm_; }
+  const UpdaterMSCKFOptions &options() const { return opt_; }
+  void set_angular_rate_lookup(AngularRateLookup f) { rate_lookup_ = std::move(f); }
+
+private:
+  /// Observations of `feature` that have a clone, as (obs index, clone).
+  void usable_observations(const State &state, const ov_core::Feature &feature,
+                           std::vector<std::pair<size_t, const CloneState *>> &out) const;
+  void append_records(const State &state, const ov_core::Feature &feature, const FeatureLinearization *lin,
+                      const std::vector<std::pair<size_t, const CloneState *>> &usable, TdObservation td_obs,
+                      const VelocityProvider &velocities, const Eigen::Vector3d &p_f, double chi2, double threshold,
+                      ResidualStatus status, std::vector<ResidualRecord> &log) const;
+
+  ov_core::CameraCalib calib_;
+  UpdaterMSCKFOptions opt_;
+  Eigen::Matrix3d R_BC_;
+  Eigen::Vector3d p_BC_;
+  double sigma_norm_;
+  std::vector<double> chi2_table_; ///< index = dof
+  AngularRateLookup rate_lookup_;
+  uint64_t update_count_ = 0;
+
+  // Scratch reused across features and updates.
+  mutable std::vector<std::pair<size_t, const CloneState *>> usable_;
+  mutable std::vector<CameraPose> poses_;
+  mutable std::vector<Eigen::Vector2d> xy_;
+  FeatureLinearization lin_;
+  struct Accepted {
+    std::vector<int> cols;
+    Eigen::MatrixXd H;
+    Eigen::VectorXd r;
+  };
+  std::vector<Accepted> accepted_;
+};
+
+} // namespace ov_msckf_ton
