@@ -370,3 +370,24 @@ TEST(EvalCit, HandComputedCase) {
   o.cit.target_from_truth = false;
   EXPECT_EQ(evaluate(cit_estimate({0.01, 0.01}), cit_estimate({0.01, 0.01}), {}, o).cit, 1);
 }
+
+TEST(EvalAlign, StillTrajectoryTakesYawFromOrientations) {
+  // A platform that does not move: positions cannot fix yaw, orientations can.
+  std::vector<ov_core::StateSample> gt, est;
+  const Eigen::Matrix3d Rz = Eigen::AngleAxisd(1.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  for (int i = 0; i < 50; ++i) {
+    ov_core::StateSample g;
+    g.t_ns = 1000000000LL + i * 50000000LL;
+    g.p = Eigen::Vector3d(1.0, 2.0, 0.5) + 1e-4 * Eigen::Vector3d(std::sin(i), std::cos(i), 0);
+    g.q_WB = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 1, 0).normalized()));
+    ov_core::StateSample e = g;
+    e.p = Rz.transpose() * g.p;
+    e.q_WB = Eigen::Quaterniond(Rz.transpose() * g.q_WB.toRotationMatrix());
+    gt.push_back(g);
+    est.push_back(e);
+  }
+  ov_core::EvalOptions opt;
+  const auto r = ov_core::evaluate(est, gt, {}, opt);
+  EXPECT_LT(r.ape_rmse_m, 1e-9);
+  EXPECT_LT(r.are_rmse_deg, 1e-6);
+}

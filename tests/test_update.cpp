@@ -246,9 +246,9 @@ TEST(UpdateJacobians, StackedFeatureJacobianIncludingTdColumnMatchesFiniteDiffer
     const Eigen::VectorXd num = -(lp.r - lm.r) / (2 * h);
     EXPECT_LT((num - lin.H_f.col(i)).norm(), 1e-6 * (1 + lin.H_f.col(i).norm())) << "feature axis " << i;
   }
-  // The t_d column is +V (model form) on rows that have a velocity.
+  // The t_d column is +V (model form) on rows that have a velocity, in distorted pixels like every row.
   for (int k = 1; k < m; ++k)
-    EXPECT_LT((lin.H_x.block<2, 1>(2 * k, 6 * m) - f.obs[k].vel_xy).norm(), 1e-15);
+    EXPECT_LT((lin.H_x.block<2, 1>(2 * k, 6 * m) - up.distortion_jacobian(f.obs[k].xy) * f.obs[k].vel_xy).norm(), 1e-9);
 
   // StateRelevant / None add no t_d column and no shift.
   ASSERT_TRUE(up.linearize(s, f, p_f, TdObservation::StateRelevant, vp, lp));
@@ -381,7 +381,9 @@ TEST(UpdateMsckf, ChiSquareTableMatchesKnownQuantiles) {
   EXPECT_NEAR(up.chi2_threshold(1), 3.841459, 1e-5);
   EXPECT_NEAR(up.chi2_threshold(10), 18.307038, 1e-5);
   EXPECT_NEAR(up.chi2_threshold(600), 658.09, 0.1); // beyond the cached table
-  EXPECT_NEAR(up.sigma_normalized(), 1.0 / (0.5 * (458.654 + 457.296)), 1e-12);
+  // Residual rows are in distorted pixels: at the principal point the scaling is the focal lengths.
+  const Eigen::Matrix2d Jd = up.distortion_jacobian(Eigen::Vector2d::Zero());
+  EXPECT_NEAR((Jd - Eigen::Vector2d(458.654, 457.296).asDiagonal().toDenseMatrix()).norm(), 0, 1e-9);
   UpdaterMSCKFOptions bad;
   bad.min_observations = 1;
   EXPECT_THROW(UpdaterMSCKF(euroc_cam0(), bad), ov_core::UsageError);

@@ -1,7 +1,9 @@
 // Estimator configuration, static initialisation, and whole runs of the VioManager.
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/replay.h"
 #include "ov_core/types/errors.h"
 #include "ov_msckf_ton/core/static_init.h"
+#include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_msckf_ton/core/vio_options.h"
 #include "test_util.h"
 
@@ -56,4 +58,27 @@ TEST(StaticInit, RealEurocStillStartMatchesGroundTruth) {
   const StaticInitResult m = static_initialize(moving, t_end, 1.0, 1.0, 0.1);
   EXPECT_FALSE(m.ok);
   EXPECT_NE(m.why.find("moving"), std::string::npos);
+}
+
+TEST(VioRun, RealEurocStillStartStaysPut) {
+  OVTEST_REQUIRE_SHARED_DATA();
+  const ov_core::Dataset d = ov_core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_micro");
+  const VioOptions opt = load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
+  VioManager vio(opt, d.cam, d.imu_calib);
+  std::vector<ov_core::StateSample> traj;
+  vio.set_state_callback([&](const ov_core::StateSample &s) { traj.push_back(s); });
+  ov_core::Replay(d).run(vio);
+  ASSERT_TRUE(vio.initialized()) << vio.init_message();
+  ASSERT_GT(traj.size(), 50u);
+  double max_move = 0.0;
+  for (const auto &s : traj)
+    max_move = std::max(max_move, (s.p - traj.front().p).norm());
+  std::cout << "[still start] " << traj.size() << " poses, largest displacement " << max_move * 100 << " cm, "
+            << vio.counters().zupts << " zero-velocity updates\n";
+  EXPECT_LT(max_move, 0.05);
+  // Gravity from static initialisation agrees with the ground truth's tilt.
+  const ov_core::StateSample &g = d.groundtruth.front();
+  const Eigen::Vector3d z_est = traj.front().q_WB.toRotationMatrix().transpose() * Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d z_gt = g.q_WB.toRotationMatrix().transpose() * Eigen::Vector3d::UnitZ();
+  EXPECT_LT(std::acos(std::min(1.0, z_est.dot(z_gt))) * 180 / M_PI, 1.0);
 }

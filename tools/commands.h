@@ -12,5 +12,6 @@ int cmd_eval(const Args &args);
 int cmd_info(const Args &args);
 int cmd_simulate(const Args &args);
 int cmd_perturb(const Args &args);
+int cmd_run(const Args &args);
 
 } // namespace ovton

@@ -16,6 +16,7 @@ struct Command {
 
 const std::map<std::string, Command> &commands() {
   static const std::map<std::string, Command> cmds = {
+      {"run", {ovton::cmd_run, "replay a dataset through the MSCKF and write a trajectory CSV"}},
       {"info", {ovton::cmd_info, "load a dataset folder, validate it and print what it holds"}},
       {"eval", {ovton::cmd_eval, "APE/ARE/RPE/TPE/CIT of a trajectory against ground truth"}},
       {"simulate", {ovton::cmd_simulate, "write a synthetic EuRoC-format folder with a known time offset"}},

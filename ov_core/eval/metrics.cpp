@@ -143,6 +143,9 @@ Association associate(const std::vector<StateSample> &est, const std::vector<Sta
   return a;
 }
 
+/// Mean squared horizontal distance from the centroid [m²] below which positions cannot fix yaw (10 cm RMS).
+constexpr double kMinYawSpreadM2 = 0.01;
+
 Alignment align(const Association &a, AlignMode mode) {
   if (a.est.empty() || a.est.size() != a.gt.size())
     throw UsageError("align: empty or inconsistent association");
@@ -180,7 +183,25 @@ Alignment align(const Association &a, AlignMode mode) {
       A += e.x() * g.x() + e.y() * g.y();
       B += e.x() * g.y() - e.y() * g.x();
     }
-    const double theta = (A == 0.0 && B == 0.0) ? 0.0 : std::atan2(B, A);
+    double theta = (A == 0.0 && B == 0.0) ? 0.0 : std::atan2(B, A);
+    // A trajectory that barely moves horizontally (a still start) says nothing about yaw through its positions;
+    // then take the mean yaw of R_gt R_estᵀ from the orientations, when both sides have them.
+    double spread = 0.0;
+    bool have_orientation = true;
+    for (size_t i = 0; i < n; ++i) {
+      spread += (a.est[i].p - mu_e).head<2>().squaredNorm();
+      have_orientation = have_orientation && a.est[i].has_orientation && a.gt[i].has_orientation;
+    }
+    if (have_orientation && spread / static_cast<double>(n) < kMinYawSpreadM2) {
+      double sy = 0.0, cy = 0.0;
+      for (size_t i = 0; i < n; ++i) {
+        const Eigen::Matrix3d D = a.gt[i].q_WB.toRotationMatrix() * a.est[i].q_WB.toRotationMatrix().transpose();
+        const double yaw = std::atan2(D(1, 0), D(0, 0));
+        sy += std::sin(yaw);
+        cy += std::cos(yaw);
+      }
+      theta = std::atan2(sy, cy);
+    }
     out.R = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   }
   out.t = mu_g - out.R * mu_e;

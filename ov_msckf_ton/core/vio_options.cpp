@@ -43,6 +43,9 @@ std::map<std::string, Field> fields(VioOptions &o) {
   f["sigma_px"] = field(o.sigma_px, "sigma_px");
   f["chi2_multiplier"] = field(o.chi2_multiplier, "chi2_multiplier");
   f["max_features_per_update"] = field(o.max_features_per_update, "max_features_per_update");
+  f["zupt"] = field(o.zupt, "zupt");
+  f["zupt_max_disparity_px"] = field(o.zupt_max_disparity_px, "zupt_max_disparity_px");
+  f["zupt_sigma_v"] = field(o.zupt_sigma_v, "zupt_sigma_v");
   f["num_features"] = field(o.track.num_features, "num_features");
   f["grid_x"] = field(o.track.grid_x, "grid_x");
   f["grid_y"] = field(o.track.grid_y, "grid_y");

@@ -26,6 +26,12 @@ struct VioOptions {
   double chi2_multiplier = 1.0; ///< scales the 95% chi-square gate
   int max_features_per_update = 80;
 
+  // Zero-velocity update: when the features do not move on the image the platform is taken as still, the state
+  // gets a v = 0 measurement instead of a clone (no parallax would make every MSCKF feature untriangulable).
+  bool zupt = true;
+  double zupt_max_disparity_px = 0.5; ///< median feature motion since the previous frame below this = still
+  double zupt_sigma_v = 0.02;         ///< m/s; covers the rotor vibration of a MAV standing on the ground
+
   // Front end.
   ov_core::TrackKLTOptions track;
 

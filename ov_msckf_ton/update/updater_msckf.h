@@ -3,6 +3,7 @@
 // linearise its measurements w.r.t. the clones (and t_d), remove the feature by projecting onto the left nullspace
 // of its Jacobian, gate by chi-square, stack, compress and apply one EKF update.
 #include "ov_core/cam/camera_calib.h"
+#include "ov_core/cam/camera_model.h"
 #include "ov_core/track/feature_database.h"
 #include "ov_msckf_ton/state/state.h"
 #include "ov_msckf_ton/update/residual_log.h"
@@ -102,8 +103,8 @@ public:
 
   /// chi2_multiplier × the chi-square quantile at chi2_confidence for `dof` degrees of freedom (cached table).
   double chi2_threshold(int dof) const;
-  /// Measurement standard deviation in normalised units.
-  double sigma_normalized() const { return sigma_norm_; }
+  /// d(distorted pixel)/d(normalised point) at xy: residual rows are scaled by it (noise is isotropic in pixels).
+  Eigen::Matrix2d distortion_jacobian(const Eigen::Vector2d &xy) const;
   const UpdaterMSCKFOptions &options() const { return opt_; }
   void set_angular_rate_lookup(AngularRateLookup f) { rate_lookup_ = std::move(f); }
 
@@ -120,7 +121,7 @@ private:
   UpdaterMSCKFOptions opt_;
   Eigen::Matrix3d R_BC_;
   Eigen::Vector3d p_BC_;
-  double sigma_norm_;
+  ov_core::CameraModel camera_;
   std::vector<double> chi2_table_; ///< index = dof
   AngularRateLookup rate_lookup_;
   uint64_t update_count_ = 0;

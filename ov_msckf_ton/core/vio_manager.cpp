@@ -1,0 +1,324 @@
+#include "ov_msckf_ton/core/vio_manager.h"
+#include "ov_core/math/so3.h"
+#include "ov_core/types/errors.h"
+#include "ov_msckf_ton/core/static_init.h"
+#include "ov_msckf_ton/state/state_helper.h"
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <chrono>
+
+namespace ov_msckf_ton {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+ImuNoise noise_from(const ov_core::ImuCalib &imu, const VioOptions &opt) {
+  ImuNoise n;
+  const double k = opt.imu_noise_multiplier;
+  n.sigma_w = k * imu.gyro_noise_density;
+  n.sigma_a = k * imu.accel_noise_density;
+  n.sigma_wb = k * imu.gyro_random_walk;
+  n.sigma_ab = k * imu.accel_random_walk;
+  n.sigma_td = uses_tpn(opt.td_mode) ? opt.td_random_walk_tpn : opt.td_random_walk;
+  return n;
+}
+
+UpdaterMSCKFOptions updater_options(const VioOptions &o) {
+  UpdaterMSCKFOptions u;
+  u.sigma_px = o.sigma_px;
+  u.chi2_multiplier = o.chi2_multiplier;
+  u.min_observations = o.min_track_length;
+  u.max_features = o.max_features_per_update;
+  return u;
+}
+
+TdObservation td_observation(TdMode m) {
+  if (m == TdMode::Sr)
+    return TdObservation::StateRelevant;
+  if (uses_sir(m))
+    return TdObservation::ImagePlane;
+  return TdObservation::None;
+}
+
+bool estimates_td(TdMode m) {
+  return m != TdMode::Off && m != TdMode::Oracle;
+}
+
+/// Ground truth interpolated at t (linear position/velocity, slerp rotation); false outside its span.
+bool gt_at(const std::vector<ov_core::StateSample> &gt, int64_t t, ov_core::StateSample &out) {
+  if (gt.size() < 2 || t < gt.front().t_ns || t > gt.back().t_ns)
+    return false;
+  auto it =
+      std::lower_bound(gt.begin(), gt.end(), t, [](const ov_core::StateSample &s, int64_t x) { return s.t_ns < x; });
+  if (it == gt.begin()) {
+    out = *it;
+    return true;
+  }
+  const auto &b = *it, &a = *(it - 1);
+  const double u = static_cast<double>(t - a.t_ns) / static_cast<double>(b.t_ns - a.t_ns);
+  out = a;
+  out.t_ns = t;
+  out.p = (1 - u) * a.p + u * b.p;
+  out.v = (1 - u) * a.v + u * b.v;
+  out.q_WB = a.q_WB.slerp(u, b.q_WB);
+  return true;
+}
+
+} // namespace
+
+VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, const ov_core::ImuCalib &imu)
+    : opt_(opt), camera_(cam), tracker_(camera_, opt.track), propagator_(noise_from(imu, opt), opt.gravity_mag),
+      updater_(cam, updater_options(opt)), state_(std::make_unique<State>(estimates_td(opt.td_mode))) {
+  state_->td = opt.td_init_s;
+  updater_.set_angular_rate_lookup([this](int64_t t_cam_ns, Eigen::Vector3d &w) {
+    auto it = clone_rates_.find(t_cam_ns);
+    if (it == clone_rates_.end())
+      return false;
+    w = it->second;
+    return true;
+  });
+}
+
+double VioManager::td_for_image_s(int64_t t_cam_ns) const {
+  if (opt_.td_mode == TdMode::Oracle) {
+    if (!td_oracle_)
+      throw ov_core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
+    return td_oracle_(t_cam_ns);
+  }
+  return state_->td;
+}
+
+void VioManager::on_imu(const ov_core::ImuData &m) {
+  propagator_.feed_imu(m);
+  if (!initialized_) {
+    init_imu_.push_back(m);
+    while (init_imu_.size() > 2 &&
+           init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns > ov_core::s_to_ns(opt_.init_window_s + 1.0))
+      init_imu_.pop_front();
+  }
+}
+
+void VioManager::on_image(const ov_core::ImageEntry &e) {
+  if (e.features) {
+    process_features(e.t_cam_ns, *e.features);
+    return;
+  }
+  const auto t0 = Clock::now();
+  cv::Mat gray = cv::imread(e.path, cv::IMREAD_GRAYSCALE);
+  if (gray.empty())
+    throw ov_core::DataError(e.path, "unreadable image (listed for stamp " + std::to_string(e.t_cam_ns) + ")");
+  times_.image_load += ms_since(t0);
+  process_image(e.t_cam_ns, gray);
+}
+
+bool VioManager::try_initialize(int64_t t_cam_ns) {
+  const int64_t t_imu = t_cam_ns + ov_core::s_to_ns(td_for_image_s(t_cam_ns));
+  State &s = *state_;
+  if (opt_.init_mode == InitMode::GroundTruth) {
+    ov_core::StateSample g;
+    if (!gt_at(gt_, t_imu, g)) {
+      init_msg_ = "no ground truth at the first image";
+      return false;
+    }
+    s.imu.R = g.q_WB.toRotationMatrix();
+    s.imu.p = g.p;
+    s.imu.v = g.v;
+    s.imu.bg = g.bg;
+    s.imu.ba = g.ba;
+    init_msg_ = "initialised from ground truth";
+  } else {
+    const StaticInitResult r =
+        static_initialize(init_imu_, t_imu, opt_.init_window_s, opt_.init_max_accel_std, opt_.init_max_gyro_std);
+    if (!r.ok) {
+      init_msg_ = r.why;
+      return false;
+    }
+    s.imu.R = r.R_WB;
+    s.imu.p.setZero();
+    s.imu.v.setZero();
+    s.imu.bg = r.bg;
+    s.imu.ba = r.ba;
+    init_msg_ = "static initialisation (accel std " + std::to_string(r.accel_std) + " m/s^2)";
+  }
+  s.t_imu_ns = t_imu;
+  s.P.setZero();
+  const auto sq = [](double x) { return x * x; };
+  s.P.diagonal().segment<2>(ImuState::kTheta).setConstant(sq(opt_.init_sigma_rollpitch));
+  s.P(ImuState::kTheta + 2, ImuState::kTheta + 2) = sq(opt_.init_sigma_yaw);
+  // Right perturbation: express the world-frame roll/pitch/yaw uncertainty in the body frame.
+  const Eigen::Matrix3d Pth_W = s.P.block<3, 3>(ImuState::kTheta, ImuState::kTheta);
+  s.P.block<3, 3>(ImuState::kTheta, ImuState::kTheta) = s.imu.R.transpose() * Pth_W * s.imu.R;
+  s.P.diagonal().segment<3>(ImuState::kPos).setConstant(sq(opt_.init_sigma_pos));
+  s.P.diagonal().segment<3>(ImuState::kVel).setConstant(sq(opt_.init_sigma_vel));
+  s.P.diagonal().segment<3>(ImuState::kBg).setConstant(sq(opt_.init_sigma_bg));
+  s.P.diagonal().segment<3>(ImuState::kBa).setConstant(sq(opt_.init_sigma_ba));
+  if (s.estimates_td())
+    s.P(s.td_index, s.td_index) = sq(opt_.td_sigma_init_s);
+  initialized_ = true;
+  init_imu_.clear();
+  return true;
+}
+
+void VioManager::process_image(int64_t t_cam_ns, const cv::Mat &gray) {
+  const auto t0 = Clock::now();
+  const auto &tracked = tracker_.track(t_cam_ns, gray);
+  db_.add_frame(t_cam_ns, tracked);
+  times_.tracking += ms_since(t0);
+  process_frame(t_cam_ns, t0);
+}
+
+void VioManager::process_features(int64_t t_cam_ns, const std::vector<ov_core::PointObservation> &obs) {
+  const auto t0 = Clock::now();
+  for (const auto &o : obs)
+    db_.add_observation(o.id, t_cam_ns, o.uv, camera_.undistort(o.uv));
+  times_.tracking += ms_since(t0);
+  process_frame(t_cam_ns, t0);
+}
+
+void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time_point t_start) {
+  ++counters_.images;
+  auto t0 = Clock::now();
+
+  State &s = *state_;
+  if (!initialized_ && !try_initialize(t_cam_ns)) {
+    ++counters_.images_before_init;
+    // Nothing to estimate yet: keep the tracks short so the first update only sees stamps that get clones.
+    db_.remove_observations_older_than(t_cam_ns);
+    return;
+  }
+
+  // Propagate to the image's IMU-clock time and clone there.
+  t0 = Clock::now();
+  if (opt_.td_mode == TdMode::Oracle)
+    s.td = td_for_image_s(t_cam_ns);
+  const int64_t t_imu = std::max(s.t_imu_ns, t_cam_ns + ov_core::s_to_ns(s.td));
+  if (!propagator_.propagate(s, t_imu, 0.0))
+    throw ov_core::UsageError("IMU data does not reach image " + std::to_string(t_cam_ns));
+  if (opt_.zupt && is_still(t_cam_ns)) {
+    // Still platform: no parallax for triangulation, so constrain the velocity instead and keep no clone.
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3, s.dim());
+    H.block<3, 3>(0, ImuState::kVel).setIdentity();
+    state_helper::ekf_update(s, H, -s.imu.v, opt_.zupt_sigma_v * opt_.zupt_sigma_v);
+    db_.remove_observations_at(t_cam_ns);
+    ++counters_.zupts;
+    times_.propagation += ms_since(t0);
+    ++times_.frames;
+    times_.total += ms_since(t_start);
+    if (on_state_)
+      on_state_(snapshot());
+    return;
+  }
+  state_helper::clone(s, t_cam_ns, opt_.td_mode == TdMode::Sr, propagator_.last_w_B(), s.imu.v);
+  clone_rates_[t_cam_ns] = propagator_.last_w_B();
+  times_.propagation += ms_since(t0);
+
+  t0 = Clock::now();
+  update_and_marginalize(t_cam_ns);
+  times_.update += ms_since(t0);
+
+  ++times_.frames;
+  times_.total += ms_since(t_start);
+  accumulate_nees();
+  if (on_state_)
+    on_state_(snapshot());
+}
+
+bool VioManager::is_still(int64_t t_cam_ns) const {
+  std::vector<const ov_core::Feature *> seen;
+  db_.features_observed_at(t_cam_ns, seen);
+  std::vector<double> disparity;
+  disparity.reserve(seen.size());
+  for (const auto *f : seen) {
+    const auto &o = f->newest();
+    if (o.t_cam_ns == t_cam_ns && o.vel_valid && f->obs.size() >= 2) {
+      const auto &prev = f->obs[f->obs.size() - 2];
+      disparity.push_back((o.uv - prev.uv).norm());
+    }
+  }
+  if (disparity.size() < 10)
+    return false;
+  std::nth_element(disparity.begin(), disparity.begin() + disparity.size() / 2, disparity.end());
+  return disparity[disparity.size() / 2] < opt_.zupt_max_disparity_px;
+}
+
+void VioManager::update_and_marginalize(int64_t t_cam_ns) {
+  State &s = *state_;
+  // Features the tracker lost in this frame have complete tracks; when the window is full, features seen by the
+  // oldest clone must be used now or their information about it is lost.
+  std::vector<const ov_core::Feature *> feats;
+  db_.lost_features(t_cam_ns, feats);
+  const bool window_full = static_cast<int>(s.clones.size()) > opt_.max_clones;
+  int64_t oldest = s.clones.begin()->first;
+  if (window_full) {
+    std::vector<const ov_core::Feature *> old;
+    db_.features_observed_at(oldest, old);
+    feats.insert(feats.end(), old.begin(), old.end());
+    std::sort(feats.begin(), feats.end(), [](const auto *a, const auto *b) { return a->id < b->id; });
+    feats.erase(std::unique(feats.begin(), feats.end()), feats.end());
+  }
+  if (!feats.empty()) {
+    std::vector<ResidualRecord> records;
+    const UpdateStats st =
+        updater_.update(s, feats, td_observation(opt_.td_mode), tracked_velocities_, log_ ? &records : nullptr);
+    ++counters_.updates;
+    counters_.features_used += st.features_used;
+    counters_.features_gated += st.gated_chi2;
+    counters_.features_rejected += st.rejected_triangulation;
+    for (int n : st.td_obs_used)
+      counters_.td_rows += n;
+    if (log_)
+      log_->write(records);
+    // A feature used in an update must not be used again: its information is in the state now.
+    std::vector<size_t> ids;
+    ids.reserve(feats.size());
+    for (const auto *f : feats)
+      ids.push_back(f->id);
+    for (size_t id : ids)
+      db_.remove(id);
+  }
+  if (window_full) {
+    state_helper::marginalize_clone(s, oldest);
+    clone_rates_.erase(oldest);
+    db_.remove_observations_older_than(s.clones.begin()->first);
+  }
+}
+
+void VioManager::accumulate_nees() {
+  // Only meaningful when the estimate lives in the ground truth's frame (ground-truth initialisation).
+  ov_core::StateSample g;
+  if (opt_.init_mode != InitMode::GroundTruth || !gt_at(gt_, state_->t_imu_ns, g))
+    return;
+  const State &s = *state_;
+  // Errors in the convention of state.h: R_true = R̂ Exp(δθ), p_true = p̂ + δp.
+  const Eigen::Vector3d e_th = ov_core::so3_log(s.imu.R.transpose() * g.q_WB.toRotationMatrix());
+  const Eigen::Vector3d e_p = g.p - s.imu.p;
+  const Eigen::Matrix3d P_th = s.P.block<3, 3>(ImuState::kTheta, ImuState::kTheta);
+  const Eigen::Matrix3d P_p = s.P.block<3, 3>(ImuState::kPos, ImuState::kPos);
+  nees_.ori_sum += e_th.dot(P_th.ldlt().solve(e_th));
+  nees_.pos_sum += e_p.dot(P_p.ldlt().solve(e_p));
+  ++nees_.count;
+}
+
+ov_core::StateSample VioManager::snapshot() const {
+  const State &s = *state_;
+  ov_core::StateSample o;
+  o.t_ns = s.t_imu_ns;
+  o.p = s.imu.p;
+  o.q_WB = Eigen::Quaterniond(s.imu.R).normalized();
+  o.v = s.imu.v;
+  o.bg = s.imu.bg;
+  o.ba = s.imu.ba;
+  o.td_s = s.td;
+  o.td_sigma_s = s.td_sigma();
+  o.has_velocity = true;
+  o.has_td = true;
+  return o;
+}
+
+} // namespace ov_msckf_ton

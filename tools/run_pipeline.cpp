@@ -1,0 +1,67 @@
+#include "tools/run_pipeline.h"
+#include "ov_core/io/trajectory_io.h"
+#include "ov_core/types/errors.h"
+#include "tools/progress.h"
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+
+namespace ovton {
+
+void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov_msckf_ton::VioOptions &opt) {
+  if (!td_init_given && data.td_prior_s != 0.0)
+    opt.td_init_s = data.td_prior_s;
+}
+
+RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
+  const auto &opt = req.opt;
+  ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
+  if (data.has_td_truth())
+    vio.set_td_oracle([&data](int64_t t) { return data.td_truth_at(t); });
+  else if (opt.td_mode == ov_msckf_ton::TdMode::Oracle)
+    throw ov_core::UsageError("mode oracle needs " + data.root + " to have td_truth/data.csv");
+  if (opt.init_mode == ov_msckf_ton::InitMode::GroundTruth) {
+    if (!data.has_groundtruth() || !data.groundtruth.front().has_velocity)
+      throw ov_core::UsageError("ground-truth initialisation needs full-state ground truth in " + data.root);
+    vio.set_groundtruth(data.groundtruth);
+  }
+  RunResult res;
+  std::unique_ptr<ov_core::TrajectoryWriter> writer;
+  if (!req.output.empty())
+    writer = std::make_unique<ov_core::TrajectoryWriter>(req.output, req.tum ? ov_core::TrajectoryFormat::Tum
+                                                                             : ov_core::TrajectoryFormat::Csv);
+  vio.set_state_callback([&](const ov_core::StateSample &s) {
+    if (writer)
+      writer->write(s);
+    res.traj.push_back(s);
+  });
+  std::unique_ptr<ov_msckf_ton::ResidualLogWriter> rlog;
+  if (!req.residual_log.empty()) {
+    rlog = std::make_unique<ov_msckf_ton::ResidualLogWriter>(req.residual_log);
+    vio.set_residual_log(rlog.get());
+  }
+
+  ProgressBar bar(req.label.empty() ? "run " + ov_msckf_ton::to_string(opt.td_mode) : req.label, !req.progress);
+  const auto t0 = std::chrono::steady_clock::now();
+  size_t last_i = 0;
+  res.replay = ov_core::Replay(data).run(vio, [&](size_t i, size_t n) {
+    last_i = i;
+    char extra[64];
+    std::snprintf(extra, sizeof(extra), "t_d %.3f ms", vio.state().td * 1e3);
+    bar.update(i, n, extra);
+    return !interrupted() && (req.max_images <= 0 || static_cast<long>(i) < req.max_images);
+  });
+  bar.finish();
+  res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  res.interrupted = interrupted();
+  if (last_i > 0)
+    res.data_span_s = ov_core::ns_to_s(data.images[last_i - 1].t_cam_ns - data.images.front().t_cam_ns);
+  res.counters = vio.counters();
+  res.times = vio.times();
+  res.nees = vio.nees();
+  res.init_message = vio.init_message();
+  return res;
+}
+
+} // namespace ovton

@@ -1,0 +1,40 @@
+#pragma once
+// One replay of a dataset through the estimator, shared by `run`, `compare` and `benchmark`.
+#include "ov_core/io/dataset.h"
+#include "ov_core/io/replay.h"
+#include "ov_msckf_ton/core/vio_manager.h"
+
+#include <string>
+#include <vector>
+
+namespace ovton {
+
+struct RunRequest {
+  ov_msckf_ton::VioOptions opt;
+  std::string output;       ///< trajectory file ("" = none)
+  bool tum = false;         ///< TUM text instead of the project CSV
+  std::string residual_log; ///< "" = none
+  long max_images = 0;      ///< 0 = all
+  bool progress = true;     ///< progress bar on stderr
+  std::string label;        ///< progress bar label
+};
+
+struct RunResult {
+  std::vector<ov_core::StateSample> traj;
+  ov_msckf_ton::VioCounters counters;
+  ov_msckf_ton::StageTimes times;
+  ov_msckf_ton::NeesStats nees;
+  ov_core::ReplayStats replay;
+  std::string init_message;
+  double wall_s = 0.0;
+  double data_span_s = 0.0; ///< camera time covered by the images replayed
+  bool interrupted = false;
+};
+
+/// Runs the estimator over `data` as asked. Rows are written (and flushed) as they are produced.
+RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req);
+
+/// Applies the dataset's own facts to options the user did not set: Kalibr timeshift as t_d prior.
+void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov_msckf_ton::VioOptions &opt);
+
+} // namespace ovton
