@@ -13,5 +13,7 @@ int cmd_info(const Args &args);
 int cmd_simulate(const Args &args);
 int cmd_perturb(const Args &args);
 int cmd_run(const Args &args);
+int cmd_compare(const Args &args);
+int cmd_benchmark(const Args &args);
 
 } // namespace ovton

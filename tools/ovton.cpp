@@ -17,10 +17,12 @@ struct Command {
 const std::map<std::string, Command> &commands() {
   static const std::map<std::string, Command> cmds = {
       {"run", {ovton::cmd_run, "replay a dataset through the MSCKF and write a trajectory CSV"}},
+      {"compare", {ovton::cmd_compare, "run a dataset under several time-offset modes: tables and plots"}},
       {"info", {ovton::cmd_info, "load a dataset folder, validate it and print what it holds"}},
       {"eval", {ovton::cmd_eval, "APE/ARE/RPE/TPE/CIT of a trajectory against ground truth"}},
       {"simulate", {ovton::cmd_simulate, "write a synthetic EuRoC-format folder with a known time offset"}},
       {"perturb", {ovton::cmd_perturb, "rewrite a real folder's image stamps with a time-offset model"}},
+      {"benchmark", {ovton::cmd_benchmark, "per-frame cost by stage, x real time and memory, mode by mode"}},
   };
   return cmds;
 }

@@ -50,6 +50,8 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
     char extra[64];
     std::snprintf(extra, sizeof(extra), "t_d %.3f ms", vio.state().td * 1e3);
     bar.update(i, n, extra);
+    if (req.on_progress)
+      req.on_progress(i, n);
     return !interrupted() && (req.max_images <= 0 || static_cast<long>(i) < req.max_images);
   });
   bar.finish();

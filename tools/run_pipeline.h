@@ -4,6 +4,7 @@
 #include "ov_core/io/replay.h"
 #include "ov_msckf_ton/core/vio_manager.h"
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,8 @@ struct RunRequest {
   long max_images = 0;      ///< 0 = all
   bool progress = true;     ///< progress bar on stderr
   std::string label;        ///< progress bar label
+  /// Called after each image with (images done, images in the dataset); the benchmark samples memory here.
+  std::function<void(size_t, size_t)> on_progress;
 };
 
 struct RunResult {

@@ -45,8 +45,12 @@ void FeatureDatabase::add_observation(size_t id, int64_t t_cam_ns, const Eigen::
   o.t_cam_ns = t_cam_ns;
   o.uv = uv;
   o.xy = xy;
-  if (!f.obs.empty()) {
-    const FeatureObservation &prev = f.obs.back();
+  const FeatureObservation *prev_ptr = f.obs.empty() ? nullptr : &f.obs.back();
+  auto ghost = inserted ? last_seen_.find(id) : last_seen_.end();
+  if (ghost != last_seen_.end() && ghost->second.t_cam_ns < t_cam_ns)
+    prev_ptr = &ghost->second;
+  if (prev_ptr) {
+    const FeatureObservation &prev = *prev_ptr;
     // Difference in int64 first: stamps near 1.4e18 ns would lose the nanoseconds as doubles.
     const double dt = static_cast<double>(t_cam_ns - prev.t_cam_ns) * 1e-9;
     o.vel_uv = (uv - prev.uv) / dt;
@@ -54,6 +58,8 @@ void FeatureDatabase::add_observation(size_t id, int64_t t_cam_ns, const Eigen::
     o.vel_valid = true;
   }
   f.obs.push_back(o);
+  if (ghost != last_seen_.end())
+    last_seen_.erase(ghost);
 }
 
 void FeatureDatabase::lost_features(int64_t t_newest_cam_ns, std::vector<const Feature *> &out) const {
@@ -81,6 +87,8 @@ void FeatureDatabase::features_observed_at(int64_t t_cam_ns, std::vector<const F
 }
 
 void FeatureDatabase::remove_observations_older_than(int64_t t_cam_ns) {
+  for (auto it = last_seen_.begin(); it != last_seen_.end();)
+    it = it->second.t_cam_ns < t_cam_ns ? last_seen_.erase(it) : std::next(it);
   for (auto it = features_.begin(); it != features_.end();) {
     auto &obs = it->second.obs;
     obs.erase(obs.begin(), first_not_older(obs, t_cam_ns));
@@ -99,7 +107,14 @@ void FeatureDatabase::remove_observations_at(int64_t t_cam_ns) {
 }
 
 bool FeatureDatabase::remove(size_t id) {
-  return features_.erase(id) > 0;
+  const auto it = features_.find(id);
+  if (it == features_.end())
+    return false;
+  // The tracker may go on following this id; its next observation still has a velocity with respect to this one.
+  if (!it->second.obs.empty())
+    last_seen_[id] = it->second.obs.back();
+  features_.erase(it);
+  return true;
 }
 
 const Feature *FeatureDatabase::get(size_t id) const {

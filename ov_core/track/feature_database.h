@@ -69,9 +69,14 @@ public:
   /// Drops the observation stamped exactly t_cam_ns from every feature (a marginalised clone that is not the
   /// oldest); features left empty are removed. The next observation keeps its velocity for the same reason.
   void remove_observations_at(int64_t t_cam_ns);
-  /// Removes one feature; returns false when it does not exist.
+  /// Removes one feature (e.g. after it was used in an update); returns false when it does not exist. Its newest
+  /// observation is remembered so that, if the tracker keeps the id, the next observation still gets a velocity:
+  /// the image motion is a fact of the tracker, not information the filter has used.
   bool remove(size_t id);
-  void clear() { features_.clear(); }
+  void clear() {
+    features_.clear();
+    last_seen_.clear();
+  }
 
   const Feature *get(size_t id) const;
   size_t size() const { return features_.size(); }
@@ -83,6 +88,7 @@ public:
 private:
   size_t obs_capacity_;
   std::unordered_map<size_t, Feature> features_;
+  std::unordered_map<size_t, FeatureObservation> last_seen_; ///< newest observation of removed features
 };
 
 } // namespace ov_core

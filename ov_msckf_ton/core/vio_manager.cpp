@@ -214,8 +214,13 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
       on_state_(snapshot());
     return;
   }
-  state_helper::clone(s, t_cam_ns, opt_.td_mode == TdMode::Sr, propagator_.last_w_B(), s.imu.v);
-  clone_rates_[t_cam_ns] = propagator_.last_w_B();
+  // The clone's t_d Jacobian needs the body rate AT the image time (interpolated reading), not the mean over the
+  // last IMU interval, and not a stale value: the first clone after initialisation has no interval behind it.
+  ov_core::ImuData at_image;
+  const Eigen::Vector3d w_B =
+      propagator_.reading_at(s.t_imu_ns, at_image) ? Eigen::Vector3d(at_image.wm - s.imu.bg) : propagator_.last_w_B();
+  state_helper::clone(s, t_cam_ns, opt_.td_mode == TdMode::Sr, w_B, s.imu.v);
+  clone_rates_[t_cam_ns] = w_B;
   times_.propagation += ms_since(t0);
 
   t0 = Clock::now();

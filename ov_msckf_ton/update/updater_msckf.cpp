@@ -118,8 +118,17 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
       o.vel_source = kVelocityNone;
     }
     o.td_column = td_obs == TdObservation::ImagePlane && o.vel_source != kVelocityNone && state.estimates_td();
-    any_td = any_td || o.td_column;
   }
+  // All or nothing per feature: an observation without a velocity shifts by an unknown V·δt_d too. Giving t_d
+  // columns to only some rows would tell the filter that the others stay put, a relative shift the feature position
+  // cannot absorb: spurious information that pins t̂_d to td_ref. Such a feature constrains t_d only once every
+  // observation has a velocity (a track that started before the window, or FVON's prediction for its first one).
+  bool all_td = m > 0;
+  for (int k = 0; k < m; ++k)
+    all_td = all_td && out.obs[k].td_column;
+  for (int k = 0; k < m; ++k)
+    out.obs[k].td_column = all_td;
+  any_td = all_td;
   const int nc = 6 * m + (any_td ? 1 : 0);
   out.cols.resize(nc);
   for (int k = 0; k < m; ++k)

@@ -1,0 +1,332 @@
+// `ovton benchmark`: per-frame cost by stage, throughput as a multiple of real time, and resident memory over a run,
+// for one or more time-offset modes replayed one after another in this process (see docs/benchmarks.md).
+#include "ov_core/io/dataset.h"
+#include "ov_core/sim/simulator.h"
+#include "ov_core/types/errors.h"
+#include "tools/commands.h"
+#include "tools/mem_usage.h"
+#include "tools/progress.h"
+#include "tools/run_pipeline.h"
+
+#include <algorithm>
+#include <array>
+#include <boost/program_options.hpp>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <opencv2/core.hpp>
+#include <sstream>
+#include <thread>
+
+namespace po = boost::program_options;
+namespace fs = std::filesystem;
+
+namespace ovton {
+
+namespace {
+
+/// What one mode's run left behind; the trajectory itself is dropped so it does not weigh on the next mode's RSS.
+struct ModeBench {
+  std::string mode;
+  long images = 0, images_before_init = 0, updates = 0, features_used = 0;
+  double data_span_s = 0, wall_s = 0;
+  // Mean cost per processed image [ms]. `other` is what the stage clocks do not see: IMU hand-over, replay,
+  // trajectory output and the progress bar; total = wall / images, so the columns add up.
+  double load = 0, track = 0, prop = 0, update = 0, nets = 0, other = 0, total = 0;
+  std::array<double, 4> rss_quarter{}; ///< RSS [MB] at 25/50/75/100 % of the images
+  double rss_start = 0, peak = 0;
+  bool peak_own = false; ///< peak belongs to this mode alone (kernel mark was reset before it)
+  bool interrupted = false;
+  std::string init_message;
+
+  double realtime() const { return wall_s > 0 ? data_span_s / wall_s : 0.0; }
+  double features_per_frame() const { return images > 0 ? static_cast<double>(features_used) / images : 0.0; }
+};
+
+std::vector<std::string> split_modes(const std::string &s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string m;
+  while (std::getline(ss, m, ','))
+    if (!m.empty()) {
+      ov_msckf_ton::parse_td_mode(m); // fail before any work on a typo
+      out.push_back(m);
+    }
+  if (out.empty())
+    throw ov_core::UsageError("--modes names no mode");
+  return out;
+}
+
+std::string loadavg() {
+  std::ifstream f("/proc/loadavg");
+  std::string a, b, c;
+  if (!(f >> a >> b >> c))
+    return "n/a";
+  return a + " " + b + " " + c;
+}
+
+std::string num(double v, int prec = 3) {
+  if (!std::isfinite(v))
+    return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.*f", prec, v);
+  return buf;
+}
+
+std::string json_str(const std::string &s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\')
+      o += '\\';
+    if (static_cast<unsigned char>(c) < 0x20)
+      continue;
+    o += c;
+  }
+  return o + "\"";
+}
+
+/// Renders a 30 s (by default) flight along the built-in trajectory, or reuses one already in `dir`: rendering costs
+/// far more than the benchmark itself, and the same seed gives the same bytes anyway.
+void generate(const std::string &dir, double seconds, bool quiet) {
+  if (fs::exists(fs::path(dir) / "mav0" / "cam0" / "data.csv")) {
+    std::cerr << "benchmark: reusing the dataset in " << dir << " (delete it to render a new one)\n";
+    return;
+  }
+  ov_core::sim::SimOptions o;
+  o.out_dir = dir;
+  o.duration_s = seconds;
+  std::string last_stage;
+  size_t last_pct = 101;
+  const auto rep = ov_core::sim::write_simulation(o, [&](const std::string &stage, size_t done, size_t total) {
+    if (quiet || total == 0)
+      return;
+    const size_t pct = done * 100 / total;
+    if (stage != last_stage || pct != last_pct) {
+      std::fprintf(stderr, "\rgenerate %-12s %3zu %%", stage.c_str(), pct);
+      if (done == total)
+        std::fprintf(stderr, "\n");
+      last_stage = stage;
+      last_pct = pct;
+    }
+  });
+  std::cerr << "benchmark: rendered " << rep.n_images << " images, " << rep.n_imu << " IMU readings along "
+            << rep.trajectory << " into " << dir << " in " << num(rep.total_seconds, 1) << " s\n";
+}
+
+ModeBench bench_mode(const ov_core::Dataset &data, RunRequest req, const std::string &mode) {
+  ModeBench b;
+  b.mode = mode;
+  req.opt.td_mode = ov_msckf_ton::parse_td_mode(mode);
+  req.label = "benchmark " + mode;
+
+  b.peak_own = reset_peak_rss();
+  b.rss_start = current_rss_mb();
+  // The kernel may keep an older high-water mark in getrusage (e.g. after a thread exit); then the reset did not
+  // reach what we read and the peak is the process's.
+  if (b.peak_own && peak_rss_mb() > b.rss_start + 1.0)
+    b.peak_own = false;
+
+  const size_t n_all = data.images.size();
+  const size_t n_run = req.max_images > 0 ? std::min(n_all, static_cast<size_t>(req.max_images)) : n_all;
+  std::array<size_t, 4> at{};
+  for (size_t q = 0; q < 4; ++q)
+    at[q] = std::max<size_t>(1, (n_run * (q + 1) + 3) / 4);
+  std::array<bool, 4> taken{};
+  b.rss_quarter.fill(std::nan(""));
+  req.on_progress = [&](size_t i, size_t) {
+    for (size_t q = 0; q < 4; ++q)
+      if (!taken[q] && i >= at[q]) {
+        b.rss_quarter[q] = current_rss_mb();
+        taken[q] = true;
+      }
+  };
+
+  const RunResult r = run_dataset(data, req);
+  // A replay can end short of n_run (images beyond the IMU log); the last sample is then the end of the run.
+  if (!taken[3])
+    b.rss_quarter[3] = current_rss_mb();
+  // ru_maxrss is in kB and the samples in pages: keep the peak from reading below a sample by rounding.
+  b.peak = peak_rss_mb();
+  for (double v : b.rss_quarter)
+    if (std::isfinite(v))
+      b.peak = std::max(b.peak, v);
+
+  const auto &c = r.counters;
+  const auto &t = r.times;
+  b.images = c.images;
+  b.images_before_init = c.images_before_init;
+  b.updates = c.updates;
+  b.features_used = c.features_used;
+  b.data_span_s = r.data_span_s;
+  b.wall_s = r.wall_s;
+  b.interrupted = r.interrupted;
+  b.init_message = r.init_message;
+  if (b.images > 0) {
+    const double n = static_cast<double>(b.images);
+    b.load = t.image_load / n;
+    b.track = t.tracking / n;
+    b.prop = t.propagation / n;
+    b.update = t.update / n;
+    b.nets = t.networks / n;
+    b.total = r.wall_s * 1e3 / n;
+    b.other = b.total - (b.load + b.track + b.prop + b.update + b.nets);
+  }
+  return b;
+}
+
+void print_tables(const std::vector<ModeBench> &res, std::ostream &os) {
+  char line[256];
+  os << "\nper-frame cost [ms], mean over the images processed (stage clocks of VioManager; total = wall / images;\n"
+        "x realtm = data span / wall; feat/frame = features used by MSCKF updates per image)\n";
+  std::snprintf(line, sizeof(line), "%-7s %6s %7s %7s %7s %7s %7s %7s %7s %9s %8s %10s\n", "mode", "images", "load",
+                "track", "prop", "update", "nets", "other", "total", "x realtm", "x first", "feat/frame");
+  os << line;
+  for (const auto &b : res) {
+    std::snprintf(line, sizeof(line), "%-7s %6ld %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %9.1f %8.2f %10.1f\n",
+                  b.mode.c_str(), b.images, b.load, b.track, b.prop, b.update, b.nets, b.other, b.total, b.realtime(),
+                  res.front().total > 0 ? b.total / res.front().total : 0.0, b.features_per_frame());
+    os << line;
+  }
+  os << "\nresident memory [MB] at 25/50/75/100 % of the images; growth = 100 % - 25 %\n";
+  std::snprintf(line, sizeof(line), "%-7s %8s %8s %8s %8s %8s %8s %8s\n", "mode", "start", "25%", "50%", "75%", "100%",
+                "peak", "growth");
+  os << line;
+  bool any_process_peak = false;
+  for (const auto &b : res) {
+    any_process_peak |= !b.peak_own;
+    std::snprintf(line, sizeof(line), "%-7s %8.1f %8.1f %8.1f %8.1f %8.1f %7.1f%s %8.1f\n", b.mode.c_str(), b.rss_start,
+                  b.rss_quarter[0], b.rss_quarter[1], b.rss_quarter[2], b.rss_quarter[3], b.peak,
+                  b.peak_own ? " " : "*", b.rss_quarter[3] - b.rss_quarter[0]);
+    os << line;
+  }
+  if (any_process_peak)
+    os << "* peak of the whole process so far (the kernel's high-water mark could not be reset for this mode)\n";
+  if (res.size() > 1)
+    os << "Modes after the first ran after it in the same process, on the same data already in memory and under the "
+          "same machine load: read the 'x first' column as a ratio measured in the same run, not as an absolute.\n";
+  for (const auto &b : res) {
+    if (b.images_before_init > 0)
+      os << b.mode << ": " << b.images_before_init << " of " << b.images
+         << " images came before initialisation (load and tracking only)\n";
+    if (b.interrupted)
+      os << b.mode << ": interrupted; numbers cover the images processed\n";
+  }
+}
+
+void write_json(const std::string &file, const std::vector<ModeBench> &res, const std::string &dataset,
+                const std::string &config, const std::string &init, const std::string &load_start,
+                const std::string &load_end) {
+  std::ofstream out(file);
+  if (!out)
+    throw ov_core::UsageError("cannot write " + file);
+  out << "{\n  \"dataset\": " << json_str(dataset) << ",\n  \"config\": " << json_str(config)
+      << ",\n  \"init\": " << json_str(init) << ",\n  \"cores\": " << std::thread::hardware_concurrency()
+      << ",\n  \"loadavg_start\": " << json_str(load_start) << ",\n  \"loadavg_end\": " << json_str(load_end)
+      << ",\n  \"same_process\": true,\n  \"modes\": [";
+  for (size_t i = 0; i < res.size(); ++i) {
+    const auto &b = res[i];
+    out << (i ? "," : "") << "\n    {\"mode\": " << json_str(b.mode) << ", \"images\": " << b.images
+        << ", \"images_before_init\": " << b.images_before_init << ", \"updates\": " << b.updates
+        << ", \"features_used\": " << b.features_used << ", \"features_per_frame\": " << num(b.features_per_frame())
+        << ",\n     \"data_span_s\": " << num(b.data_span_s) << ", \"wall_s\": " << num(b.wall_s)
+        << ", \"realtime_factor\": " << num(b.realtime())
+        << ", \"ratio_to_first\": " << num(res.front().total > 0 ? b.total / res.front().total : NAN)
+        << ",\n     \"ms_per_frame\": {\"image_load\": " << num(b.load, 4) << ", \"tracking\": " << num(b.track, 4)
+        << ", \"propagation\": " << num(b.prop, 4) << ", \"update\": " << num(b.update, 4)
+        << ", \"networks\": " << num(b.nets, 4) << ", \"other\": " << num(b.other, 4)
+        << ", \"total\": " << num(b.total, 4) << "},\n     \"rss_mb\": {\"start\": " << num(b.rss_start, 2)
+        << ", \"p25\": " << num(b.rss_quarter[0], 2) << ", \"p50\": " << num(b.rss_quarter[1], 2)
+        << ", \"p75\": " << num(b.rss_quarter[2], 2) << ", \"p100\": " << num(b.rss_quarter[3], 2)
+        << ", \"peak\": " << num(b.peak, 2) << ", \"peak_scope\": " << json_str(b.peak_own ? "mode" : "process")
+        << "},\n     \"interrupted\": " << (b.interrupted ? "true" : "false") << "}";
+  }
+  out << "\n  ]\n}\n";
+  out.close();
+  if (!out)
+    throw ov_core::UsageError("failed writing " + file);
+}
+
+} // namespace
+
+int cmd_benchmark(const Args &args) {
+  po::options_description desc(
+      "ovton benchmark: per-frame cost by stage, x real time and resident memory, mode after mode on one thread");
+  std::string config, dataset, generate_dir, modes_str = "sr", init, json;
+  double gen_seconds = 30.0;
+  bool quiet = false;
+  RunRequest req;
+  desc.add_options()("help,h", "this help")                                                                       //
+      ("dataset,d", po::value(&dataset), "dataset folder (EuRoC or SCube)")                                       //
+      ("generate", po::value(&generate_dir), "without --dataset: render a built-in flight here and benchmark it") //
+      ("generate-seconds", po::value(&gen_seconds), "length of the --generate flight [s] (default 30)")           //
+      ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")                      //
+      ("modes,m", po::value(&modes_str), "comma-separated td modes, run in this order (default sr)")              //
+      ("init", po::value(&init), "static|groundtruth (overrides the config; groundtruth with --generate)")        //
+      ("max-images", po::value(&req.max_images), "stop each mode after this many images")                         //
+      ("json", po::value(&json), "also write the numbers as JSON")                                                //
+      ("quiet,q", po::bool_switch(&quiet), "no progress bars");
+  po::variables_map vm;
+  po::store(po::command_line_parser(args).options(desc).run(), vm);
+  if (vm.count("help")) {
+    std::cout << desc << "\n";
+    return 0;
+  }
+  po::notify(vm);
+  if (dataset.empty() && generate_dir.empty())
+    throw ov_core::UsageError("give --dataset DIR, or --generate DIR to render a dataset to benchmark");
+  if (!dataset.empty() && !generate_dir.empty())
+    throw ov_core::UsageError("--dataset and --generate are exclusive");
+  if (!(gen_seconds > 0))
+    throw ov_core::UsageError("--generate-seconds must be positive");
+  if (!init.empty() && init != "static" && init != "groundtruth")
+    throw ov_core::UsageError("--init must be static or groundtruth");
+  const auto modes = split_modes(modes_str);
+
+  req.opt = config.empty() ? ov_msckf_ton::VioOptions{} : ov_msckf_ton::load_vio_options(config);
+  if (!generate_dir.empty()) {
+    // The built-in flight starts moving: a static initialisation would never succeed.
+    if (init.empty())
+      init = "groundtruth";
+    generate(generate_dir, gen_seconds, quiet);
+    dataset = generate_dir;
+  }
+  if (!init.empty())
+    req.opt.init_mode = init == "static" ? ov_msckf_ton::InitMode::Static : ov_msckf_ton::InitMode::GroundTruth;
+  req.progress = !quiet;
+
+  // One thread, so that the numbers say what one core does and modes do not compete with each other.
+  cv::setNumThreads(0);
+
+  const ov_core::Dataset data = ov_core::load_dataset(dataset);
+  apply_dataset_defaults(data, false, req.opt);
+  const std::string load_start = loadavg();
+  std::cout << "dataset " << dataset << ": " << data.images.size() << " images " << data.cam.width << "x"
+            << data.cam.height << ", " << data.imu.size() << " IMU readings; init "
+            << (req.opt.init_mode == ov_msckf_ton::InitMode::Static ? "static" : "groundtruth") << "; config "
+            << (config.empty() ? "built-in defaults" : config) << "\nmachine: " << std::thread::hardware_concurrency()
+            << " cores, load average " << load_start << "; one thread per mode, modes run one after another\n"
+            << std::flush;
+
+  install_interrupt_handler();
+  std::vector<ModeBench> res;
+  for (const auto &m : modes) {
+    res.push_back(bench_mode(data, req, m));
+    if (!quiet)
+      std::cerr << m << ": " << res.back().init_message << "\n";
+    if (res.back().interrupted)
+      break;
+  }
+  const std::string load_end = loadavg();
+  print_tables(res, std::cout);
+  std::cout << "load average at the end: " << load_end << "\n";
+  if (!json.empty()) {
+    const bool stat = req.opt.init_mode == ov_msckf_ton::InitMode::Static;
+    write_json(json, res, dataset, config, stat ? "static" : "groundtruth", load_start, load_end);
+    std::cout << "json: " << json << "\n";
+  }
+  return res.back().interrupted ? 130 : 0;
+}
+
+} // namespace ovton

@@ -1,0 +1,137 @@
+#include "tools/compare_report.h"
+#include "ov_core/types/errors.h"
+#include "tools/progress.h"
+#include "tools/run_pipeline.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <ostream>
+
+namespace fs = std::filesystem;
+
+namespace ovton {
+
+namespace {
+
+std::vector<std::string> mode_names() {
+  std::vector<std::string> names;
+  for (auto m : ov_msckf_ton::all_td_modes())
+    names.push_back(ov_msckf_ton::to_string(m));
+  return names;
+}
+
+/// One line for the log: the numbers a user watching a long comparison wants before the table is written.
+std::string done_line(const ov_core::RunRecord &rec, const ov_core::ReportRow &row, size_t done, size_t total) {
+  char buf[512];
+  int n =
+      std::snprintf(buf, sizeof(buf), "compare [%zu/%zu] %s: %s", done, total, rec.name.c_str(), rec.status.c_str());
+  const auto add = [&](const char *fmt, double v) {
+    if (std::isfinite(v) && n >= 0 && n < static_cast<int>(sizeof(buf)))
+      n += std::snprintf(buf + n, sizeof(buf) - n, fmt, v);
+  };
+  if (!rec.traj.empty()) {
+    add(", %.0f poses", static_cast<double>(rec.traj.size()));
+    add(", APE %.4f m", row.ape_rmse_m);
+    add(", TPE %.3f mm", row.tpe_rmse_mm);
+    add(", final t_d %.3f ms", row.final_td_ms);
+  }
+  add(", %.1f s", row.runtime_s);
+  add(" (%.1fx real time)", row.realtime_factor);
+  return buf;
+}
+
+} // namespace
+
+std::vector<ov_msckf_ton::TdMode> parse_compare_modes(const std::string &list) {
+  std::vector<ov_msckf_ton::TdMode> modes;
+  for (const auto &name : ov_core::parse_name_list(list, mode_names(), "mode"))
+    modes.push_back(ov_msckf_ton::parse_td_mode(name));
+  return modes;
+}
+
+CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &req) {
+  using ov_msckf_ton::TdMode;
+  if (req.modes.empty())
+    throw ov_core::UsageError("compare: no mode to run");
+  // Every run would fail the same way: say it once, before spending any time.
+  if (req.base.init_mode == ov_msckf_ton::InitMode::GroundTruth &&
+      (!data.has_groundtruth() || !data.groundtruth.front().has_velocity))
+    throw ov_core::UsageError("ground-truth initialisation needs full-state ground truth in " + data.root +
+                              " (use --init static)");
+  std::error_code ec;
+  fs::create_directories(req.out_dir, ec);
+  if (ec)
+    throw ov_core::DataError(req.out_dir, "cannot create the output folder: " + ec.message());
+
+  ov_core::ReportInfo info = req.info;
+
+  std::vector<std::string> to_run;
+  std::map<std::string, ov_core::RunRecord> skipped;
+  for (TdMode m : req.modes) {
+    const std::string name = ov_msckf_ton::to_string(m);
+    if (m == TdMode::Oracle && !data.has_td_truth()) {
+      ov_core::RunRecord rec;
+      rec.name = name;
+      rec.status = "skipped: no td_truth/data.csv";
+      info.notes.push_back("oracle skipped: " + data.root +
+                           " has no time-offset truth (td_truth/data.csv), which the oracle mode reads");
+      if (req.log)
+        *req.log << "compare: " << info.notes.back() << "\n" << std::flush;
+      skipped[name] = std::move(rec);
+      continue;
+    }
+    to_run.push_back(name);
+  }
+
+  info.jobs = std::max(1, std::min(req.jobs, static_cast<int>(to_run.size())));
+
+  const auto run_one = [&](const std::string &name) {
+    RunRequest rr;
+    rr.opt = req.base;
+    rr.opt.td_mode = ov_msckf_ton::parse_td_mode(name);
+    rr.output = (fs::path(req.out_dir) / ("traj_" + name + ".csv")).string();
+    rr.max_images = req.max_images;
+    rr.progress = false; // parallel bars would overwrite each other; the log has one line per finished mode
+    RunResult r = run_dataset(data, rr);
+    ov_core::RunRecord rec;
+    rec.name = name;
+    const bool no_estimate = r.traj.empty();
+    rec.traj = std::move(r.traj);
+    rec.traj_file = rr.output;
+    rec.wall_s = r.wall_s;
+    rec.data_span_s = r.data_span_s;
+    rec.frames = static_cast<long>(r.replay.images_fed);
+    if (r.interrupted)
+      rec.status = "interrupted";
+    else if (no_estimate)
+      rec.status = "no estimate (initialisation: " + r.init_message + ")";
+    return rec;
+  };
+  const auto on_done = [&](const ov_core::RunRecord &rec, size_t done, size_t total) {
+    if (!req.log)
+      return;
+    const auto rows = ov_core::evaluate_runs({rec}, data, req.report);
+    *req.log << done_line(rec, rows.front(), done, total) << "\n" << std::flush;
+  };
+  std::vector<ov_core::RunRecord> ran = ov_core::run_parallel(to_run, req.jobs, run_one, on_done, interrupted);
+
+  CompareResult res;
+  size_t k = 0;
+  for (TdMode m : req.modes) {
+    const std::string name = ov_msckf_ton::to_string(m);
+    auto it = skipped.find(name);
+    res.runs.push_back(it != skipped.end() ? std::move(it->second) : std::move(ran[k++]));
+  }
+  for (const auto &r : res.runs) {
+    res.failed += r.status.rfind("failed", 0) == 0;
+    res.interrupted = res.interrupted || r.status == "interrupted" || r.status.rfind("not run", 0) == 0;
+  }
+  res.rows = ov_core::evaluate_runs(res.runs, data, req.report);
+  res.files = ov_core::write_report(req.out_dir, res.runs, res.rows, data, info, req.report);
+  return res;
+}
+
+} // namespace ovton
