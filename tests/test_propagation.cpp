@@ -27,7 +27,7 @@ ImuState random_state(std::mt19937 &rng) {
 /// x ⊞ d with the convention of state.h.
 ImuState plus(const ImuState &x, const Eigen::Matrix<double, 15, 1> &d) {
   ImuState y = x;
-  y.R = x.R * so3_exp(d.segment<3>(0));
+  y.R = so3_exp(d.segment<3>(0)) * x.R;
   y.p += d.segment<3>(3);
   y.v += d.segment<3>(6);
   y.bg += d.segment<3>(9);
@@ -38,7 +38,7 @@ ImuState plus(const ImuState &x, const Eigen::Matrix<double, 15, 1> &d) {
 /// y ⊟ x.
 Eigen::Matrix<double, 15, 1> minus(const ImuState &y, const ImuState &x) {
   Eigen::Matrix<double, 15, 1> d;
-  d.segment<3>(0) = so3_log(x.R.transpose() * y.R);
+  d.segment<3>(0) = so3_log(y.R * x.R.transpose());
   d.segment<3>(3) = y.p - x.p;
   d.segment<3>(6) = y.v - x.v;
   d.segment<3>(9) = y.bg - x.bg;
@@ -173,7 +173,7 @@ TEST(Cloning, TdJacobianMatchesFiniteDifferences) {
   ImuState ap;
   ASSERT_TRUE(prop.predict_mean(s0, t_img + h_ns, ap));
   const double h = ov_core::ns_to_s(h_ns);
-  const Eigen::Vector3d dth = so3_log(c.R.transpose() * ap.R) / h;
+  const Eigen::Vector3d dth = so3_log(ap.R * c.R.transpose()) / h; // world-frame rate
   const Eigen::Vector3d dp = (ap.p - c.p) / h;
   // The clone rows of P equal J P, so the td column of J is recovered from P(clone, td) / P(td, td).
   const Eigen::Vector3d J_th = s.P.block<3, 1>(c.index, s.td_index) / s.P(s.td_index, s.td_index);
@@ -213,4 +213,48 @@ TEST(StateHelper, MarginalizeAndUpdateKeepCovarianceConsistent) {
   EXPECT_GT(s.imu.p.x(), p_before.x());
   // Clones of one unpropagated pose are exact copies, so P is singular: PSD up to rounding is what must hold.
   EXPECT_GT(state_helper::min_eigenvalue(s), -1e-12);
+}
+
+TEST(Propagation, FirstEstimateJacobiansKeepYawAndPositionUnobservable) {
+  // An update moves the state away from its first estimate. With FEJ the propagation must still carry the
+  // unobservable directions (global yaw, global translation) of the first estimate onto those of the new
+  // estimate: Φ N(k) = N(k+1). Checked through the covariance with P = N Nᵀ and no process noise.
+  ImuNoise quiet;
+  quiet.sigma_w = quiet.sigma_a = quiet.sigma_wb = quiet.sigma_ab = 0.0;
+  auto nullspace = [](const Eigen::Vector3d &p, const Eigen::Vector3d &v) {
+    Eigen::Matrix<double, 16, 4> N = Eigen::Matrix<double, 16, 4>::Zero();
+    const Eigen::Vector3d ez = Eigen::Vector3d::UnitZ();
+    N.block<3, 1>(ImuState::kTheta, 0) = ez;
+    N.block<3, 1>(ImuState::kPos, 0) = ez.cross(p);
+    N.block<3, 1>(ImuState::kVel, 0) = ez.cross(v);
+    N.block<3, 3>(ImuState::kPos, 1).setIdentity();
+    return N;
+  };
+  for (bool fej : {true, false}) {
+    Propagator prop(quiet);
+    prop.set_use_fej(fej);
+    for (int i = 0; i <= 100; ++i) {
+      ov_core::ImuData m;
+      m.t_imu_ns = static_cast<int64_t>(i) * 5000000LL;
+      m.wm = Eigen::Vector3d(0.3, -0.2, 0.5 + 0.01 * i);
+      m.am = Eigen::Vector3d(0.4, 0.1 * std::sin(0.1 * i), 9.9);
+      prop.feed_imu(m);
+    }
+    std::mt19937 rng(13);
+    State s(true);
+    s.imu = random_state(rng);
+    s.imu.set_fej();
+    // As after an update: current estimate moved away from the first estimate.
+    s.imu.p += Eigen::Vector3d(0.3, -0.2, 0.1);
+    s.imu.v += Eigen::Vector3d(-0.1, 0.25, 0.05);
+    const Eigen::Matrix<double, 16, 4> N0 = nullspace(s.imu.p_fej, s.imu.v_fej);
+    s.P = N0 * N0.transpose();
+    ASSERT_TRUE(prop.propagate(s, 400000000LL));
+    const Eigen::Matrix<double, 16, 4> N1 = nullspace(s.imu.p, s.imu.v);
+    const double err = (s.P - N1 * N1.transpose()).norm() / (N1 * N1.transpose()).norm();
+    if (fej)
+      EXPECT_LT(err, 1e-9) << "FEJ propagation does not map the nullspace";
+    else
+      EXPECT_GT(err, 1e-3) << "without FEJ the nullspace should not be preserved (the test could not fail)";
+  }
 }

@@ -181,8 +181,8 @@ TEST(UpdateJacobians, CloneAndFeatureJacobiansMatchFiniteDifferences) {
     Eigen::Matrix<double, 2, 3> Nth, Np, Nf;
     for (int i = 0; i < 3; ++i) {
       const Eigen::Vector3d d = h * Eigen::Vector3d::Unit(i);
-      project_in_clone(R * so3_exp(d), p, R_BC, p_BC, p_f, zp);
-      project_in_clone(R * so3_exp(-d), p, R_BC, p_BC, p_f, zm);
+      project_in_clone(so3_exp(d) * R, p, R_BC, p_BC, p_f, zp);
+      project_in_clone(so3_exp(-d) * R, p, R_BC, p_BC, p_f, zm);
       Nth.col(i) = (zp - zm) / (2 * h);
       project_in_clone(R, p + d, R_BC, p_BC, p_f, zp);
       project_in_clone(R, p - d, R_BC, p_BC, p_f, zm);

@@ -147,13 +147,11 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
     init_msg_ = "static initialisation (accel std " + std::to_string(r.accel_std) + " m/s^2)";
   }
   s.t_imu_ns = t_imu;
+  s.imu.set_fej();
   s.P.setZero();
   const auto sq = [](double x) { return x * x; };
   s.P.diagonal().segment<2>(ImuState::kTheta).setConstant(sq(opt_.init_sigma_rollpitch));
   s.P(ImuState::kTheta + 2, ImuState::kTheta + 2) = sq(opt_.init_sigma_yaw);
-  // Right perturbation: express the world-frame roll/pitch/yaw uncertainty in the body frame.
-  const Eigen::Matrix3d Pth_W = s.P.block<3, 3>(ImuState::kTheta, ImuState::kTheta);
-  s.P.block<3, 3>(ImuState::kTheta, ImuState::kTheta) = s.imu.R.transpose() * Pth_W * s.imu.R;
   s.P.diagonal().segment<3>(ImuState::kPos).setConstant(sq(opt_.init_sigma_pos));
   s.P.diagonal().segment<3>(ImuState::kVel).setConstant(sq(opt_.init_sigma_vel));
   s.P.diagonal().segment<3>(ImuState::kBg).setConstant(sq(opt_.init_sigma_bg));
@@ -300,8 +298,8 @@ void VioManager::accumulate_nees() {
   if (opt_.init_mode != InitMode::GroundTruth || !gt_at(gt_, state_->t_imu_ns, g))
     return;
   const State &s = *state_;
-  // Errors in the convention of state.h: R_true = R̂ Exp(δθ), p_true = p̂ + δp.
-  const Eigen::Vector3d e_th = ov_core::so3_log(s.imu.R.transpose() * g.q_WB.toRotationMatrix());
+  // Errors in the convention of state.h: R_true = Exp(δθ) R̂, p_true = p̂ + δp.
+  const Eigen::Vector3d e_th = ov_core::so3_log(g.q_WB.toRotationMatrix() * s.imu.R.transpose());
   const Eigen::Vector3d e_p = g.p - s.imu.p;
   const Eigen::Matrix3d P_th = s.P.block<3, 3>(ImuState::kTheta, ImuState::kTheta);
   const Eigen::Matrix3d P_p = s.P.block<3, 3>(ImuState::kPos, ImuState::kPos);

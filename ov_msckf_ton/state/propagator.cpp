@@ -12,7 +12,8 @@ using ov_core::so3_exp;
 using ov_core::so3_jr;
 
 void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt,
-              const Eigen::Vector3d &gravity, const ImuNoise &noise, ImuState &out, Mat15 *Phi, Mat15 *Q) {
+              const Eigen::Vector3d &gravity, const ImuNoise &noise, ImuState &out, Mat15 *Phi, Mat15 *Q,
+              bool use_fej) {
   const Eigen::Vector3d w = wm - x.bg, a = am - x.ba;
   const Eigen::Matrix3d dR = so3_exp(w * dt), dR_half = so3_exp(0.5 * w * dt);
   const Eigen::Matrix3d R_mid = x.R * dR_half;
@@ -24,22 +25,26 @@ void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3
   if (!Phi && !Q)
     return;
 
-  // d(R_mid a)/dδθ = −R_mid [a]× Exp(−ω dt/2);  d(R_mid a)/dδb_g = R_mid [a]× Jr(ω dt/2) dt/2;  d/dδb_a = −R_mid.
+  // World-frame rotation error: Exp(δθ) R a ≈ R a − [R a]× δθ. The rotated specific force is written as the state
+  // difference it integrates to, (R_mid a) dt = v' − v − g dt and ½ (R_mid a) dt² = p' − p − v dt − ½ g dt², so
+  // that with FEJ the first estimates of v and p enter exactly where OpenVINS' FEJ puts them.
+  const Eigen::Vector3d v0 = use_fej ? x.v_fej : x.v, p0 = use_fej ? x.p_fej : x.p;
+  const Eigen::Vector3d dv = out.v - v0 - gravity * dt;
+  const Eigen::Vector3d dp = out.p - p0 - v0 * dt - 0.5 * gravity * dt * dt;
+  // Bias terms: ω − δb_g rotates by Exp(−Jr(ω dt) δb_g dt) on the right of R, i.e. −R' Jr dt δb_g on the left;
+  // R_mid (a) with a = a_m − b_a − δb_a.
   const Eigen::Matrix3d Ra_x = R_mid * skew(a);
-  const Eigen::Matrix3d dAcc_dth = -Ra_x * dR_half.transpose();
   const Eigen::Matrix3d dAcc_dbg = Ra_x * so3_jr(0.5 * w * dt) * (0.5 * dt);
   const Eigen::Matrix3d dAcc_dba = -R_mid;
-  const Eigen::Matrix3d Jr_dt = so3_jr(w * dt) * dt;
   constexpr int T = ImuState::kTheta, P = ImuState::kPos, V = ImuState::kVel, G = ImuState::kBg, A = ImuState::kBa;
 
   Mat15 F = Mat15::Identity();
-  F.block<3, 3>(T, T) = dR.transpose();
-  F.block<3, 3>(T, G) = -Jr_dt;
-  F.block<3, 3>(V, T) = dAcc_dth * dt;
+  F.block<3, 3>(T, G) = -out.R * so3_jr(w * dt) * dt;
+  F.block<3, 3>(V, T) = -skew(dv);
   F.block<3, 3>(V, G) = dAcc_dbg * dt;
   F.block<3, 3>(V, A) = dAcc_dba * dt;
   F.block<3, 3>(P, V) = Eigen::Matrix3d::Identity() * dt;
-  F.block<3, 3>(P, T) = 0.5 * dAcc_dth * dt * dt;
+  F.block<3, 3>(P, T) = -skew(dp);
   F.block<3, 3>(P, G) = 0.5 * dAcc_dbg * dt * dt;
   F.block<3, 3>(P, A) = 0.5 * dAcc_dba * dt * dt;
   if (Phi)
@@ -114,10 +119,15 @@ bool Propagator::propagate(State &s, int64_t t_to_ns, double td_rate) {
   ImuState x = s.imu;
   Mat15 Phi_total = Mat15::Identity(), Q_total = Mat15::Zero();
   Eigen::Vector3d w_last = last_w_B_;
+  // FEJ: the first step starts from the state an update may have moved; its Jacobian uses the first estimates.
+  // The following steps start from states no update has touched, where first and current estimates agree.
+  bool first = true;
   const bool ok = integrate(s.t_imu_ns, t_to_ns, [&](const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt) {
     Mat15 Phi, Q;
     ImuState next;
-    imu_step(x, wm, am, dt, gravity_, noise_, next, &Phi, &Q);
+    imu_step(x, wm, am, dt, gravity_, noise_, next, &Phi, &Q, first && use_fej_);
+    first = false;
+    next.set_fej();
     Phi_total = Phi * Phi_total;
     Q_total = Phi * Q_total * Phi.transpose() + Q;
     w_last = wm - x.bg;
@@ -127,7 +137,7 @@ bool Propagator::propagate(State &s, int64_t t_to_ns, double td_rate) {
     return false;
   const double dt_total = ov_core::ns_to_s(t_to_ns - s.t_imu_ns);
   state_helper::propagate_covariance(s, Phi_total, Q_total, noise_.sigma_td * noise_.sigma_td * dt_total);
-  s.imu = x;
+  s.imu = x; // x carries the propagated values as its first estimates (set_fej in each step)
   s.t_imu_ns = t_to_ns;
   s.td += td_rate * dt_total;
   last_w_B_ = w_last;

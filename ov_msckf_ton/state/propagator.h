@@ -21,14 +21,18 @@ using Mat15 = Eigen::Matrix<double, 15, 15>;
 /// One propagation step over dt with gyro/accel readings held constant (the caller passes the mean of the two
 /// readings that bound the interval). Mean, with ω = ω_m − b_g, a = a_m − b_a, R_mid = R·Exp(ω dt/2):
 ///   R' = R·Exp(ω dt),  v' = v + (R_mid a + g) dt,  p' = p + v dt + ½ (R_mid a + g) dt²
-/// Phi is the exact first-order Jacobian of this discrete map in the error-state convention of state.h; Q the
-/// discrete noise (white noise as variance density/dt per sample, bias random walks as density²·dt).
+/// Phi is the exact first-order Jacobian of this discrete map in the error-state convention of state.h
+/// (use_fej = false), or its FEJ form with x's first estimates of v and p (use_fej = true); Q the discrete noise
+/// (white noise as variance density/dt per sample, bias random walks as density²·dt).
 void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt,
-              const Eigen::Vector3d &gravity, const ImuNoise &noise, ImuState &out, Mat15 *Phi, Mat15 *Q);
+              const Eigen::Vector3d &gravity, const ImuNoise &noise, ImuState &out, Mat15 *Phi, Mat15 *Q,
+              bool use_fej = false);
 
 class Propagator {
 public:
   Propagator(const ImuNoise &noise, double gravity_mag = 9.81);
+  /// First-estimate Jacobians in propagation (on by default; off only to measure what they change).
+  void set_use_fej(bool on) { use_fej_ = on; }
 
   void feed_imu(const ov_core::ImuData &m);
 
@@ -55,6 +59,7 @@ private:
   Eigen::Vector3d gravity_;
   std::deque<ov_core::ImuData> buf_;
   Eigen::Vector3d last_w_B_ = Eigen::Vector3d::Zero();
+  bool use_fej_ = true;
 };
 
 } // namespace ov_msckf_ton

@@ -11,7 +11,7 @@ State::State(bool estimate_td) {
 }
 
 void State::boxplus(const Eigen::VectorXd &dx) {
-  imu.R = imu.R * ov_core::so3_exp(dx.segment<3>(ImuState::kTheta));
+  imu.R = ov_core::so3_exp(dx.segment<3>(ImuState::kTheta)) * imu.R;
   imu.p += dx.segment<3>(ImuState::kPos);
   imu.v += dx.segment<3>(ImuState::kVel);
   imu.bg += dx.segment<3>(ImuState::kBg);
@@ -19,7 +19,7 @@ void State::boxplus(const Eigen::VectorXd &dx) {
   if (td_index >= 0)
     td += dx(td_index);
   for (auto &[key, c] : clones) {
-    c.R = c.R * ov_core::so3_exp(dx.segment<3>(c.index));
+    c.R = ov_core::so3_exp(dx.segment<3>(c.index)) * c.R;
     c.p += dx.segment<3>(c.index + 3);
   }
 }

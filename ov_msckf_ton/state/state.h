@@ -3,11 +3,16 @@
 // covariance whose blocks the variables index.
 //
 // Error-state convention (the only place it is written; every Jacobian test checks it numerically):
-//   R_WB = R̂_WB · Exp(δθ)          rotation: right (body-frame) perturbation, Hamilton, body -> world
+//   R_WB = Exp(δθ) · R̂_WB          rotation: left (world-frame) perturbation, Hamilton, body -> world
 //   p = p̂ + δp,  v = v̂ + δv        world-frame position and velocity of the IMU/body
 //   b_g = b̂_g + δb_g,  b_a = b̂_a + δb_a
 //   t_d = t̂_d + δt_d               t_imu = t_cam + t_d
 // Clones use the same rotation and position convention.
+//
+// Why world-frame: the directions the filter cannot observe (yaw about gravity, global position) are then fixed
+// vectors in error coordinates, and first-estimate Jacobians (FEJ: propagation and measurement Jacobians evaluated
+// at the first estimate of each variable, Huang et al. / Li & Mourikis) keep them unobservable. Without FEJ the
+// filter gains spurious information along them and becomes over-confident (NEES well above 3).
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
@@ -26,6 +31,14 @@ struct ImuState {
   Eigen::Vector3d bg = Eigen::Vector3d::Zero();
   Eigen::Vector3d ba = Eigen::Vector3d::Zero();
   int index = 0;
+  /// First estimates for FEJ: the values of the last propagation before any update touched them.
+  Eigen::Matrix3d R_fej = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p_fej = Eigen::Vector3d::Zero(), v_fej = Eigen::Vector3d::Zero();
+  void set_fej() {
+    R_fej = R;
+    p_fej = p;
+    v_fej = v;
+  }
 };
 
 /// A cloned IMU pose [δθ δp] at the IMU-clock time of one image; keyed in the window by the image's camera stamp.
@@ -37,6 +50,12 @@ struct CloneState {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   int index = -1;
+  /// First estimate (the pose when cloned): measurement Jacobians are evaluated here (FEJ); residuals use R, p.
+  bool has_fej = false;
+  Eigen::Matrix3d R_fej = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p_fej = Eigen::Vector3d::Zero();
+  const Eigen::Matrix3d &R_lin() const { return has_fej ? R_fej : R; }
+  const Eigen::Vector3d &p_lin() const { return has_fej ? p_fej : p; }
 };
 
 class State {

@@ -33,7 +33,7 @@ void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w
   J.block<3, 3>(0, ImuState::kTheta).setIdentity();
   J.block<3, 3>(3, ImuState::kPos).setIdentity();
   if (td_coupled && s.estimates_td()) {
-    J.block<3, 1>(0, s.td_index) = w_B;
+    J.block<3, 1>(0, s.td_index) = s.imu.R * w_B; // world-frame rotation error: R(t+δ) = Exp(R ω δ) R(t)
     J.block<3, 1>(3, s.td_index) = v_W;
   }
   const Eigen::MatrixXd PJt = s.P * J.transpose();
@@ -50,6 +50,9 @@ void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w
   c.td_ref = s.td;
   c.R = s.imu.R;
   c.p = s.imu.p;
+  c.has_fej = true;
+  c.R_fej = c.R;
+  c.p_fej = c.p;
   c.index = n;
   s.clones[t_cam_ns] = c;
 }

@@ -1,6 +1,6 @@
 #pragma once
 // The MSCKF camera measurement of one feature in one clone, in undistorted normalised coordinates, and its Jacobians
-// in the error-state convention of ov_msckf_ton/state/state.h (R_WB = R̂_WB·Exp(δθ), p = p̂ + δp).
+// in the error-state convention of ov_msckf_ton/state/state.h (R_WB = Exp(δθ)·R̂_WB, p = p̂ + δp).
 #include "ov_core/math/so3.h"
 
 #include <Eigen/Core>
@@ -16,8 +16,8 @@ struct CloneMeasurementJacobians {
 
 /// Projects the world point p_f into the camera of a clone:
 ///   p_B = R_WBᵀ (p_f − p_WB),   p_C = R_BCᵀ (p_B − p_BC),   z = (x/z, y/z).
-/// With R_WB = R̂_WB·Exp(δθ), R_WBᵀ ≈ (I − [δθ]×) R̂_WBᵀ, so p_B ≈ p̂_B + [p̂_B]× δθ and
-///   ∂p_C/∂δθ = R_BCᵀ [p_B]×,   ∂p_C/∂δp = −R_BCᵀ R_WBᵀ,   ∂p_C/∂p_f = R_BCᵀ R_WBᵀ,
+/// With R_WB = Exp(δθ)·R̂_WB, R_WBᵀ ≈ R̂_WBᵀ (I − [δθ]×), so p_B ≈ p̂_B + R̂_WBᵀ [p_f − p̂_WB]× δθ and
+///   ∂p_C/∂δθ = R_BCᵀ R_WBᵀ [p_f − p_WB]×,   ∂p_C/∂δp = −R_BCᵀ R_WBᵀ,   ∂p_C/∂p_f = R_BCᵀ R_WBᵀ,
 ///   ∂z/∂p_C = [1/z 0 −x/z²; 0 1/z −y/z²].
 /// Returns false (outputs untouched except p_C) when the point is not in front of the camera (z <= min_z), where
 /// the projection and its Jacobian are meaningless.
@@ -37,8 +37,8 @@ inline bool project_in_clone(const Eigen::Matrix3d &R_WB, const Eigen::Vector3d 
     Eigen::Matrix<double, 2, 3> dz_dpc;
     dz_dpc << iz, 0.0, -p_C.x() * iz * iz, 0.0, iz, -p_C.y() * iz * iz;
     const Eigen::Matrix3d R_CW = R_BC.transpose() * R_WB.transpose();
-    J->H_theta = dz_dpc * (R_BC.transpose() * ov_core::skew(p_B));
     J->H_f = dz_dpc * R_CW;
+    J->H_theta = J->H_f * ov_core::skew(p_f - p_WB);
     J->H_p = -J->H_f;
   }
   return true;

@@ -148,6 +148,13 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
     const CloneState &c = *o.clone;
     if (!project_in_clone(c.R, c.p, R_BC_, p_BC_, p_f, zhat, &p_C, &J))
       return false;
+    // FEJ: the residual uses the current clone, the Jacobian the clone's first estimate, so that every update
+    // linearises a clone at the same point and the unobservable directions stay unobservable.
+    if (c.has_fej) {
+      Eigen::Vector2d z_fej;
+      if (!project_in_clone(c.R_lin(), c.p_lin(), R_BC_, p_BC_, p_f, z_fej, nullptr, &J))
+        return false;
+    }
     o.depth = p_C.z();
     Eigen::Vector2d z = feature.obs[o.obs_index].xy;
     if (td_obs == TdObservation::ImagePlane && o.vel_source != kVelocityNone)
