@@ -135,18 +135,22 @@ ModeBench bench_mode(const ov_core::Dataset &data, RunRequest req, const std::st
     at[q] = std::max<size_t>(1, (n_run * (q + 1) + 3) / 4);
   std::array<bool, 4> taken{};
   b.rss_quarter.fill(std::nan(""));
+  double last_rss = std::nan("");
   req.on_progress = [&](size_t i, size_t) {
+    // Reading statm costs a few microseconds against a frame of milliseconds; it gives an interrupted or short
+    // replay an honest last sample taken while the estimator is still alive.
+    last_rss = current_rss_mb();
     for (size_t q = 0; q < 4; ++q)
       if (!taken[q] && i >= at[q]) {
-        b.rss_quarter[q] = current_rss_mb();
+        b.rss_quarter[q] = last_rss;
         taken[q] = true;
       }
   };
 
   const RunResult r = run_dataset(data, req);
-  // A replay can end short of n_run (images beyond the IMU log); the last sample is then the end of the run.
+  // A replay can end short of n_run (interrupted, images beyond the IMU log): the 100 % column is then its last frame.
   if (!taken[3])
-    b.rss_quarter[3] = current_rss_mb();
+    b.rss_quarter[3] = last_rss;
   // ru_maxrss is in kB and the samples in pages: keep the peak from reading below a sample by rounding.
   b.peak = peak_rss_mb();
   for (double v : b.rss_quarter)
@@ -309,23 +313,28 @@ int cmd_benchmark(const Args &args) {
             << " cores, load average " << load_start << "; one thread per mode, modes run one after another\n"
             << std::flush;
 
-  install_interrupt_handler();
+  // The JSON is rewritten after every mode, so an interrupted or failing benchmark keeps the modes already done;
+  // writing it once before the first mode finds an unwritable path before minutes of work.
+  const std::string init_name = req.opt.init_mode == ov_msckf_ton::InitMode::Static ? "static" : "groundtruth";
   std::vector<ModeBench> res;
+  const auto save = [&] {
+    if (!json.empty())
+      write_json(json, res, dataset, config, init_name, load_start, loadavg());
+  };
+  save();
+  install_interrupt_handler();
   for (const auto &m : modes) {
     res.push_back(bench_mode(data, req, m));
+    save();
     if (!quiet)
       std::cerr << m << ": " << res.back().init_message << "\n";
     if (res.back().interrupted)
       break;
   }
-  const std::string load_end = loadavg();
   print_tables(res, std::cout);
-  std::cout << "load average at the end: " << load_end << "\n";
-  if (!json.empty()) {
-    const bool stat = req.opt.init_mode == ov_msckf_ton::InitMode::Static;
-    write_json(json, res, dataset, config, stat ? "static" : "groundtruth", load_start, load_end);
+  std::cout << "load average at the end: " << loadavg() << "\n";
+  if (!json.empty())
     std::cout << "json: " << json << "\n";
-  }
   return res.back().interrupted ? 130 : 0;
 }
 
