@@ -140,21 +140,23 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
   out.H_f.resize(2 * m, 3);
   out.r.resize(2 * m);
 
+  // FEJ: the residual uses the current clones, the Jacobians the clones' first estimates, so that every update
+  // linearises a clone at the same point and the unobservable directions stay unobservable. The feature was
+  // triangulated relative to the current clones; for the Jacobians it is carried rigidly with the anchor (newest)
+  // clone onto that clone's first estimate (as OpenVINS does), so that the lever arms p_f − p_clone stay
+  // consistent with the first-estimate poses.
+  const CloneState &anchor = *out.obs[m - 1].clone;
+  const Eigen::Vector3d p_f_lin =
+      anchor.R_lin() * (anchor.R.transpose() * (p_f - anchor.p)) + anchor.p_lin();
   CloneMeasurementJacobians J;
-  Eigen::Vector2d zhat;
+  Eigen::Vector2d zhat, z_lin;
   Eigen::Vector3d p_C;
   for (int k = 0; k < m; ++k) {
     FeatureLinearization::Obs &o = out.obs[k];
     const CloneState &c = *o.clone;
-    if (!project_in_clone(c.R, c.p, R_BC_, p_BC_, p_f, zhat, &p_C, &J))
+    if (!project_in_clone(c.R, c.p, R_BC_, p_BC_, p_f, zhat, &p_C) ||
+        !project_in_clone(c.R_lin(), c.p_lin(), R_BC_, p_BC_, p_f_lin, z_lin, nullptr, &J))
       return false;
-    // FEJ: the residual uses the current clone, the Jacobian the clone's first estimate, so that every update
-    // linearises a clone at the same point and the unobservable directions stay unobservable.
-    if (c.has_fej) {
-      Eigen::Vector2d z_fej;
-      if (!project_in_clone(c.R_lin(), c.p_lin(), R_BC_, p_BC_, p_f, z_fej, nullptr, &J))
-        return false;
-    }
     o.depth = p_C.z();
     Eigen::Vector2d z = feature.obs[o.obs_index].xy;
     if (td_obs == TdObservation::ImagePlane && o.vel_source != kVelocityNone)
