@@ -71,6 +71,10 @@ int cmd_run(const Args &args) {
             << c.images_before_init << " before initialisation, " << r.replay.images_skipped << " beyond the IMU log), "
             << c.updates << " updates, " << c.features_used << " features used, " << c.features_gated << " gated, "
             << c.zupts << " zero-velocity updates, " << c.td_rows << " observations constraining t_d\n";
+  std::cout << "t_d rows by velocity source: tracked " << c.td_rows_by_source[ov_msckf_ton::kVelocityTracked]
+            << ", ITS-FVON " << c.td_rows_by_source[ov_msckf_ton::kVelocityItsFvon] << ", F2F-FVON "
+            << c.td_rows_by_source[ov_msckf_ton::kVelocityF2fFvon] << " (" << c.td_features << " features); networks "
+            << (tm.frames ? tm.networks / tm.frames : 0.0) << " ms/frame\n";
   std::cout << "initialisation: " << r.init_message << "\n";
   if (tm.frames > 0)
     std::cout << "per frame [ms]: image load " << tm.image_load / tm.frames << ", tracking " << tm.tracking / tm.frames

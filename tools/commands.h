@@ -15,5 +15,6 @@ int cmd_perturb(const Args &args);
 int cmd_run(const Args &args);
 int cmd_compare(const Args &args);
 int cmd_benchmark(const Args &args);
+int cmd_diagnose(const Args &args);
 
 } // namespace ovton

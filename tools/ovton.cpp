@@ -23,6 +23,7 @@ const std::map<std::string, Command> &commands() {
       {"simulate", {ovton::cmd_simulate, "write a synthetic EuRoC-format folder with a known time offset"}},
       {"perturb", {ovton::cmd_perturb, "rewrite a real folder's image stamps with a time-offset model"}},
       {"benchmark", {ovton::cmd_benchmark, "per-frame cost by stage, x real time and memory, mode by mode"}},
+      {"diagnose", {ovton::cmd_diagnose, "rank candidate effects behind the residuals of `run --residual-log`"}},
   };
   return cmds;
 }

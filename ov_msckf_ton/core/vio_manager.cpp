@@ -46,6 +46,23 @@ TdObservation td_observation(TdMode m) {
   return TdObservation::None;
 }
 
+FvonProviderOptions fvon_options(const VioOptions &o) {
+  FvonProviderOptions f;
+  f.max_labels = o.fvon_max_labels;
+  f.min_f2f_labels = o.fvon_min_f2f_labels;
+  f.its.train.max_epochs = o.its_epochs;
+  f.f2f.train.max_epochs = o.f2f_epochs;
+  return f;
+}
+
+TpnDriverOptions tpn_options(const VioOptions &o) {
+  TpnDriverOptions t;
+  t.tpn.train.max_epochs = o.tpn_epochs;
+  t.min_labels = o.tpn_min_labels;
+  t.td_rate_max = o.td_rate_max;
+  return t;
+}
+
 bool estimates_td(TdMode m) {
   return m != TdMode::Off && m != TdMode::Oracle;
 }
@@ -76,6 +93,10 @@ VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, c
     : opt_(opt), camera_(cam), tracker_(camera_, opt.track), propagator_(noise_from(imu, opt), opt.gravity_mag),
       updater_(cam, updater_options(opt)), state_(std::make_unique<State>(estimates_td(opt.td_mode))) {
   state_->td = opt.td_init_s;
+  if (uses_fvon(opt.td_mode))
+    fvon_ = std::make_unique<FvonVelocityProvider>(cam, fvon_options(opt));
+  if (uses_tpn(opt.td_mode))
+    tpn_ = std::make_unique<TpnDriver>(tpn_options(opt));
   updater_.set_angular_rate_lookup([this](int64_t t_cam_ns, Eigen::Vector3d &w) {
     auto it = clone_rates_.find(t_cam_ns);
     if (it == clone_rates_.end())
@@ -91,7 +112,8 @@ double VioManager::td_for_image_s(int64_t t_cam_ns) const {
       throw ov_core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
     return td_oracle_(t_cam_ns);
   }
-  return state_->td;
+  // The replay feeds IMU readings up to this time: it must be where the propagation will go, TPN's rate included.
+  return initialized_ ? td_target(t_cam_ns) : state_->td;
 }
 
 void VioManager::on_imu(const ov_core::ImuData &m) {
@@ -195,8 +217,9 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
   t0 = Clock::now();
   if (opt_.td_mode == TdMode::Oracle)
     s.td = td_for_image_s(t_cam_ns);
-  const int64_t t_imu = std::max(s.t_imu_ns, t_cam_ns + ov_core::s_to_ns(s.td));
-  if (!propagator_.propagate(s, t_imu, 0.0))
+  double td_rate = 0.0;
+  const int64_t t_imu = propagation_target(t_cam_ns, td_rate);
+  if (!propagator_.propagate(s, t_imu, td_rate))
     throw ov_core::UsageError("IMU data does not reach image " + std::to_string(t_cam_ns));
   if (opt_.zupt && is_still(t_cam_ns)) {
     // Still platform: no parallax for triangulation, so constrain the velocity instead and keep no clone.
@@ -206,6 +229,7 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
     db_.remove_observations_at(t_cam_ns);
     ++counters_.zupts;
     times_.propagation += ms_since(t0);
+    tpn_after_image(t_cam_ns);
     ++times_.frames;
     times_.total += ms_since(t_start);
     if (on_state_)
@@ -222,8 +246,10 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
   times_.propagation += ms_since(t0);
 
   t0 = Clock::now();
+  const double networks_before = times_.networks;
   update_and_marginalize(t_cam_ns);
-  times_.update += ms_since(t0);
+  times_.update += ms_since(t0) - (times_.networks - networks_before);
+  tpn_after_image(t_cam_ns);
 
   ++times_.frames;
   times_.total += ms_since(t_start);
@@ -267,14 +293,24 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
   }
   if (!feats.empty()) {
     std::vector<ResidualRecord> records;
+    const VelocityProvider *velocities = &tracked_velocities_;
+    if (fvon_) {
+      const auto t0 = Clock::now();
+      fvon_->prepare(s, feats, updater_);
+      velocities = fvon_.get();
+      times_.networks += ms_since(t0);
+    }
     const UpdateStats st =
-        updater_.update(s, feats, td_observation(opt_.td_mode), tracked_velocities_, log_ ? &records : nullptr);
+        updater_.update(s, feats, td_observation(opt_.td_mode), *velocities, log_ ? &records : nullptr);
     ++counters_.updates;
     counters_.features_used += st.features_used;
     counters_.features_gated += st.gated_chi2;
     counters_.features_rejected += st.rejected_triangulation;
-    for (int n : st.td_obs_used)
-      counters_.td_rows += n;
+    for (int k = 0; k < kNumVelocitySources; ++k) {
+      counters_.td_rows += st.td_obs_used[k];
+      counters_.td_rows_by_source[k] += st.td_obs_used[k];
+    }
+    counters_.td_features += st.td_features_used;
     if (log_)
       log_->write(records);
     // A feature used in an update must not be used again: its information is in the state now.
@@ -290,6 +326,41 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
     clone_rates_.erase(oldest);
     db_.remove_observations_older_than(s.clones.begin()->first);
   }
+}
+
+double VioManager::td_target(int64_t t_cam_ns, bool *clamped) const {
+  const State &s = *state_;
+  if (clamped)
+    *clamped = false;
+  if (!tpn_ || last_image_ns_ < 0 || t_cam_ns <= last_image_ns_)
+    return s.td;
+  // Paper eq. 14 with dt the time between images: the mean reaches t_d^TPN(K) (or the clamped step towards it)
+  // exactly at this image.
+  const double dt = ov_core::ns_to_s(t_cam_ns - last_image_ns_);
+  return s.td + tpn_->rate(s.td, dt, clamped) * dt;
+}
+
+int64_t VioManager::propagation_target(int64_t t_cam_ns, double &td_rate) {
+  const State &s = *state_;
+  bool clamped = false;
+  const double target = td_target(t_cam_ns, &clamped);
+  counters_.td_rate_clamped += clamped ? 1 : 0;
+  // The clone is placed at t_cam + target so that its td_ref agrees with where the mean will be.
+  const int64_t t_imu = std::max(s.t_imu_ns, t_cam_ns + ov_core::s_to_ns(target));
+  // The propagator moves t_d at td_rate over the IMU-clock interval, which differs from the camera interval by the
+  // change in t_d itself: the rate is taken over the interval actually propagated.
+  const double dt_imu = ov_core::ns_to_s(t_imu - s.t_imu_ns);
+  td_rate = dt_imu > 0 ? (target - s.td) / dt_imu : 0.0;
+  return t_imu;
+}
+
+void VioManager::tpn_after_image(int64_t t_cam_ns) {
+  last_image_ns_ = t_cam_ns;
+  if (!tpn_)
+    return;
+  const auto t0 = Clock::now();
+  tpn_->step(state_->td);
+  times_.networks += ms_since(t0);
 }
 
 void VioManager::accumulate_nees() {

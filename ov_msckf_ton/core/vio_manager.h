@@ -8,9 +8,12 @@
 #include "ov_msckf_ton/core/vio_options.h"
 #include "ov_msckf_ton/state/propagator.h"
 #include "ov_msckf_ton/state/state.h"
+#include "ov_msckf_ton/ton/fvon_provider.h"
+#include "ov_msckf_ton/ton/tpn_driver.h"
 #include "ov_msckf_ton/update/residual_log.h"
 #include "ov_msckf_ton/update/updater_msckf.h"
 
+#include <array>
 #include <chrono>
 #include <functional>
 #include <map>
@@ -20,7 +23,8 @@
 
 namespace ov_msckf_ton {
 
-/// Per-frame cost of each stage [ms], accumulated; the benchmark prints means.
+/// Per-frame cost of each stage [ms], accumulated; the benchmark prints means. `networks` is FVON and TPN
+/// (training, prediction and FVON's triangulation); it is not part of `update`.
 struct StageTimes {
   long frames = 0;
   double image_load = 0, tracking = 0, propagation = 0, update = 0, networks = 0, total = 0;
@@ -29,7 +33,13 @@ struct StageTimes {
 struct VioCounters {
   long images = 0, images_before_init = 0, updates = 0, features_used = 0, features_gated = 0, features_rejected = 0;
   long td_rows = 0; ///< observations whose residual carried a t_d column
-  long zupts = 0;   ///< frames handled by a zero-velocity update
+  /// td_rows split by where the velocity came from (index: VelocitySource; 0 stays 0). FVON's job is to add rows
+  /// from ITS/F2F: a new feature's first observation has no tracked velocity, and without one none of its rows
+  /// may carry t_d (updater_msckf.cpp).
+  std::array<long, kNumVelocitySources> td_rows_by_source{};
+  long td_features = 0;     ///< used features whose rows carried t_d
+  long td_rate_clamped = 0; ///< propagations whose TPN rate hit td_rate_max
+  long zupts = 0;           ///< frames handled by a zero-velocity update
 };
 
 /// Normalised estimation error squared of orientation and position against ground truth (3 is ideal for each).
@@ -71,6 +81,10 @@ public:
   const NeesStats &nees() const { return nees_; }
   const VioOptions &options() const { return opt_; }
   const std::string &init_message() const { return init_msg_; }
+  /// FVON diagnostics (modes fvon, ton), nullptr otherwise.
+  const FvonVelocityProvider *fvon() const { return fvon_.get(); }
+  /// TPN driver (modes tpn, ton), nullptr otherwise.
+  const TpnDriver *tpn() const { return tpn_.get(); }
 
 private:
   void process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time_point t_start);
@@ -78,6 +92,12 @@ private:
   void update_and_marginalize(int64_t t_cam_ns);
   /// Median feature motion since the previous frame is below the ZUPT threshold.
   bool is_still(int64_t t_cam_ns) const;
+  /// Stages 3-4 of Algorithm 1 after an image: feeds t̂_d to TPN and keeps its prediction for the next image.
+  void tpn_after_image(int64_t t_cam_ns);
+  /// t_d the propagation to image t_cam_ns will end at: the current mean, moved by TPN's rate in tpn/ton.
+  double td_target(int64_t t_cam_ns, bool *clamped = nullptr) const;
+  /// IMU-clock target of the propagation to image t_cam_ns and the t_d rate that moves the mean there.
+  int64_t propagation_target(int64_t t_cam_ns, double &td_rate);
   ov_core::StateSample snapshot() const;
   void accumulate_nees();
 
@@ -98,6 +118,9 @@ private:
   bool initialized_ = false;
   std::string init_msg_;
   VelocityProvider tracked_velocities_;            ///< constant-speed velocities of the front end (paper eq. 2)
+  std::unique_ptr<FvonVelocityProvider> fvon_;     ///< modes fvon, ton
+  std::unique_ptr<TpnDriver> tpn_;                 ///< modes tpn, ton
+  int64_t last_image_ns_ = -1;                     ///< camera stamp of the previous processed image
   std::map<int64_t, Eigen::Vector3d> clone_rates_; ///< body rate at each clone, for the residual log
   StageTimes times_;
   VioCounters counters_;

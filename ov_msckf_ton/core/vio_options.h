@@ -19,6 +19,16 @@ struct VioOptions {
   double td_random_walk = 0.0;      ///< s/sqrt(s); 0 treats t_d as a constant (sr, sir, fvon)
   double td_random_walk_tpn = 2e-4; ///< s/sqrt(s) for tpn/ton: the offset is allowed to move (paper §IV-C)
 
+  // Networks (paper Table I), trained online. Epochs are per training call, i.e. per frame; lower them to trade
+  // accuracy for per-frame cost.
+  int fvon_max_labels = 40;    ///< labels per FVON training call (ITS pairs / F2F points)
+  int fvon_min_f2f_labels = 5; ///< F2F predicts for a frame only with this many labelled features in it
+  int its_epochs = 1000;       ///< ITS-FVON epochs per call (Table I)
+  int f2f_epochs = 1500;       ///< F2F-FVON epochs per call (Table I)
+  int tpn_epochs = 1000;       ///< TPN epochs per frame (Table I)
+  int tpn_min_labels = 5;      ///< TPN drives t_d only once its buffer holds this many estimates
+  double td_rate_max = 0.01;   ///< s/s bound on TPN's J_td (tpn_driver.h says why)
+
   // Window and update.
   int max_clones = 11;
   int min_track_length = 3;     ///< observations (at clones) a feature needs to enter an MSCKF update

@@ -1,0 +1,991 @@
+#include "ov_core/eval/diagnose.h"
+#include "ov_core/eval/plot.h"
+#include "ov_core/io/csv.h"
+#include "ov_core/types/errors.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <numeric>
+#include <sstream>
+
+namespace ov_core {
+
+// ---------------------------------------------------------------------------------------------------------------
+// Reading the log
+// ---------------------------------------------------------------------------------------------------------------
+
+namespace {
+
+/// Like TextTableReader::to_double but lets "nan" through: the writer logs NaN where a quantity does not exist, and
+/// the caller decides per column and status whether that is allowed.
+double parse_number(const TextTableReader &rd, const std::string &field, const std::string &what) {
+  if (field.empty())
+    rd.fail("empty " + what);
+  char *end = nullptr;
+  errno = 0;
+  const double v = std::strtod(field.c_str(), &end);
+  if (*end != '\0')
+    rd.fail("bad " + what + " '" + field + "' (expected a number)");
+  if (std::isinf(v))
+    rd.fail("infinite " + what + " '" + field + "'");
+  return v;
+}
+
+double finite_number(const TextTableReader &rd, const std::string &field, const std::string &what) {
+  const double v = parse_number(rd, field, what);
+  if (std::isnan(v))
+    rd.fail("NaN " + what);
+  return v;
+}
+
+} // namespace
+
+ResidualLog load_residual_log(const std::string &file) {
+  TextTableReader rd(file, ',');
+  ResidualLog log;
+  log.file = file;
+  std::vector<std::string> f;
+  bool have_row = rd.next(f);
+  // The header is the last non-'#' line the reader skipped before the first data row.
+  std::string header;
+  for (auto it = rd.comments().rbegin(); it != rd.comments().rend(); ++it)
+    if (!it->empty() && (*it)[0] != '#') {
+      header = *it;
+      break;
+    }
+  if (header.empty())
+    throw DataError(file, 1, "no header line: expected the residual log's column names (ovton run --residual-log)");
+  const long header_line = have_row ? std::max(1L, rd.line() - 1) : 1L;
+  std::map<std::string, size_t> col;
+  {
+    std::stringstream ss(header);
+    std::string name;
+    size_t i = 0;
+    while (std::getline(ss, name, ',')) {
+      name.erase(0, name.find_first_not_of(" \t\r"));
+      name.erase(name.find_last_not_of(" \t\r") + 1);
+      col[name] = i++;
+    }
+  }
+  static const char *required[] = {"update_id",   "t_cam_ns", "feature_id", "obs_index",  "track_length", "res_u_px",
+                                   "res_v_px",    "u_px",     "v_px",       "vel_u_px_s", "vel_v_px_s",   "vel_source",
+                                   "radius_norm", "w_x",      "w_y",        "w_z",        "td_s",         "status",
+                                   "x_norm",      "y_norm",   "w_valid"};
+  size_t max_col = 0;
+  for (const char *name : required) {
+    const auto it = col.find(name);
+    if (it == col.end())
+      throw DataError(file, header_line,
+                      std::string("header has no column '") + name + "': not a residual log of this version");
+    max_col = std::max(max_col, it->second);
+  }
+  const auto idx = [&](const char *name) { return col.at(name); };
+  while (have_row) {
+    if (f.size() <= max_col)
+      rd.fail("row has " + std::to_string(f.size()) + " fields, the header names " + std::to_string(col.size()));
+    ResidualLogRow r;
+    r.line = rd.line();
+    r.update_id = static_cast<uint64_t>(rd.to_int64(f[idx("update_id")], "update_id"));
+    r.t_cam_ns = rd.to_int64(f[idx("t_cam_ns")], "t_cam_ns");
+    r.feature_id = static_cast<uint64_t>(rd.to_int64(f[idx("feature_id")], "feature_id"));
+    r.obs_index = static_cast<int>(rd.to_int64(f[idx("obs_index")], "obs_index"));
+    r.track_length = static_cast<int>(rd.to_int64(f[idx("track_length")], "track_length"));
+    r.status = static_cast<int>(rd.to_int64(f[idx("status")], "status"));
+    if (r.status < 0 || r.status > 2)
+      rd.fail("status " + std::to_string(r.status) + " is not 0 (accepted), 1 (gated) or 2 (triangulation failed)");
+    r.res_u_px = parse_number(rd, f[idx("res_u_px")], "res_u_px");
+    r.res_v_px = parse_number(rd, f[idx("res_v_px")], "res_v_px");
+    if (r.status != 2 && (std::isnan(r.res_u_px) || std::isnan(r.res_v_px)))
+      rd.fail("NaN residual in a row whose status (" + std::to_string(r.status) + ") says it was computed");
+    r.u_px = finite_number(rd, f[idx("u_px")], "u_px");
+    r.v_px = finite_number(rd, f[idx("v_px")], "v_px");
+    r.x_norm = finite_number(rd, f[idx("x_norm")], "x_norm");
+    r.y_norm = finite_number(rd, f[idx("y_norm")], "y_norm");
+    r.radius_norm = finite_number(rd, f[idx("radius_norm")], "radius_norm");
+    r.vel_u_px_s = finite_number(rd, f[idx("vel_u_px_s")], "vel_u_px_s");
+    r.vel_v_px_s = finite_number(rd, f[idx("vel_v_px_s")], "vel_v_px_s");
+    r.vel_source = static_cast<int>(rd.to_int64(f[idx("vel_source")], "vel_source"));
+    r.w_x = finite_number(rd, f[idx("w_x")], "w_x");
+    r.w_y = finite_number(rd, f[idx("w_y")], "w_y");
+    r.w_z = finite_number(rd, f[idx("w_z")], "w_z");
+    r.w_valid = static_cast<int>(rd.to_int64(f[idx("w_valid")], "w_valid"));
+    r.td_s = finite_number(rd, f[idx("td_s")], "td_s");
+    log.rows.push_back(r);
+    have_row = rd.next(f);
+  }
+  return log;
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Regression machinery
+// ---------------------------------------------------------------------------------------------------------------
+
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+/// Columns of the design matrix; a candidate is a list of them, so nested candidates share columns.
+enum Col : int {
+  kV = 0,  ///< image velocity [px/s]
+  kVt,     ///< image velocity × (t − t_mid) [px]
+  kVrow,   ///< image velocity × (row fraction − 0.5) [px/s]
+  kFocal,  ///< (fu·x, fv·y) [px]
+  kPpU,    ///< (1, 0)
+  kPpV,    ///< (0, 1)
+  kRadial, ///< r²·(fu·x, fv·y) [px]
+  kGyro0,  ///< 9 columns B(x,y)·e_i·Θ_j [px·rad/rad]
+  kNumCols = kGyro0 + 9
+};
+
+struct Design {
+  MatrixXd D;               ///< n × kNumCols, demeaned per track where the column says so
+  VectorXd r;               ///< residual components, u and v rows interleaved
+  std::vector<int> cluster; ///< track index per component row
+  std::vector<double> t_s;  ///< time of each component row [s from the first used row]
+  int n_clusters = 0;
+  double scale = 1; ///< robust σ of r
+  double t_mid = 0; ///< centre of the drift term
+  bool have_velocity = false, have_rate = false;
+};
+
+struct Fit {
+  VectorXd beta;
+  MatrixXd cov;
+  double loss = 0;
+  VectorXd e; ///< final residual
+};
+
+double huber_rho(double e, double c) {
+  const double a = std::abs(e);
+  return a <= c ? 0.5 * e * e : c * a - 0.5 * c * c;
+}
+
+/// Huber M-estimate by IRLS with a fixed scale (so that losses of different candidates compare), and its
+/// covariance by the sandwich with scores summed per track: residuals of one track share the triangulated point and
+/// are not independent, so per-row standard errors would be too small.
+Fit fit_huber(const MatrixXd &X, const VectorXd &r, const Design &d, double k,
+              const std::vector<char> *mask = nullptr) {
+  const Eigen::Index n = r.size(), p = X.cols();
+  const double c = k * d.scale;
+  Fit f;
+  f.beta = VectorXd::Zero(p);
+  VectorXd w = VectorXd::Ones(n);
+  if (mask)
+    for (Eigen::Index i = 0; i < n; ++i)
+      w(i) = (*mask)[i] ? 1.0 : 0.0;
+  const VectorXd w_mask = w;
+  if (p > 0) {
+    for (int it = 0; it < 12; ++it) {
+      const MatrixXd A = X.transpose() * w.asDiagonal() * X;
+      const VectorXd b = X.transpose() * w.cwiseProduct(r);
+      Eigen::LDLT<MatrixXd> ldlt(A + 1e-12 * A.diagonal().cwiseAbs().maxCoeff() * MatrixXd::Identity(p, p));
+      const VectorXd beta_new = ldlt.solve(b);
+      const bool converged = (beta_new - f.beta).norm() <= 1e-9 * (1 + beta_new.norm());
+      f.beta = beta_new;
+      const VectorXd e = r - X * f.beta;
+      for (Eigen::Index i = 0; i < n; ++i)
+        w(i) = w_mask(i) * (std::abs(e(i)) <= c ? 1.0 : c / std::abs(e(i)));
+      if (converged && it > 0)
+        break;
+    }
+  }
+  f.e = r - X * f.beta;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (w_mask(i) > 0)
+      f.loss += huber_rho(f.e(i), c);
+  if (p > 0) {
+    const MatrixXd A = X.transpose() * w.asDiagonal() * X;
+    MatrixXd S = MatrixXd::Zero(d.n_clusters, p);
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (w(i) > 0)
+        S.row(d.cluster[i]) += (w(i) * f.e(i)) * X.row(i);
+    const MatrixXd Ainv = A.ldlt().solve(MatrixXd::Identity(p, p));
+    const double g = d.n_clusters > 1 ? double(d.n_clusters) / (d.n_clusters - 1) : 1.0;
+    f.cov = g * Ainv * (S.transpose() * S) * Ainv;
+  }
+  return f;
+}
+
+/// Survival function of chi-square with k degrees of freedom (closed forms for integer k).
+double chi2_sf(double x, int k) {
+  if (x <= 0)
+    return 1.0;
+  const double h = 0.5 * x;
+  if (k % 2 == 0) {
+    double term = 1, sum = 1;
+    for (int i = 1; i < k / 2; ++i) {
+      term *= h / i;
+      sum += term;
+    }
+    return std::exp(-h) * sum;
+  }
+  double sum = std::erfc(std::sqrt(h));
+  double term = std::sqrt(h) * 2.0 / std::sqrt(M_PI); // h^{1/2} / Γ(3/2)
+  for (int i = 1; i <= (k - 1) / 2; ++i) {
+    sum += std::exp(-h) * term;
+    term *= h / (i + 0.5);
+  }
+  return sum;
+}
+
+/// Wald statistic with k dof as the two-sided Gaussian σ of the same p-value, so that "5σ" means the same thing for
+/// a one-parameter and a nine-parameter candidate.
+double wald_to_sigma(double W, int k) {
+  if (!(W > 0) || k <= 0)
+    return 0.0;
+  if (k == 1)
+    return std::sqrt(W);
+  const double p = chi2_sf(W, k);
+  if (!(p > 1e-300))
+    return std::sqrt(std::max(0.0, W - (k - 1) * std::log(W))); // far past any threshold; a monotone stand-in
+  double lo = 0, hi = 40;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+struct CandidateDef {
+  std::string key, description;
+  std::vector<int> cols;
+  bool needs_velocity = false, needs_rate = false;
+};
+
+std::vector<CandidateDef> candidate_defs() {
+  std::vector<int> gyro;
+  for (int i = 0; i < 9; ++i)
+    gyro.push_back(kGyro0 + i);
+  return {
+      {"td_const", "constant time-offset error: r = V·δt", {kV}, true, false},
+      {"td_drift", "drifting time-offset error: r = V·(δt + ḋ·(t − t_mid))", {kV, kVt}, true, false},
+      {"rolling_shutter", "rolling-shutter readout: r = V·(row/height − 0.5)·t_r", {kVrow}, true, false},
+      {"focal", "focal-length error: r = ε·(fu·x, fv·y), δf = ε·f", {kFocal}, false, false},
+      {"principal_point", "principal-point error: r = (δcu, δcv)", {kPpU, kPpV}, false, false},
+      {"radial_k1", "radial distortion error: r = δk1·|xy|²·(fu·x, fv·y)", {kRadial}, false, false},
+      {"gyro_scale", "gyro scale error: r = −s·B(x,y)·R_CB·∫ω dt over the track", gyro, false, true},
+  };
+}
+
+/// Rotational image flow of a normalised point per unit camera rotation (columns: rotation about x, y, z).
+Eigen::Matrix<double, 2, 3> rot_flow(double x, double y) {
+  Eigen::Matrix<double, 2, 3> B;
+  B << x * y, -(1 + x * x), y, 1 + y * y, -x * y, -x;
+  return B;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty())
+    return 0;
+  const size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + m, v.end());
+  return v[m];
+}
+
+std::vector<EffectEstimate> estimates_of(const std::string &key, const std::vector<int> &cols, const Fit &fit,
+                                         const std::vector<int> &joint, const DiagnoseReport &rep, const Design &d) {
+  std::vector<int> at;
+  for (int c : cols)
+    at.push_back(static_cast<int>(std::find(joint.begin(), joint.end(), c) - joint.begin()));
+  const auto b = [&](int i) { return fit.beta(at[i]); };
+  const auto s = [&](int i) { return std::sqrt(std::max(0.0, fit.cov(at[i], at[i]))); };
+  std::vector<EffectEstimate> out;
+  if (key == "td_const") {
+    out.push_back({"offset error δt", "ms", 1e3 * b(0), 1e3 * s(0)});
+  } else if (key == "td_drift") {
+    const double t0 = -d.t_mid; // start of the log relative to the centre
+    const double v = fit.cov(at[0], at[0]) + t0 * t0 * fit.cov(at[1], at[1]) + 2 * t0 * fit.cov(at[0], at[1]);
+    out.push_back({"drift rate", "ms/s", 1e3 * b(1), 1e3 * s(1)});
+    out.push_back({"offset error at start", "ms", 1e3 * (b(0) + t0 * b(1)), 1e3 * std::sqrt(std::max(0.0, v))});
+    out.push_back({"offset error at mid-log", "ms", 1e3 * b(0), 1e3 * s(0)});
+  } else if (key == "rolling_shutter") {
+    out.push_back({"readout time t_r", "ms", 1e3 * b(0), 1e3 * s(0)});
+  } else if (key == "focal") {
+    const double f = 0.5 * (rep.fu + rep.fv);
+    out.push_back({"focal error δf", "px", f * b(0), f * s(0)});
+    out.push_back({"relative focal error ε", "%", 100 * b(0), 100 * s(0)});
+  } else if (key == "principal_point") {
+    out.push_back({"δcu", "px", b(0), s(0)});
+    out.push_back({"δcv", "px", b(1), s(1)});
+  } else if (key == "radial_k1") {
+    out.push_back({"δk1", "", b(0), s(0)});
+  } else if (key == "gyro_scale") {
+    // M = −s·R_CB: |M|_F = √3·|s| and det M = −s³, so s = −sign(det M)·|M|_F/√3 (delta-method σ).
+    Eigen::Matrix3d M;
+    Eigen::Matrix<double, 9, 9> C;
+    for (int i = 0; i < 9; ++i) {
+      M(i / 3, i % 3) = b(i);
+      for (int j = 0; j < 9; ++j)
+        C(i, j) = fit.cov(at[i], at[j]);
+    }
+    const double nrm = M.norm();
+    const double sgn = M.determinant() > 0 ? -1.0 : 1.0;
+    Eigen::Matrix<double, 9, 1> g;
+    for (int i = 0; i < 9; ++i)
+      g(i) = nrm > 0 ? sgn * M(i / 3, i % 3) / (nrm * std::sqrt(3.0)) : 0.0;
+    out.push_back({"gyro scale error s", "%", 100 * sgn * nrm / std::sqrt(3.0),
+                   100 * std::sqrt(std::max(0.0, double(g.transpose() * C * g)))});
+  }
+  return out;
+}
+
+Fit fit_cols(const Design &d, const std::vector<int> &cols, double k, const std::vector<char> *mask = nullptr) {
+  MatrixXd X(d.r.size(), cols.size());
+  for (size_t j = 0; j < cols.size(); ++j)
+    X.col(j) = d.D.col(cols[j]);
+  return fit_huber(X, d.r, d, k, mask);
+}
+
+/// Partial residual (other selected effects removed) binned against the candidate's own variable.
+BinnedCurve make_curve(const CandidateDef &c, const Design &d, const Fit &fit, const std::vector<int> &joint,
+                       int bins) {
+  BinnedCurve cur;
+  const Eigen::Index n = d.r.size();
+  VectorXd own = VectorXd::Zero(n), x(n);
+  for (size_t j = 0; j < joint.size(); ++j)
+    if (std::find(c.cols.begin(), c.cols.end(), joint[j]) != c.cols.end())
+      own += fit.beta(j) * d.D.col(joint[j]);
+  const VectorXd y = fit.e + own; // residual with everything but this effect removed
+  if (c.cols.size() == 1) {
+    x = d.D.col(c.cols[0]);
+    const std::vector<int> one = {c.cols[0]};
+    const auto it = std::find(joint.begin(), joint.end(), c.cols[0]) - joint.begin();
+    cur.slope = fit.beta(it);
+  } else {
+    x = own;
+    cur.slope = 1.0;
+  }
+  static const std::map<std::string, std::string> xl = {
+      {"td_const", "image velocity V [px/s]"},
+      {"rolling_shutter", "V * (row fraction - 0.5) [px/s]"},
+      {"focal", "(fu*x, fv*y) from the track mean [px]"},
+      {"radial_k1", "|xy|^2 * (fu*x, fv*y) from the track mean [px]"}};
+  cur.xlabel = xl.count(c.key) ? xl.at(c.key) : "fitted " + c.key + " effect [px]";
+  cur.ylabel = "residual, other selected effects removed [px] (bin mean +- SE)";
+  std::vector<Eigen::Index> order;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (x(i) != 0.0)
+      order.push_back(i);
+  if (order.size() < static_cast<size_t>(bins) * 10)
+    return cur;
+  std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return x(a) < x(b); });
+  if (!(x(order.back()) > x(order.front())))
+    return cur;
+  // Robust bin means: clip at the Huber threshold so a handful of outliers do not draw the curve.
+  const double clip = 3.0 * d.scale;
+  for (int b = 0; b < bins; ++b) {
+    const size_t lo = order.size() * b / bins, hi = order.size() * (b + 1) / bins;
+    double sx = 0, sy = 0, syy = 0;
+    for (size_t i = lo; i < hi; ++i) {
+      const double yi =
+          std::clamp(y(order[i]), -clip - std::abs(cur.slope * x(order[i])), clip + std::abs(cur.slope * x(order[i])));
+      sx += x(order[i]);
+      sy += yi;
+      syy += yi * yi;
+    }
+    const double m = double(hi - lo);
+    cur.x.push_back(sx / m);
+    cur.mean.push_back(sy / m);
+    cur.se.push_back(std::sqrt(std::max(0.0, syy / m - (sy / m) * (sy / m)) / m));
+  }
+  return cur;
+}
+
+} // namespace
+
+// ---------------------------------------------------------------------------------------------------------------
+// The analysis
+// ---------------------------------------------------------------------------------------------------------------
+
+DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
+  if (!(opt.min_sigma > 0) || !(opt.min_explained >= 0) || !(opt.huber_k > 0) || opt.time_bins < 1 || opt.plot_bins < 2)
+    throw UsageError("diagnose: thresholds must be positive and bins at least 1 (time) / 2 (plots)");
+  DiagnoseReport rep;
+  rep.log_file = log.file;
+  rep.options = opt;
+  rep.rows_read = static_cast<long>(log.rows.size());
+
+  // Rows with a residual (accepted or gated: a gated feature may be gated precisely because of the missing effect).
+  std::vector<const ResidualLogRow *> rows;
+  long with_vel = 0;
+  for (const auto &r : log.rows) {
+    if (r.status == 2) {
+      ++rep.rows_triangulation_failed;
+      continue;
+    }
+    rows.push_back(&r);
+    with_vel += r.vel_source != 0;
+  }
+  // The time candidates need V; keeping rows without it would make their R² not comparable with the others', so the
+  // common sample is the rows with a velocity whenever most rows have one (all but the first of each track).
+  const bool use_vel =
+      !opt.use_logged_velocity || (!rows.empty() && with_vel >= opt.min_velocity_share * double(rows.size()));
+  if (use_vel && opt.use_logged_velocity) {
+    std::vector<const ResidualLogRow *> kept;
+    for (auto *r : rows)
+      if (r->vel_source != 0)
+        kept.push_back(r);
+    rep.rows_without_velocity = static_cast<long>(rows.size() - kept.size());
+    rows.swap(kept);
+  }
+  // Tracks: one feature in one update. A track needs two rows to say anything once its mean is removed, three when
+  // the velocity comes from the neighbouring rows
+  // (two interior rows).
+  const size_t min_track = opt.use_logged_velocity ? 2 : 4;
+  std::map<std::pair<uint64_t, uint64_t>, std::vector<const ResidualLogRow *>> tracks;
+  for (auto *r : rows)
+    tracks[{r->update_id, r->feature_id}].push_back(r);
+  for (auto it = tracks.begin(); it != tracks.end();)
+    it = it->second.size() < min_track ? tracks.erase(it) : std::next(it);
+  long n_obs = 0;
+  for (auto &kv : tracks)
+    n_obs += static_cast<long>(kv.second.size()) - (opt.use_logged_velocity ? 0 : 2);
+  if (n_obs < 50)
+    throw DataError(log.file, "only " + std::to_string(n_obs) +
+                                  " usable observations (accepted or gated, in tracks of 2+): too few to diagnose");
+  rep.rows_used = n_obs;
+  rep.tracks_used = static_cast<long>(tracks.size());
+
+  // Intrinsics: given, or fitted from the log (u ≈ cu + fu·x near the centre, where distortion is small).
+  if (opt.fu > 0 && opt.fv > 0) {
+    rep.fu = opt.fu, rep.fv = opt.fv, rep.cu = opt.cu, rep.cv = opt.cv;
+  } else {
+    rep.intrinsics_fitted = true;
+    for (double rmax : {0.3, 1e9}) {
+      Eigen::Matrix2d Au = Eigen::Matrix2d::Zero(), Av = Eigen::Matrix2d::Zero();
+      Eigen::Vector2d bu = Eigen::Vector2d::Zero(), bv = Eigen::Vector2d::Zero();
+      long cnt = 0;
+      for (auto *r : rows) {
+        if (r->radius_norm > rmax)
+          continue;
+        ++cnt;
+        const Eigen::Vector2d hu(1, r->x_norm), hv(1, r->y_norm);
+        Au += hu * hu.transpose(), bu += hu * r->u_px;
+        Av += hv * hv.transpose(), bv += hv * r->v_px;
+      }
+      if (cnt < 100 && rmax < 1e9)
+        continue;
+      const Eigen::Vector2d su = Au.ldlt().solve(bu), sv = Av.ldlt().solve(bv);
+      rep.cu = su(0), rep.fu = su(1), rep.cv = sv(0), rep.fv = sv(1);
+      break;
+    }
+    if (!(rep.fu > 0) || !(rep.fv > 0))
+      throw DataError(log.file, "cannot fit the focal length from (u_px, x_norm): pass --dataset");
+  }
+  double vmax = 0;
+  for (auto *r : rows)
+    vmax = std::max(vmax, r->v_px);
+  rep.image_height = opt.image_height > 0 ? opt.image_height : static_cast<int>(std::ceil(vmax + 0.5));
+
+  // Design matrix.
+  Design d;
+  const Eigen::Index n = 2 * n_obs;
+  d.D = MatrixXd::Zero(n, kNumCols);
+  d.r.resize(n);
+  d.cluster.resize(n);
+  d.t_s.resize(n);
+  d.n_clusters = static_cast<int>(tracks.size());
+  d.have_velocity = use_vel;
+  int64_t t_first = std::numeric_limits<int64_t>::max(), t_last = std::numeric_limits<int64_t>::min();
+  for (auto *r : rows)
+    t_first = std::min(t_first, r->t_cam_ns), t_last = std::max(t_last, r->t_cam_ns);
+  rep.duration_s = 1e-9 * double(t_last - t_first);
+  d.t_mid = 0.5 * rep.duration_s;
+  long rate_rows = 0;
+  Eigen::Index i = 0;
+  int g = 0;
+  for (auto &kv : tracks) {
+    auto &tr = kv.second;
+    std::sort(tr.begin(), tr.end(), [](auto *a, auto *b) { return a->t_cam_ns < b->t_cam_ns; });
+    const Eigen::Index i0 = i;
+    bool rates = true;
+    for (auto *r : tr)
+      rates = rates && r->w_valid;
+    // Velocity of row j from rows other than j: the central difference of its neighbours, exact for a quadratic
+    // image track at 20 Hz spacing. End rows have no such pair (a one-sided difference is the velocity half a frame
+    // away and biases δt by ~15 %, an extrapolation triples the noise), so without the logged velocity they only
+    // serve the neighbours and are dropped below.
+    const size_t m = tr.size();
+    std::vector<Eigen::Vector2d> vel(m, Eigen::Vector2d::Zero());
+    for (size_t j = 0; j < m; ++j) {
+      if (opt.use_logged_velocity) {
+        vel[j] = Eigen::Vector2d(tr[j]->vel_u_px_s, tr[j]->vel_v_px_s);
+        continue;
+      }
+      if (j == 0 || j + 1 == m)
+        continue;
+      const double dt = 1e-9 * double(tr[j + 1]->t_cam_ns - tr[j - 1]->t_cam_ns);
+      if (dt > 0)
+        vel[j] = Eigen::Vector2d(tr[j + 1]->u_px - tr[j - 1]->u_px, tr[j + 1]->v_px - tr[j - 1]->v_px) / dt;
+    }
+    if (!opt.use_logged_velocity) { // keep the interior rows
+      tr = std::vector<const ResidualLogRow *>(tr.begin() + 1, tr.end() - 1);
+      vel = std::vector<Eigen::Vector2d>(vel.begin() + 1, vel.end() - 1);
+    }
+    size_t j_row = 0;
+    Eigen::Vector3d theta = Eigen::Vector3d::Zero(), w_prev = Eigen::Vector3d::Zero();
+    int64_t t_prev = tr.front()->t_cam_ns;
+    for (auto *r : tr) {
+      const double t = 1e-9 * double(r->t_cam_ns - t_first);
+      const Eigen::Vector2d V = vel[j_row++];
+      const Eigen::Vector2d fxy(rep.fu * r->x_norm, rep.fv * r->y_norm);
+      const double row_frac = r->v_px / rep.image_height - 0.5;
+      const double r2 = r->x_norm * r->x_norm + r->y_norm * r->y_norm;
+      const Eigen::Vector3d w(r->w_x, r->w_y, r->w_z);
+      if (rates) { // trapezoid integral of the body rate since the track's first row
+        theta += 0.5 * (w + w_prev) * 1e-9 * double(r->t_cam_ns - t_prev);
+        if (r == tr.front())
+          theta.setZero();
+        w_prev = w, t_prev = r->t_cam_ns;
+      }
+      const Eigen::Matrix<double, 2, 3> B = rot_flow(r->x_norm, r->y_norm);
+      for (int a = 0; a < 2; ++a, ++i) {
+        const double fa = a == 0 ? rep.fu : rep.fv;
+        d.r(i) = a == 0 ? r->res_u_px : r->res_v_px;
+        d.cluster[i] = g;
+        d.t_s[i] = t;
+        d.D(i, kV) = V(a);
+        d.D(i, kVt) = V(a) * (t - d.t_mid);
+        d.D(i, kVrow) = V(a) * row_frac;
+        d.D(i, kFocal) = fxy(a);
+        d.D(i, kPpU) = a == 0 ? 1.0 : 0.0;
+        d.D(i, kPpV) = a == 1 ? 1.0 : 0.0;
+        d.D(i, kRadial) = r2 * fxy(a);
+        if (rates)
+          for (int c = 0; c < 3; ++c)
+            for (int j = 0; j < 3; ++j)
+              d.D(i, kGyro0 + 3 * c + j) = fa * B(a, c) * theta(j);
+      }
+      rate_rows += rates;
+    }
+    // The triangulated point absorbs what is common to a track's observations (to first order a constant image
+    // shift per coordinate); regressing on the within-track variation removes that part from the regressors too,
+    // which keeps the estimates unbiased whether or not the logged residual had it removed.
+    for (int c = 0; c < kNumCols; ++c) {
+      if (c == kPpU || c == kPpV)
+        continue; // constant per track: nothing is left after demeaning (docs/diagnose.md: weakly observable)
+      for (int a = 0; a < 2; ++a) {
+        double m = 0;
+        for (Eigen::Index k = i0 + a; k < i; k += 2)
+          m += d.D(k, c);
+        m /= double(tr.size());
+        for (Eigen::Index k = i0 + a; k < i; k += 2)
+          d.D(k, c) -= m;
+      }
+    }
+    ++g;
+  }
+  d.have_rate = rate_rows >= 0.5 * n_obs;
+  {
+    std::vector<double> absr(n);
+    double ss = 0;
+    for (Eigen::Index k = 0; k < n; ++k)
+      absr[k] = std::abs(d.r(k)), ss += d.r(k) * d.r(k);
+    rep.residual_rms_px = std::sqrt(ss / double(n));
+    d.scale = std::max(1e-9, 1.4826 * median(absr));
+    rep.robust_sigma_px = d.scale;
+  }
+
+  // Forward stepwise selection.
+  const auto defs = candidate_defs();
+  const double k = opt.huber_k;
+  const double loss0 = fit_cols(d, {}, k).loss;
+  std::vector<CandidateResult> res(defs.size());
+  std::vector<bool> usable(defs.size(), true);
+  for (size_t c = 0; c < defs.size(); ++c) {
+    res[c].key = defs[c].key;
+    res[c].description = defs[c].description;
+    if (defs[c].needs_velocity && !d.have_velocity) {
+      usable[c] = false;
+      res[c].note = "skipped: fewer than " + std::to_string(int(100 * opt.min_velocity_share)) +
+                    "% of rows carry an image velocity";
+    }
+    if (defs[c].needs_rate && !d.have_rate) {
+      usable[c] = false;
+      res[c].note = "skipped: most tracks lack body rates (w_valid)";
+    }
+    if (usable[c])
+      res[c].explained_alone = 1.0 - fit_cols(d, defs[c].cols, k).loss / loss0;
+  }
+  std::vector<int> selected_cols;
+  std::vector<size_t> order;
+  std::vector<bool> taken(defs.size(), false);
+  double loss_sel = loss0;
+  std::vector<Fit> last_fit(defs.size());
+  std::vector<std::vector<int>> last_joint(defs.size());
+  const auto strictly_contains = [&](size_t a, size_t b) {
+    if (defs[a].cols.size() <= defs[b].cols.size())
+      return false;
+    for (int col : defs[b].cols)
+      if (std::find(defs[a].cols.begin(), defs[a].cols.end(), col) == defs[a].cols.end())
+        return false;
+    return true;
+  };
+  while (true) {
+    int best = -1;
+    std::vector<bool> passes(defs.size(), false);
+    for (size_t c = 0; c < defs.size(); ++c) {
+      if (!usable[c] || taken[c])
+        continue;
+      std::vector<int> joint = selected_cols, own;
+      for (int col : defs[c].cols)
+        if (std::find(joint.begin(), joint.end(), col) == joint.end())
+          joint.push_back(col), own.push_back(col);
+      CandidateResult &cr = res[c];
+      if (own.empty()) {
+        cr.explained_added = 0, cr.sigma = 0;
+        cr.note = "nested in a selected candidate: adds no term";
+        last_fit[c] = Fit();
+        last_joint[c].clear();
+        continue;
+      }
+      const Fit f = fit_cols(d, joint, k);
+      const Eigen::Index p0 = static_cast<Eigen::Index>(selected_cols.size()),
+                         q = static_cast<Eigen::Index>(own.size());
+      const VectorXd bo = f.beta.tail(q);
+      const MatrixXd Co = f.cov.bottomRightCorner(q, q);
+      const double W = bo.dot(Co.ldlt().solve(bo));
+      (void)p0;
+      cr.sigma = wald_to_sigma(W, static_cast<int>(q));
+      cr.explained_added = (loss_sel - f.loss) / loss0;
+      cr.estimates = estimates_of(defs[c].key, defs[c].cols, f, joint, rep, d);
+      last_fit[c] = f;
+      last_joint[c] = joint;
+      passes[c] = cr.sigma >= opt.min_sigma && cr.explained_added >= opt.min_explained;
+    }
+    // Parsimony: a candidate whose terms strictly contain a passing candidate's (drift ⊃ constant offset) waits for
+    // the next round, where it is credited only with what its extra terms add.
+    for (size_t c = 0; c < defs.size(); ++c) {
+      if (!passes[c])
+        continue;
+      bool nests = false;
+      for (size_t b = 0; b < defs.size(); ++b)
+        nests = nests || (b != c && passes[b] && strictly_contains(c, b));
+      if (!nests && (best < 0 || res[c].explained_added > res[best].explained_added))
+        best = static_cast<int>(c);
+    }
+    if (best < 0)
+      break;
+    taken[best] = true;
+    res[best].explained = true;
+    loss_sel -= res[best].explained_added * loss0;
+    // A selected extension (drift) supersedes the candidate it contains (constant offset): it takes that one's rank
+    // and the contained one is no longer the name of the effect.
+    for (size_t q = 0; q < order.size(); ++q)
+      if (strictly_contains(best, order[q])) {
+        res[order[q]].explained = false;
+        res[order[q]].note = "contained in " + defs[best].key + " (selected)";
+        res[best].explained_added += res[order[q]].explained_added;
+        res[order[q]].explained_added = 0;
+        order.erase(order.begin() + q);
+        break;
+      }
+    res[best].curve = make_curve(defs[best], d, last_fit[best], last_joint[best], opt.plot_bins);
+    order.push_back(best);
+    for (int col : defs[best].cols)
+      if (std::find(selected_cols.begin(), selected_cols.end(), col) == selected_cols.end())
+        selected_cols.push_back(col);
+  }
+  std::vector<size_t> rest;
+  for (size_t c = 0; c < defs.size(); ++c)
+    if (!taken[c]) {
+      rest.push_back(c);
+      if (usable[c] && !last_joint[c].empty())
+        res[c].curve = make_curve(defs[c], d, last_fit[c], last_joint[c], opt.plot_bins);
+    }
+  std::stable_sort(rest.begin(), rest.end(), [&](size_t a, size_t b) {
+    if (usable[a] != usable[b])
+      return bool(usable[a]);
+    if (res[a].explained_added != res[b].explained_added)
+      return res[a].explained_added > res[b].explained_added;
+    return res[a].explained_alone > res[b].explained_alone;
+  });
+  order.insert(order.end(), rest.begin(), rest.end());
+  for (size_t r = 0; r < order.size(); ++r) {
+    res[order[r]].rank = static_cast<int>(r + 1);
+    rep.candidates.push_back(res[order[r]]);
+  }
+
+  // δt per time bin (the trend a drift shows), each bin fitted on its own rows, nothing else removed.
+  if (d.have_velocity) {
+    const int bins = opt.time_bins;
+    std::vector<int> bin_of(n);
+    for (Eigen::Index k2 = 0; k2 < n; ++k2)
+      bin_of[k2] = std::min(bins - 1, static_cast<int>(bins * d.t_s[k2] / std::max(1e-9, rep.duration_s)));
+    std::vector<double> td_sum(bins, 0.0);
+    std::vector<long> td_cnt(bins, 0);
+    for (auto &kv : tracks)
+      for (auto *r : kv.second) {
+        const int b = std::min(
+            bins - 1, static_cast<int>(bins * 1e-9 * double(r->t_cam_ns - t_first) / std::max(1e-9, rep.duration_s)));
+        td_sum[b] += r->td_s, ++td_cnt[b];
+      }
+    for (int b = 0; b < bins; ++b) {
+      std::vector<char> mask(n);
+      long cnt = 0;
+      for (Eigen::Index k2 = 0; k2 < n; ++k2)
+        cnt += (mask[k2] = bin_of[k2] == b);
+      if (cnt < 40)
+        continue;
+      const Fit f = fit_cols(d, {kV}, k, &mask);
+      TimeBin tb;
+      tb.t_s = (b + 0.5) * rep.duration_s / bins;
+      tb.td_ms = 1e3 * f.beta(0);
+      tb.td_se_ms = 1e3 * std::sqrt(std::max(0.0, f.cov(0, 0)));
+      tb.td_filter_ms = td_cnt[b] ? 1e3 * td_sum[b] / td_cnt[b] : 0.0;
+      tb.observations = cnt / 2;
+      rep.td_bins.push_back(tb);
+    }
+  }
+  return rep;
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Output
+// ---------------------------------------------------------------------------------------------------------------
+
+namespace {
+
+std::string fmt(double v, int prec) {
+  if (!std::isfinite(v))
+    return "n/a";
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(prec) << v;
+  return os.str();
+}
+
+std::string jnum(double v) {
+  if (!std::isfinite(v))
+    return "null";
+  std::ostringstream os;
+  os << std::setprecision(10) << v;
+  return os.str();
+}
+
+std::string jstr(const std::string &s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\')
+      out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string estimates_text(const CandidateResult &c) {
+  std::string s;
+  for (const auto &e : c.estimates) {
+    if (!s.empty())
+      s += "; ";
+    s += e.name + " " + fmt(e.value, 3) + " ± " + fmt(e.stderr_, 3) + (e.unit.empty() ? "" : " " + e.unit);
+  }
+  return s.empty() ? "-" : s;
+}
+
+void write_file(const std::string &file, const std::string &text) {
+  std::ofstream out(file);
+  if (!out)
+    throw DataError(file, "cannot open for writing");
+  out << text;
+  out.close();
+  if (!out)
+    throw DataError(file, "write failed");
+}
+
+/// Bin means with ±1 SE bars (vertical segments broken by NaN) and the fitted line.
+void plot_curve(const CandidateResult &c, const std::string &file) {
+  const BinnedCurve &cu = c.curve;
+  PlotOptions po;
+  po.title = "#" + std::to_string(c.rank) + " " + c.key + ": " + c.description;
+  po.xlabel = cu.xlabel;
+  po.ylabel = cu.ylabel;
+  Plot p(po);
+  std::vector<double> ex, ey;
+  for (size_t i = 0; i < cu.x.size(); ++i) {
+    ex.insert(ex.end(), {cu.x[i], cu.x[i], std::nan("")});
+    ey.insert(ey.end(), {cu.mean[i] - cu.se[i], cu.mean[i] + cu.se[i], std::nan("")});
+  }
+  Series bars("", ex, ey, Series::Style::Line);
+  bars.color = cv::Scalar(60, 60, 60);
+  p.add(bars);
+  Series pts("bin mean (+-1 SE)", cu.x, cu.mean, Series::Style::Points);
+  pts.width = 4;
+  p.add(pts);
+  p.add_line(cu.slope, cu.intercept, "fit: " + estimates_text(c).substr(0, 70));
+  p.save_png(file);
+}
+
+void plot_td_bins(const DiagnoseReport &rep, const std::string &file) {
+  PlotOptions po;
+  po.title = "time-offset error per time bin (true - filter's t_d), from r = V*dt in each bin";
+  po.xlabel = "time since first logged row [s]";
+  po.ylabel = "offset [ms]";
+  Plot p(po);
+  std::vector<double> x, y, yt, ex, ey;
+  for (const auto &b : rep.td_bins) {
+    x.push_back(b.t_s), y.push_back(b.td_ms), yt.push_back(b.td_filter_ms + b.td_ms);
+    ex.insert(ex.end(), {b.t_s, b.t_s, std::nan("")});
+    ey.insert(ey.end(), {b.td_ms - b.td_se_ms, b.td_ms + b.td_se_ms, std::nan("")});
+  }
+  Series bars("", ex, ey, Series::Style::Line);
+  bars.color = cv::Scalar(60, 60, 60);
+  p.add(bars);
+  Series pts("offset error dt (+-1 SE)", x, y, Series::Style::Points);
+  pts.width = 4;
+  p.add(pts);
+  p.add(Series("filter t_d + dt (implied true offset)", x, yt, Series::Style::Line));
+  for (const auto &c : rep.candidates)
+    if (c.key == "td_drift" && c.estimates.size() >= 3)
+      p.add_line(c.estimates[0].value, c.estimates[2].value - c.estimates[0].value * 0.5 * rep.duration_s,
+                 "td_drift fit: " + fmt(c.estimates[0].value, 3) + " ms/s");
+  p.add_hline(0.0);
+  p.save_png(file);
+}
+
+} // namespace
+
+std::string format_ranking(const DiagnoseReport &rep) {
+  std::ostringstream os;
+  os << "rank  candidate         verdict        alone[%]  added[%]   sigma  estimate\n";
+  for (const auto &c : rep.candidates) {
+    os << std::left << std::setw(6) << c.rank << std::setw(18) << c.key << std::setw(15)
+       << (c.explained ? "EXPLAINED" : "not explained") << std::right << std::setw(8) << fmt(100 * c.explained_alone, 2)
+       << std::setw(10) << fmt(100 * c.explained_added, 2) << std::setw(8) << fmt(c.sigma, 1) << "  "
+       << estimates_text(c) << (c.note.empty() ? "" : "  [" + c.note + "]") << "\n";
+  }
+  return os.str();
+}
+
+std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const std::string &out_dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (!std::filesystem::is_directory(out_dir))
+    throw DataError(out_dir, "cannot create the output folder");
+  std::vector<std::string> files;
+  // Plots first, so the report can link them.
+  std::vector<std::pair<std::string, std::string>> plots; // key, file name
+  int plotted = 0;
+  for (const auto &c : rep.candidates) {
+    if (plotted >= 3)
+      break;
+    if (c.curve.x.size() < 2)
+      continue;
+    const std::string name = "diagnose_" + std::to_string(c.rank) + "_" + c.key + ".png";
+    plot_curve(c, join_path(out_dir, name));
+    plots.push_back({c.key, name});
+    files.push_back(join_path(out_dir, name));
+    ++plotted;
+  }
+  if (rep.td_bins.size() >= 2) {
+    const std::string name = "diagnose_td_per_time_bin.png";
+    plot_td_bins(rep, join_path(out_dir, name));
+    plots.push_back({"td_bins", name});
+    files.push_back(join_path(out_dir, name));
+  }
+
+  const auto &o = rep.options;
+  std::ostringstream md;
+  md << "# Residual diagnosis\n\n"
+     << "Log: `" << rep.log_file << "`\n\n"
+     << "- rows read " << rep.rows_read << "; used " << rep.rows_used << " observations in " << rep.tracks_used
+     << " tracks (accepted + chi-square gated); " << rep.rows_triangulation_failed << " triangulation-failure rows and "
+     << rep.rows_without_velocity << " rows without image velocity left out\n"
+     << "- span " << fmt(rep.duration_s, 1) << " s; residual RMS " << fmt(rep.residual_rms_px, 3)
+     << " px, robust sigma " << fmt(rep.robust_sigma_px, 3) << " px\n"
+     << "- intrinsics " << (rep.intrinsics_fitted ? "fitted from the log" : "from the dataset") << ": fu "
+     << fmt(rep.fu, 1) << ", fv " << fmt(rep.fv, 1) << ", cu " << fmt(rep.cu, 1) << ", cv " << fmt(rep.cv, 1)
+     << " px; image height " << rep.image_height << " px; image velocity "
+     << (o.use_logged_velocity ? "from the log's column" : "from the track's neighbouring pixels") << "\n"
+     << "- verdict rule: EXPLAINED when selected by forward stepwise regression: significance >= "
+     << fmt(o.min_sigma, 1) << " sigma (Wald, track-clustered) and >= " << fmt(100 * o.min_explained, 1)
+     << " % of the residual's Huber loss removed beyond the candidates selected before it\n\n";
+  const auto first = std::find_if(rep.candidates.begin(), rep.candidates.end(), [](auto &c) { return c.explained; });
+  if (first == rep.candidates.end())
+    md << "**No candidate explains the residuals** (nothing passes both thresholds).\n\n";
+  else
+    md << "**Top effect: " << first->key << "** — " << first->description << "; " << estimates_text(*first)
+       << "; removes " << fmt(100 * first->explained_added, 1) << " % of the residual loss.\n\n";
+  md << "| rank | candidate | verdict | explained alone [%] | added [%] | sigma | estimate (± 1 SE) | note |\n"
+     << "|---:|---|---|---:|---:|---:|---|---|\n";
+  for (const auto &c : rep.candidates)
+    md << "| " << c.rank << " | " << c.key << " | " << (c.explained ? "**explained**" : "not explained") << " | "
+       << fmt(100 * c.explained_alone, 2) << " | " << fmt(100 * c.explained_added, 2) << " | " << fmt(c.sigma, 1)
+       << " | " << estimates_text(c) << " | " << c.note << " |\n";
+  md << "\nModels:\n\n";
+  for (const auto &c : rep.candidates)
+    md << "- `" << c.key << "`: " << c.description << "\n";
+  if (!rep.td_bins.empty()) {
+    md << "\nTime-offset error per time bin (each bin fitted alone, r = V·δt):\n\n"
+       << "| t [s] | δt [ms] | SE [ms] | filter t̂_d [ms] | t̂_d + δt [ms] | observations |\n"
+       << "|---:|---:|---:|---:|---:|---:|\n";
+    for (const auto &b : rep.td_bins)
+      md << "| " << fmt(b.t_s, 1) << " | " << fmt(b.td_ms, 3) << " | " << fmt(b.td_se_ms, 3) << " | "
+         << fmt(b.td_filter_ms, 3) << " | " << fmt(b.td_filter_ms + b.td_ms, 3) << " | " << b.observations << " |\n";
+  }
+  if (!plots.empty()) {
+    md << "\nPlots:\n\n";
+    for (const auto &pl : plots)
+      md << "![" << pl.first << "](" << pl.second << ")\n";
+  }
+  md << "\nCaveat: residuals are logged before the MSCKF nullspace projection and after the filter has absorbed part "
+        "of "
+        "any effect into its state (biases, t̂_d, pose). Sizes are therefore lower bounds of the effect; compare "
+        "candidates with each other and with a clean run's diagnosis (docs/diagnose.md).\n";
+  const std::string md_file = join_path(out_dir, "diagnose.md");
+  write_file(md_file, md.str());
+  files.insert(files.begin(), md_file);
+
+  std::ostringstream js;
+  js << "{\n  \"log\": " << jstr(rep.log_file) << ",\n  \"rows_read\": " << rep.rows_read
+     << ",\n  \"rows_used\": " << rep.rows_used << ",\n  \"tracks_used\": " << rep.tracks_used
+     << ",\n  \"rows_triangulation_failed\": " << rep.rows_triangulation_failed
+     << ",\n  \"rows_without_velocity\": " << rep.rows_without_velocity
+     << ",\n  \"duration_s\": " << jnum(rep.duration_s) << ",\n  \"residual_rms_px\": " << jnum(rep.residual_rms_px)
+     << ",\n  \"robust_sigma_px\": " << jnum(rep.robust_sigma_px) << ",\n  \"intrinsics\": {\"fu\": " << jnum(rep.fu)
+     << ", \"fv\": " << jnum(rep.fv) << ", \"cu\": " << jnum(rep.cu) << ", \"cv\": " << jnum(rep.cv)
+     << ", \"fitted\": " << (rep.intrinsics_fitted ? "true" : "false") << "},\n  \"image_height\": " << rep.image_height
+     << ",\n  \"min_sigma\": " << jnum(o.min_sigma) << ",\n  \"min_explained\": " << jnum(o.min_explained)
+     << ",\n  \"top\": " << (first == rep.candidates.end() ? "null" : jstr(first->key)) << ",\n  \"candidates\": [";
+  for (size_t c = 0; c < rep.candidates.size(); ++c) {
+    const auto &cr = rep.candidates[c];
+    js << (c ? "," : "") << "\n    {\"rank\": " << cr.rank << ", \"key\": " << jstr(cr.key)
+       << ", \"model\": " << jstr(cr.description) << ", \"explained\": " << (cr.explained ? "true" : "false")
+       << ", \"explained_alone\": " << jnum(cr.explained_alone) << ", \"explained_added\": " << jnum(cr.explained_added)
+       << ", \"sigma\": " << jnum(cr.sigma) << ", \"note\": " << jstr(cr.note) << ", \"estimates\": [";
+    for (size_t e = 0; e < cr.estimates.size(); ++e)
+      js << (e ? ", " : "") << "{\"name\": " << jstr(cr.estimates[e].name)
+         << ", \"unit\": " << jstr(cr.estimates[e].unit) << ", \"value\": " << jnum(cr.estimates[e].value)
+         << ", \"stderr\": " << jnum(cr.estimates[e].stderr_) << "}";
+    js << "]}";
+  }
+  js << "\n  ],\n  \"td_bins\": [";
+  for (size_t b = 0; b < rep.td_bins.size(); ++b) {
+    const auto &tb = rep.td_bins[b];
+    js << (b ? "," : "") << "\n    {\"t_s\": " << jnum(tb.t_s) << ", \"td_error_ms\": " << jnum(tb.td_ms)
+       << ", \"td_error_se_ms\": " << jnum(tb.td_se_ms) << ", \"td_filter_ms\": " << jnum(tb.td_filter_ms)
+       << ", \"observations\": " << tb.observations << "}";
+  }
+  js << "\n  ]\n}\n";
+  const std::string js_file = join_path(out_dir, "diagnose.json");
+  write_file(js_file, js.str());
+  files.insert(files.begin() + 1, js_file);
+  return files;
+}
+
+} // namespace ov_core

@@ -1,0 +1,115 @@
+#pragma once
+// `ovton diagnose`: which effect the filter's model lacks, read from its residual log alone.
+//
+// Every candidate effect predicts the logged residual r (2 rows per observation, pixels) as a linear function of
+// logged columns, r ≈ X_c·β_c. The candidates are fitted by robust (Huber) weighted least squares and selected by
+// forward stepwise regression: the candidate that removes the largest share of the residual's loss is tested first
+// (significance of its coefficients with standard errors clustered by feature track, and share of loss explained);
+// if it passes, it joins the model and the remaining candidates are tested for what they add beyond it. Nested
+// candidates (offset drift contains a constant offset) are thereby credited only with what their extra terms add.
+// docs/diagnose.md gives each model, its sign convention and the thresholds.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace ov_core {
+
+/// One row of the residual log (ov_msckf_ton/update/residual_log.h writes it; read here by header name).
+struct ResidualLogRow {
+  long line = 0; ///< 1-based line in the file, for messages
+  uint64_t update_id = 0, feature_id = 0;
+  int64_t t_cam_ns = 0;
+  int obs_index = 0, track_length = 0;
+  double res_u_px = 0, res_v_px = 0; ///< NaN only for triangulation failures
+  double u_px = 0, v_px = 0, x_norm = 0, y_norm = 0, radius_norm = 0;
+  double vel_u_px_s = 0, vel_v_px_s = 0;
+  int vel_source = 0;
+  double w_x = 0, w_y = 0, w_z = 0;
+  int w_valid = 0;
+  double td_s = 0;
+  int status = 0; ///< 0 accepted, 1 chi-square gated, 2 triangulation failed
+};
+
+struct ResidualLog {
+  std::string file;
+  std::vector<ResidualLogRow> rows;
+};
+
+/// Reads a residual log. Columns are found by header name (extra columns are ignored, so the writer may append).
+/// Throws DataError with file:line for a missing file, a missing header or required column, a short row, a value
+/// that is not a number, or a NaN where the row's status says a number must be.
+ResidualLog load_residual_log(const std::string &file);
+
+struct DiagnoseOptions {
+  int image_height = 0;                  ///< rows of the image; 0: the largest v_px in the log
+  double fu = 0, fv = 0, cu = 0, cv = 0; ///< intrinsics [px]; fu 0: fitted from (u_px, x_norm) in the log
+  double min_sigma = 5.0;                ///< significance a candidate needs (Gaussian-equivalent σ)
+  double min_explained = 0.02;           ///< share of the residual loss it must remove
+  double huber_k = 3.0;                  ///< Huber threshold in robust σ of the residual components
+  int time_bins = 12;                    ///< bins of the per-time-bin δt(t) estimate
+  int plot_bins = 16;                    ///< quantile bins of the residual-vs-variable plots
+  /// false (default): the image velocity of an observation is the central difference of its track's neighbouring
+  /// pixels, which leaves the observation's own pixel out. The logged velocity (a backward difference that includes
+  /// the observation's own noise, as the filter's SIR shift uses it) correlates with the residual through that noise
+  /// and fakes a time offset of about σ²/(Δt·var V): 18 ms on the clean builtin simulation (docs/diagnose.md).
+  bool use_logged_velocity = false;
+  double min_velocity_share = 0.5; ///< logged velocity only: below this share of rows with one, time tests are skipped
+};
+
+/// One estimated quantity of a candidate, in the unit shown to the user.
+struct EffectEstimate {
+  std::string name, unit;
+  double value = 0, stderr_ = 0;
+};
+
+/// Binned mean of the residual (projected on the candidate's effect direction) against its explaining variable.
+struct BinnedCurve {
+  std::string xlabel, ylabel;
+  std::vector<double> x, mean, se;
+  double slope = 0, intercept = 0; ///< the fitted line in these axes
+};
+
+struct CandidateResult {
+  std::string key;         ///< td_const, td_drift, rolling_shutter, focal, principal_point, radial_k1, gyro_scale
+  std::string description; ///< the model in one line
+  std::vector<EffectEstimate> estimates; ///< from the candidate fitted alone (plus the candidates selected before it)
+  double explained_alone = 0;            ///< share of the residual loss it removes on its own
+  double explained_added = 0;            ///< share it adds to the candidates selected before it
+  double sigma = 0;                      ///< Gaussian-equivalent significance of its terms (Wald, cluster-robust)
+  bool explained = false;                ///< verdict: selected by the stepwise procedure
+  int rank = 0;                          ///< 1-based; selected candidates first, in selection order
+  BinnedCurve curve;                     ///< for the plot
+  std::string note;                      ///< why it was skipped or what limits it
+};
+
+struct TimeBin {
+  double t_s = 0;                 ///< bin centre, seconds from the first used row
+  double td_ms = 0, td_se_ms = 0; ///< offset error δt in the bin (true − filter's)
+  double td_filter_ms = 0;        ///< mean of the filter's t̂_d in the bin: t̂_d + δt estimates the true offset
+  long observations = 0;
+};
+
+struct DiagnoseReport {
+  std::string log_file;
+  long rows_read = 0, rows_used = 0, tracks_used = 0;
+  long rows_triangulation_failed = 0, rows_without_velocity = 0;
+  double duration_s = 0;
+  double residual_rms_px = 0, robust_sigma_px = 0;
+  double fu = 0, fv = 0, cu = 0, cv = 0; ///< used (given or fitted)
+  bool intrinsics_fitted = false;
+  int image_height = 0;
+  DiagnoseOptions options;
+  std::vector<CandidateResult> candidates; ///< in rank order
+  std::vector<TimeBin> td_bins;            ///< empty without velocities
+};
+
+/// Runs every candidate on the log. Throws DataError when the log has too few usable rows to say anything.
+DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt = {});
+
+/// Writes diagnose.md, diagnose.json and PNG plots (top candidates, δt per time bin) into out_dir; returns the files.
+std::vector<std::string> write_diagnose_report(const DiagnoseReport &report, const std::string &out_dir);
+
+/// The ranking as a fixed-width text table (what the CLI prints).
+std::string format_ranking(const DiagnoseReport &report);
+
+} // namespace ov_core

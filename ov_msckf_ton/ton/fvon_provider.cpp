@@ -1,0 +1,175 @@
+#include "ov_msckf_ton/ton/fvon_provider.h"
+#include "ov_core/types/errors.h"
+#include "ov_msckf_ton/update/feature_jacobians.h"
+#include "ov_msckf_ton/update/updater_msckf.h"
+
+#include <algorithm>
+#include <map>
+
+namespace ov_msckf_ton {
+
+namespace {
+
+/// Later observations (after the first) that carry a tracked velocity, counted up to the first gap.
+int later_velocities(const ov_core::Feature &f) {
+  int n = 0;
+  for (size_t i = 1; i < f.obs.size() && f.obs[i].vel_valid; ++i)
+    ++n;
+  return n;
+}
+
+bool well_tracked(const ov_core::Feature &f) {
+  if (f.obs.size() < 2)
+    return false;
+  for (const auto &o : f.obs)
+    if (!o.vel_valid)
+      return false;
+  return true;
+}
+
+} // namespace
+
+FvonVelocityProvider::FvonVelocityProvider(const ov_core::CameraCalib &calib, const FvonProviderOptions &options)
+    : opt_(options), R_BC_(calib.T_BC.topLeftCorner<3, 3>()), p_BC_(calib.T_BC.topRightCorner<3, 1>()),
+      focal_(0.5 * (calib.intrinsics(0) + calib.intrinsics(1))), its_(options.its), f2f_(options.f2f) {
+  if (!(focal_ > 0))
+    throw ov_core::UsageError("FvonVelocityProvider: focal lengths must be positive");
+  if (opt_.max_labels < 1 || opt_.min_f2f_labels < 1 || opt_.its_min_later < 1)
+    throw ov_core::UsageError("FvonVelocityProvider: max_labels, min_f2f_labels and its_min_later must be >= 1");
+}
+
+void FvonVelocityProvider::prepare(const State &state, const std::vector<const ov_core::Feature *> &features,
+                                   const UpdaterMSCKF &updater) {
+  predictions_.clear();
+  std::vector<const ov_core::Feature *> need_its, need_f2f;
+  for (const auto *f : features) {
+    if (f->obs.empty() || f->obs.front().vel_valid)
+      continue;
+    (later_velocities(*f) >= opt_.its_min_later ? need_its : need_f2f).push_back(f);
+  }
+  if (need_its.empty() && need_f2f.empty())
+    return;
+
+  std::vector<Eigen::Vector2d> seq;
+  if (!need_its.empty()) {
+    // Stage 2, ITS branch: train on the velocity sequences of the well-tracked features of this update, longest
+    // first (most (V^{k+1} -> V^k) pairs per track) until the label budget is used.
+    std::vector<const ov_core::Feature *> tracks;
+    for (const auto *f : features)
+      if (well_tracked(*f))
+        tracks.push_back(f);
+    std::stable_sort(tracks.begin(), tracks.end(),
+                     [](const auto *a, const auto *b) { return a->obs.size() > b->obs.size(); });
+    its_.clear_tracks();
+    int pairs = 0;
+    for (const auto *f : tracks) {
+      if (pairs >= opt_.max_labels)
+        break;
+      seq.clear();
+      for (const auto &o : f->obs)
+        seq.push_back(o.vel_xy * focal_);
+      its_.add_track(seq);
+      pairs += static_cast<int>(seq.size()) - 1;
+    }
+    if (its_.num_tracks() > 0) {
+      its_.train();
+      ++stats_.its_trainings;
+    }
+    for (const auto *f : need_its) {
+      if (!its_.trained()) {
+        need_f2f.push_back(f); // no well-tracked feature has been seen yet: F2F is the only option
+        continue;
+      }
+      const int n = later_velocities(*f);
+      seq.clear();
+      for (int i = 1; i <= n; ++i)
+        seq.push_back(f->obs[i].vel_xy * focal_);
+      Prediction p;
+      p.t_cam_ns = f->obs.front().t_cam_ns;
+      p.vel_xy = its_.predict(seq) / focal_;
+      p.source = kVelocityItsFvon;
+      predictions_[f->id] = p;
+      ++stats_.its_predictions;
+    }
+  }
+  if (need_f2f.empty())
+    return;
+
+  // Stage 2, F2F branch: one training per frame that holds a new feature, on the 3D positions (in that camera) and
+  // tracked velocities of the other features the frame sees. Points come from the same triangulation the update
+  // does, from the current clone estimates; observations are shifted by tracked velocities only.
+  std::unordered_map<size_t, Eigen::Vector3d> p_W;
+  for (const auto *f : features) {
+    const TriangulationResult tr = updater.triangulate_feature(state, *f, TdObservation::ImagePlane, tracked_);
+    if (tr.ok())
+      p_W[f->id] = tr.p_W;
+  }
+  std::map<int64_t, std::vector<const ov_core::Feature *>> by_frame;
+  for (const auto *f : need_f2f)
+    by_frame[f->obs.front().t_cam_ns].push_back(f);
+
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector2d>> labels;
+  for (const auto &[t, group] : by_frame) {
+    const auto clone = state.clones.find(t);
+    if (clone == state.clones.end()) {
+      stats_.no_prediction += static_cast<long>(group.size());
+      continue;
+    }
+    const CloneState &c = clone->second;
+    const auto in_camera = [&](size_t id, Eigen::Vector3d &p_C) {
+      const auto it = p_W.find(id);
+      Eigen::Vector2d z;
+      return it != p_W.end() && project_in_clone(c.R, c.p, R_BC_, p_BC_, it->second, z, &p_C);
+    };
+    labels.clear();
+    Eigen::Vector3d p_C;
+    for (const auto *g : features) {
+      const ov_core::FeatureObservation *o = g->at(t);
+      if (o && o->vel_valid && in_camera(g->id, p_C))
+        labels.emplace_back(p_C, o->vel_xy * focal_);
+    }
+    if (static_cast<int>(labels.size()) < opt_.min_f2f_labels) {
+      stats_.no_prediction += static_cast<long>(group.size());
+      continue;
+    }
+    // Evenly spaced subset (features are in id order, i.e. roughly detection order): the budget bounds the cost
+    // without favouring one part of the image.
+    f2f_.clear_labels();
+    const size_t n = labels.size(), keep = std::min(n, static_cast<size_t>(opt_.max_labels));
+    for (size_t k = 0; k < keep; ++k) {
+      const auto &l = labels[k * n / keep];
+      f2f_.add_label(l.first, l.second);
+    }
+    f2f_.train();
+    ++stats_.f2f_trainings;
+    for (const auto *f : group) {
+      if (!in_camera(f->id, p_C)) {
+        ++stats_.no_prediction;
+        continue;
+      }
+      Prediction p;
+      p.t_cam_ns = t;
+      p.vel_xy = f2f_.predict(p_C) / focal_;
+      p.source = kVelocityF2fFvon;
+      predictions_[f->id] = p;
+      ++stats_.f2f_predictions;
+    }
+  }
+}
+
+bool FvonVelocityProvider::velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
+                                    int &source) const {
+  const ov_core::FeatureObservation &o = feature.obs[obs_index];
+  if (o.vel_valid)
+    return VelocityProvider::velocity(feature, obs_index, vel_xy, source);
+  const auto it = predictions_.find(feature.id);
+  if (it == predictions_.end() || it->second.t_cam_ns != o.t_cam_ns) {
+    source = kVelocityNone;
+    return false;
+  }
+  vel_xy = it->second.vel_xy;
+  source = it->second.source;
+  return true;
+}
+
+} // namespace ov_msckf_ton

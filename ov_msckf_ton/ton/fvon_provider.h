@@ -1,0 +1,79 @@
+#pragma once
+// FVON inside the MSCKF update (paper Algorithm 1, stages 1-2): the velocity of an observation that has no previous
+// observation (a track's first, i.e. a new detection) is predicted, so that the feature can constrain t_d in the
+// image-plane model z = h(clone) + V·(t_d − td_ref). Tracked velocities (paper eq. 2) are passed through unchanged.
+#include "ov_core/cam/camera_calib.h"
+#include "ov_core/track/feature_database.h"
+#include "ov_msckf_ton/state/state.h"
+#include "ov_msckf_ton/ton/f2f_fvon.h"
+#include "ov_msckf_ton/ton/its_fvon.h"
+#include "ov_msckf_ton/update/td_observation.h"
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace ov_msckf_ton {
+
+class UpdaterMSCKF;
+
+struct FvonProviderOptions {
+  ton::ItsFvonOptions its;
+  ton::F2fFvonOptions f2f;
+  /// Training labels per network call: (V^{k+1} -> V^k) pairs for ITS, (point, velocity) pairs for F2F. Bounds the
+  /// per-frame cost, which grows linearly with it (times the epochs).
+  int max_labels = 40;
+  /// F2F needs at least this many labelled features in the frame: 57 weights fitted to fewer points of a smooth
+  /// velocity field extrapolate arbitrarily, and a wrong velocity biases t_d.
+  int min_f2f_labels = 5;
+  /// Algorithm 1: a new feature "tracked over 3 consecutive frames" gets ITS, otherwise F2F.
+  int its_min_later = 3;
+};
+
+/// Counts of what prepare() did since construction (diagnostics; the updater counts what was used).
+struct FvonStats {
+  long its_trainings = 0, f2f_trainings = 0;
+  long its_predictions = 0, f2f_predictions = 0;
+  long no_prediction = 0; ///< first observations left without a velocity (too few labels, untriangulable point)
+};
+
+/// Not thread-safe; one per filter. Call prepare() before each update with the features of that update, then pass
+/// the provider to UpdaterMSCKF::update().
+class FvonVelocityProvider : public VelocityProvider {
+public:
+  FvonVelocityProvider(const ov_core::CameraCalib &calib, const FvonProviderOptions &options = {});
+
+  /// Trains the networks on the update's well-tracked features (warm start) and predicts the velocity of every
+  /// first observation of `features` that has none. Points are triangulated with `updater` from the clone
+  /// estimates in `state`. Predictions of the previous call are forgotten.
+  void prepare(const State &state, const std::vector<const ov_core::Feature *> &features, const UpdaterMSCKF &updater);
+
+  bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy, int &source) const override;
+
+  const FvonStats &stats() const { return stats_; }
+  const ton::ItsFvon &its() const { return its_; }
+  const ton::F2fFvon &f2f() const { return f2f_; }
+
+private:
+  struct Prediction {
+    int64_t t_cam_ns = 0;
+    Eigen::Vector2d vel_xy = Eigen::Vector2d::Zero();
+    int source = kVelocityNone;
+  };
+
+  FvonProviderOptions opt_;
+  Eigen::Matrix3d R_BC_;
+  Eigen::Vector3d p_BC_;
+  /// The networks' normalisers have spreads in px/s; the updater works in normalised coordinates per second, so
+  /// velocities are scaled by the mean focal length on the way in and back on the way out.
+  double focal_;
+  ton::ItsFvon its_;
+  ton::F2fFvon f2f_;
+  VelocityProvider tracked_; ///< constant-speed velocities only, for triangulating before predictions exist
+  std::unordered_map<size_t, Prediction> predictions_; ///< by feature id, for its first observation
+  FvonStats stats_;
+};
+
+} // namespace ov_msckf_ton

@@ -1,0 +1,45 @@
+#pragma once
+// TPN inside the filter (paper Sec. IV-C, eq. 14, Algorithm 1 stages 3-4): after each image the filter's estimate
+// t̂_d(K−1) is appended to the label buffer, the network is trained and predicts t_d^TPN(K); the propagation to the
+// next image then drives the t_d mean at J_td = (t_d^TPN(K) − t̂_d(K−1)) / dt.
+#include "ov_msckf_ton/ton/tpn.h"
+
+namespace ov_msckf_ton {
+
+struct TpnDriverOptions {
+  ton::TpnOptions tpn;
+  /// Below this many labels the rate is 0: a window of a few filter estimates is mostly the filter's convergence
+  /// transient, not the offset's own motion.
+  int min_labels = 5;
+  /// |J_td| bound [s/s]. Real clock drifts are ppm (1e-6 s/s) and the paper's simulated drift 1e-4 s/s; 0.01 s/s
+  /// still allows 100x that, but keeps a badly trained network (e.g. right after t_d jumps during convergence) from
+  /// moving t_d by more than 0.5 ms per 20 Hz frame, which the update would then have to undo.
+  double td_rate_max = 0.01;
+};
+
+class TpnDriver {
+public:
+  explicit TpnDriver(const TpnDriverOptions &options = {});
+
+  /// Stages 3-4 after image K−1: pushes t̂_d(K−1) [s], trains and predicts t_d^TPN(K). Returns whether a prediction
+  /// is available (enough labels).
+  bool step(double td_estimate_s);
+  bool has_prediction() const { return has_prediction_; }
+  /// t_d^TPN(K) [s]; only meaningful when has_prediction().
+  double prediction() const { return prediction_; }
+
+  /// Paper eq. 14 over `dt_s` seconds from the current mean `td_now_s`, clamped to ±td_rate_max; 0 without a
+  /// prediction or for dt_s <= 0. `clamped`, when given, tells whether the bound was hit.
+  double rate(double td_now_s, double dt_s, bool *clamped = nullptr) const;
+
+  const ton::Tpn &network() const { return tpn_; }
+  const TpnDriverOptions &options() const { return opt_; }
+
+private:
+  TpnDriverOptions opt_;
+  ton::Tpn tpn_;
+  double prediction_ = 0.0;
+  bool has_prediction_ = false;
+};
+
+} // namespace ov_msckf_ton

@@ -1,0 +1,68 @@
+// `ovton diagnose`: names the effect the filter's model lacks from its residual log (ov_core/eval/diagnose.h).
+#include "ov_core/eval/diagnose.h"
+#include "ov_core/io/dataset.h"
+#include "ov_core/types/errors.h"
+#include "tools/commands.h"
+
+#include <boost/program_options.hpp>
+#include <filesystem>
+#include <iostream>
+
+namespace po = boost::program_options;
+
+int ovton::cmd_diagnose(const ovton::Args &args) {
+  std::string log_file, dataset_dir, out_dir;
+  ov_core::DiagnoseOptions opt;
+  po::options_description desc(
+      "usage: ovton diagnose --log FILE [--dataset DIR] [--out DIR]\n\n"
+      "Fits candidate effects (time-offset error constant / drifting, rolling-shutter readout, focal,\n"
+      "principal-point and radial-distortion error, gyro scale) to the residuals that\n"
+      "`ovton run --residual-log FILE` wrote, ranks them by the share of the residual they explain and\n"
+      "says which are significant. Writes diagnose.md, diagnose.json and PNG plots (docs/diagnose.md).\n\noptions");
+  // clang-format off
+  desc.add_options()
+    ("help,h", "print this help")
+    ("log", po::value(&log_file), "residual log CSV (ovton run --residual-log)")
+    ("dataset", po::value(&dataset_dir),
+     "dataset folder the log was made from: image height and intrinsics (default: taken from the log)")
+    ("out", po::value(&out_dir), "output folder (default: <log without extension>_diagnose beside the log)")
+    ("min-sigma", po::value(&opt.min_sigma)->default_value(opt.min_sigma, "5"),
+     "significance a candidate needs [Gaussian sigma]")
+    ("min-explained", po::value(&opt.min_explained)->default_value(opt.min_explained, "0.02"),
+     "share of the residual loss a candidate must remove (0..1)")
+    ("logged-velocity", po::bool_switch(&opt.use_logged_velocity),
+     "use the log's velocity column (shares each row's pixel noise: biased) instead of the track's central difference")
+    ("time-bins", po::value(&opt.time_bins)->default_value(opt.time_bins), "bins of the per-time offset estimate");
+  // clang-format on
+  po::variables_map vm;
+  po::store(po::command_line_parser(args).options(desc).run(), vm);
+  po::notify(vm);
+  if (vm.count("help")) {
+    std::cout << desc << "\n";
+    return 0;
+  }
+  if (log_file.empty())
+    throw ov_core::UsageError("--log is required (see ovton diagnose --help)");
+  if (!(opt.min_sigma > 0) || !(opt.min_explained >= 0 && opt.min_explained < 1) || opt.time_bins < 1)
+    throw ov_core::UsageError("--min-sigma must be > 0, --min-explained in [0, 1), --time-bins >= 1");
+  if (!dataset_dir.empty()) {
+    ov_core::LoadOptions lo;
+    lo.check_images_exist = false;
+    const ov_core::Dataset data = ov_core::load_dataset(dataset_dir, lo);
+    opt.image_height = data.cam.height;
+    opt.fu = data.cam.intrinsics(0), opt.fv = data.cam.intrinsics(1);
+    opt.cu = data.cam.intrinsics(2), opt.cv = data.cam.intrinsics(3);
+  }
+  if (out_dir.empty()) {
+    std::filesystem::path p(log_file);
+    out_dir = (p.parent_path() / (p.stem().string() + "_diagnose")).string();
+  }
+  const ov_core::ResidualLog log = ov_core::load_residual_log(log_file);
+  const ov_core::DiagnoseReport rep = ov_core::diagnose(log, opt);
+  std::cout << "log " << log_file << ": " << rep.rows_used << " observations in " << rep.tracks_used << " tracks over "
+            << rep.duration_s << " s, residual RMS " << rep.residual_rms_px << " px\n\n"
+            << ov_core::format_ranking(rep) << "\n";
+  for (const auto &f : ov_core::write_diagnose_report(rep, out_dir))
+    std::cout << "wrote " << f << "\n";
+  return 0;
+}
