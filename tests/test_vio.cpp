@@ -16,8 +16,8 @@ TEST(VioOptions, ShippedConfigLoadsAndUnknownKeysFail) {
   const VioOptions o =
       load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml", &printed);
   EXPECT_EQ(o.td_mode, TdMode::Sr);
-  EXPECT_EQ(o.max_clones, 11);
-  EXPECT_NE(printed.str().find("max_clones: 11"), std::string::npos);
+  EXPECT_EQ(o.max_clones, 20);
+  EXPECT_NE(printed.str().find("max_clones: 20"), std::string::npos);
   ovtest::TempDir tmp;
   ovtest::write_text(tmp / "bad.yaml", "max_clones: 11\nmax_clone: 5\n");
   try {

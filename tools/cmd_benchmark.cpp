@@ -1,8 +1,10 @@
 // `ovton benchmark`: per-frame cost by stage, throughput as a multiple of real time, and resident memory over a run,
 // for one or more time-offset modes replayed one after another in this process (see docs/benchmarks.md).
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/text_format.h"
 #include "ov_core/sim/simulator.h"
 #include "ov_core/types/errors.h"
+#include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/mem_usage.h"
 #include "tools/progress.h"
@@ -73,18 +75,6 @@ std::string num(double v, int prec = 3) {
   char buf[32];
   std::snprintf(buf, sizeof(buf), "%.*f", prec, v);
   return buf;
-}
-
-std::string json_str(const std::string &s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\')
-      o += '\\';
-    if (static_cast<unsigned char>(c) < 0x20)
-      continue;
-    o += c;
-  }
-  return o + "\"";
 }
 
 /// Renders a 30 s (by default) flight along the built-in trajectory, or reuses one already in `dir`: rendering costs
@@ -225,13 +215,13 @@ void write_json(const std::string &file, const std::vector<ModeBench> &res, cons
   std::ofstream out(file);
   if (!out)
     throw ov_core::UsageError("cannot write " + file);
-  out << "{\n  \"dataset\": " << json_str(dataset) << ",\n  \"config\": " << json_str(config)
-      << ",\n  \"init\": " << json_str(init) << ",\n  \"cores\": " << std::thread::hardware_concurrency()
-      << ",\n  \"loadavg_start\": " << json_str(load_start) << ",\n  \"loadavg_end\": " << json_str(load_end)
-      << ",\n  \"same_process\": true,\n  \"modes\": [";
+  out << "{\n  \"dataset\": " << ov_core::json_string(dataset) << ",\n  \"config\": " << ov_core::json_string(config)
+      << ",\n  \"init\": " << ov_core::json_string(init) << ",\n  \"cores\": " << std::thread::hardware_concurrency()
+      << ",\n  \"loadavg_start\": " << ov_core::json_string(load_start)
+      << ",\n  \"loadavg_end\": " << ov_core::json_string(load_end) << ",\n  \"same_process\": true,\n  \"modes\": [";
   for (size_t i = 0; i < res.size(); ++i) {
     const auto &b = res[i];
-    out << (i ? "," : "") << "\n    {\"mode\": " << json_str(b.mode) << ", \"images\": " << b.images
+    out << (i ? "," : "") << "\n    {\"mode\": " << ov_core::json_string(b.mode) << ", \"images\": " << b.images
         << ", \"images_before_init\": " << b.images_before_init << ", \"updates\": " << b.updates
         << ", \"features_used\": " << b.features_used << ", \"features_per_frame\": " << num(b.features_per_frame())
         << ",\n     \"data_span_s\": " << num(b.data_span_s) << ", \"wall_s\": " << num(b.wall_s)
@@ -243,7 +233,8 @@ void write_json(const std::string &file, const std::vector<ModeBench> &res, cons
         << ", \"total\": " << num(b.total, 4) << "},\n     \"rss_mb\": {\"start\": " << num(b.rss_start, 2)
         << ", \"p25\": " << num(b.rss_quarter[0], 2) << ", \"p50\": " << num(b.rss_quarter[1], 2)
         << ", \"p75\": " << num(b.rss_quarter[2], 2) << ", \"p100\": " << num(b.rss_quarter[3], 2)
-        << ", \"peak\": " << num(b.peak, 2) << ", \"peak_scope\": " << json_str(b.peak_own ? "mode" : "process")
+        << ", \"peak\": " << num(b.peak, 2)
+        << ", \"peak_scope\": " << ov_core::json_string(b.peak_own ? "mode" : "process")
         << "},\n     \"interrupted\": " << (b.interrupted ? "true" : "false") << "}";
   }
   out << "\n  ]\n}\n";
@@ -272,12 +263,8 @@ int cmd_benchmark(const Args &args) {
       ("json", po::value(&json), "also write the numbers as JSON")                                                //
       ("quiet,q", po::bool_switch(&quiet), "no progress bars");
   po::variables_map vm;
-  po::store(po::command_line_parser(args).options(desc).run(), vm);
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return 0;
-  }
-  po::notify(vm);
+  if (!parse_command_line(args, desc, vm))
+    return 0; // --help
   if (dataset.empty() && generate_dir.empty())
     throw ov_core::UsageError("give --dataset DIR, or --generate DIR to render a dataset to benchmark");
   if (!dataset.empty() && !generate_dir.empty())

@@ -2,6 +2,7 @@
 #include "ov_core/eval/metrics.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/types/errors.h"
+#include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/compare_report.h"
 #include "tools/progress.h"
@@ -55,14 +56,11 @@ int cmd_compare(const Args &args) {
       ("max-images", po::value(&req.max_images), "stop each run after this many images")                         //
       ("align", po::value(&align)->default_value(align), "trajectory alignment for APE/ARE: posyaw|se3");
   po::variables_map vm;
-  po::store(po::command_line_parser(args).options(desc).run(), vm);
-  if (vm.count("help")) {
-    std::cout << desc << "\n"
-              << "Writes OUT/traj_<mode>.csv, OUT/results.md, OUT/results.csv, OUT/td.png, OUT/ape.png, OUT/top.png.\n"
+  if (!parse_command_line(args, desc, vm)) {
+    std::cout << "Writes OUT/traj_<mode>.csv, OUT/results.md, OUT/results.csv, OUT/td.png, OUT/ape.png, OUT/top.png.\n"
               << "oracle is skipped when the dataset has no td_truth/data.csv.\n";
     return 0;
   }
-  po::notify(vm);
   // Checked before the dataset is loaded, so that a typo costs nothing.
   req.modes = parse_compare_modes(modes);
   if (req.jobs < 1)

@@ -2,6 +2,7 @@
 #include "ov_core/eval/diagnose.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/types/errors.h"
+#include "tools/cli.h"
 #include "tools/commands.h"
 
 #include <boost/program_options.hpp>
@@ -35,12 +36,8 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
     ("time-bins", po::value(&opt.time_bins)->default_value(opt.time_bins), "bins of the per-time offset estimate");
   // clang-format on
   po::variables_map vm;
-  po::store(po::command_line_parser(args).options(desc).run(), vm);
-  po::notify(vm);
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return 0;
-  }
+  if (!parse_command_line(args, desc, vm))
+    return 0; // --help
   if (log_file.empty())
     throw ov_core::UsageError("--log is required (see ovton diagnose --help)");
   if (!(opt.min_sigma > 0) || !(opt.min_explained >= 0 && opt.min_explained < 1) || opt.time_bins < 1)

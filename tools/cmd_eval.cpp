@@ -1,7 +1,9 @@
 // `ovton eval`: APE/ARE/RPE/TPE/CIT of a trajectory against ground truth (paper §V-A).
 #include "ov_core/eval/metrics.h"
+#include "ov_core/io/text_format.h"
 #include "ov_core/io/trajectory_io.h"
 #include "ov_core/types/errors.h"
+#include "tools/cli.h"
 #include "tools/commands.h"
 
 #include <boost/program_options.hpp>
@@ -35,43 +37,6 @@ std::vector<double> parse_segments(const std::string &s) {
     out.push_back(v);
   }
   return out;
-}
-
-/// Fixed-point text, or "n/a" for NaN (position-only truth, empty RPE segment).
-std::string num(double v, int prec) {
-  if (std::isnan(v))
-    return "n/a";
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(prec) << v;
-  return os.str();
-}
-
-std::string json_num(double v) {
-  if (!std::isfinite(v))
-    return "null";
-  std::ostringstream os;
-  os << std::setprecision(10) << v;
-  return os.str();
-}
-
-std::string json_str(const std::string &s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\')
-      out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-      continue;
-    }
-    out += c;
-  }
-  return out + "\"";
-}
-
-std::string csv_num(double v) {
-  return std::isnan(v) ? "" : json_num(v);
 }
 
 std::ofstream open_out(const std::string &file) {
@@ -116,12 +81,8 @@ int ovton::cmd_eval(const ovton::Args &args) {
     ("csv", po::value(&csv_file), "also write the results as a one-row CSV with header");
   // clang-format on
   po::variables_map vm;
-  po::store(po::command_line_parser(args).options(desc).run(), vm);
-  po::notify(vm);
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return 0;
-  }
+  if (!parse_command_line(args, desc, vm))
+    return 0; // --help
   if (est_file.empty() || gt_file.empty())
     throw ov_core::UsageError("--est and --gt are required (see ovton eval --help)");
   if (!(eps1_ms > 0.0) || !(eps2_ms > 0.0))
@@ -152,38 +113,42 @@ int ovton::cmd_eval(const ovton::Args &args) {
   os << "estimate     " << est_file << "  (" << r.n_est << " poses)\n"
      << "ground truth " << gt_file << "  (" << gt.size() << " poses)\n"
      << "matched      " << r.n_matched << " of " << r.n_est << " estimates\n"
-     << "alignment    " << ov_core::to_string(r.align_mode) << "  (t = [" << num(r.alignment.t.x(), 3) << ", "
-     << num(r.alignment.t.y(), 3) << ", " << num(r.alignment.t.z(), 3) << "] m, yaw " << num(yaw_deg, 2) << " deg)\n\n";
+     << "alignment    " << ov_core::to_string(r.align_mode) << "  (t = [" << ov_core::format_fixed(r.alignment.t.x(), 3)
+     << ", " << ov_core::format_fixed(r.alignment.t.y(), 3) << ", " << ov_core::format_fixed(r.alignment.t.z(), 3)
+     << "] m, yaw " << ov_core::format_fixed(yaw_deg, 2) << " deg)\n\n";
   os << "metric                 value\n"
-     << "APE RMSE [m]           " << num(r.ape_rmse_m, 4) << "\n"
-     << "APE mean [m]           " << num(r.ape_mean_m, 4) << "\n"
-     << "APE max  [m]           " << num(r.ape_max_m, 4) << "\n"
-     << "ARE RMSE [deg]         " << num(r.are_rmse_deg, 3)
+     << "APE RMSE [m]           " << ov_core::format_fixed(r.ape_rmse_m, 4) << "\n"
+     << "APE mean [m]           " << ov_core::format_fixed(r.ape_mean_m, 4) << "\n"
+     << "APE max  [m]           " << ov_core::format_fixed(r.ape_max_m, 4) << "\n"
+     << "ARE RMSE [deg]         " << ov_core::format_fixed(r.are_rmse_deg, 3)
      << (std::isnan(r.are_rmse_deg) ? "   (ground truth has no orientation)" : "") << "\n"
      << "TPE RMSE [mm]          "
-     << (r.has_tpe ? num(r.tpe_rmse_mm, 3) : std::string("n/a (needs td column and --td-truth)")) << "\n"
+     << (r.has_tpe ? ov_core::format_fixed(r.tpe_rmse_mm, 3) : std::string("n/a (needs td column and --td-truth)"))
+     << "\n"
      << "CIT [frame]            "
      << (r.has_cit ? (r.cit >= 0 ? std::to_string(r.cit) : std::string("never converged"))
                    : std::string("n/a (needs td column and --td-truth or --cit-target-ms)"))
      << "\n\n";
   os << "RPE segment [m]   count   trans RMSE [m]   rot RMSE [deg]\n";
   for (const auto &rr : r.rpe)
-    os << std::setw(15) << num(rr.segment_m, 1) << std::setw(8) << rr.count << std::setw(17) << num(rr.trans_rmse_m, 4)
-       << std::setw(17) << num(rr.rot_rmse_deg, 3) << "\n";
+    os << std::setw(15) << ov_core::format_fixed(rr.segment_m, 1) << std::setw(8) << rr.count << std::setw(17)
+       << ov_core::format_fixed(rr.trans_rmse_m, 4) << std::setw(17) << ov_core::format_fixed(rr.rot_rmse_deg, 3)
+       << "\n";
 
   if (!json_file.empty()) {
     std::ofstream out = open_out(json_file);
-    out << "{\n  \"est\": " << json_str(est_file) << ",\n  \"gt\": " << json_str(gt_file)
-        << ",\n  \"align\": " << json_str(ov_core::to_string(r.align_mode)) << ",\n  \"n_est\": " << r.n_est
-        << ",\n  \"n_matched\": " << r.n_matched << ",\n  \"ape_rmse_m\": " << json_num(r.ape_rmse_m)
-        << ",\n  \"ape_mean_m\": " << json_num(r.ape_mean_m) << ",\n  \"ape_max_m\": " << json_num(r.ape_max_m)
-        << ",\n  \"are_rmse_deg\": " << json_num(r.are_rmse_deg)
-        << ",\n  \"tpe_rmse_mm\": " << (r.has_tpe ? json_num(r.tpe_rmse_mm) : "null")
+    out << "{\n  \"est\": " << ov_core::json_string(est_file) << ",\n  \"gt\": " << ov_core::json_string(gt_file)
+        << ",\n  \"align\": " << ov_core::json_string(ov_core::to_string(r.align_mode)) << ",\n  \"n_est\": " << r.n_est
+        << ",\n  \"n_matched\": " << r.n_matched << ",\n  \"ape_rmse_m\": " << ov_core::json_number(r.ape_rmse_m)
+        << ",\n  \"ape_mean_m\": " << ov_core::json_number(r.ape_mean_m)
+        << ",\n  \"ape_max_m\": " << ov_core::json_number(r.ape_max_m)
+        << ",\n  \"are_rmse_deg\": " << ov_core::json_number(r.are_rmse_deg)
+        << ",\n  \"tpe_rmse_mm\": " << (r.has_tpe ? ov_core::json_number(r.tpe_rmse_mm) : "null")
         << ",\n  \"cit\": " << (r.has_cit ? std::to_string(r.cit) : "null") << ",\n  \"rpe\": [";
     for (size_t i = 0; i < r.rpe.size(); ++i)
-      out << (i ? "," : "") << "\n    {\"segment_m\": " << json_num(r.rpe[i].segment_m)
-          << ", \"count\": " << r.rpe[i].count << ", \"trans_rmse_m\": " << json_num(r.rpe[i].trans_rmse_m)
-          << ", \"rot_rmse_deg\": " << json_num(r.rpe[i].rot_rmse_deg) << "}";
+      out << (i ? "," : "") << "\n    {\"segment_m\": " << ov_core::json_number(r.rpe[i].segment_m)
+          << ", \"count\": " << r.rpe[i].count << ", \"trans_rmse_m\": " << ov_core::json_number(r.rpe[i].trans_rmse_m)
+          << ", \"rot_rmse_deg\": " << ov_core::json_number(r.rpe[i].rot_rmse_deg) << "}";
     out << "\n  ]\n}\n";
     close_out(out, json_file);
   }
@@ -191,13 +156,15 @@ int ovton::cmd_eval(const ovton::Args &args) {
     std::ofstream out = open_out(csv_file);
     out << "align,n_est,n_matched,ape_rmse_m,ape_mean_m,ape_max_m,are_rmse_deg,tpe_rmse_mm,cit";
     for (const auto &rr : r.rpe)
-      out << ",rpe_" << json_num(rr.segment_m) << "m_trans_rmse_m,rpe_" << json_num(rr.segment_m) << "m_rot_rmse_deg";
+      out << ",rpe_" << ov_core::json_number(rr.segment_m) << "m_trans_rmse_m,rpe_"
+          << ov_core::json_number(rr.segment_m) << "m_rot_rmse_deg";
     out << "\n"
-        << ov_core::to_string(r.align_mode) << "," << r.n_est << "," << r.n_matched << "," << csv_num(r.ape_rmse_m)
-        << "," << csv_num(r.ape_mean_m) << "," << csv_num(r.ape_max_m) << "," << csv_num(r.are_rmse_deg) << ","
-        << (r.has_tpe ? csv_num(r.tpe_rmse_mm) : "") << "," << (r.has_cit ? std::to_string(r.cit) : "");
+        << ov_core::to_string(r.align_mode) << "," << r.n_est << "," << r.n_matched << ","
+        << ov_core::csv_number(r.ape_rmse_m) << "," << ov_core::csv_number(r.ape_mean_m) << ","
+        << ov_core::csv_number(r.ape_max_m) << "," << ov_core::csv_number(r.are_rmse_deg) << ","
+        << (r.has_tpe ? ov_core::csv_number(r.tpe_rmse_mm) : "") << "," << (r.has_cit ? std::to_string(r.cit) : "");
     for (const auto &rr : r.rpe)
-      out << "," << csv_num(rr.trans_rmse_m) << "," << csv_num(rr.rot_rmse_deg);
+      out << "," << ov_core::csv_number(rr.trans_rmse_m) << "," << ov_core::csv_number(rr.rot_rmse_deg);
     out << "\n";
     close_out(out, csv_file);
   }

@@ -1,5 +1,6 @@
 // `ovton info --dataset DIR`: load and validate a dataset folder, print what it holds.
 #include "ov_core/io/dataset.h"
+#include "tools/cli.h"
 #include "tools/commands.h"
 
 #include <boost/program_options.hpp>
@@ -15,12 +16,8 @@ int cmd_info(const Args &args) {
   std::string dir;
   desc.add_options()("help,h", "this help")("dataset,d", po::value(&dir)->required(), "dataset folder");
   po::variables_map vm;
-  po::store(po::command_line_parser(args).options(desc).run(), vm);
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return 0;
-  }
-  po::notify(vm);
+  if (!parse_command_line(args, desc, vm))
+    return 0; // --help
 
   const ov_core::Dataset d = ov_core::load_dataset(dir);
   const double t0 = ov_core::ns_to_s(d.images.front().t_cam_ns), t1 = ov_core::ns_to_s(d.images.back().t_cam_ns);

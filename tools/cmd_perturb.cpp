@@ -1,6 +1,7 @@
 // `ovton perturb`: the paper's EuRoC protocol — a real folder with image stamps rewritten by an offset model.
 #include "ov_core/sim/perturb.h"
 #include "ov_core/types/errors.h"
+#include "tools/cli.h"
 #include "tools/commands.h"
 
 #include <boost/program_options.hpp>
@@ -26,12 +27,8 @@ int cmd_perturb(const Args &args) {
       ("td-bias-ms-per-s", po::value(&td_bias)->default_value(0.1), "drift: growth [ms/s]")     //
       ("td-noise-ms-per-sqrt-s", po::value(&td_noise)->default_value(0.1), "drift: random walk [ms/sqrt(s)]");
   po::variables_map vm;
-  po::store(po::command_line_parser(args).options(desc).run(), vm);
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return 0;
-  }
-  po::notify(vm);
+  if (!parse_command_line(args, desc, vm))
+    return 0; // --help
   o.td.kind = ov_core::sim::parse_td_model(td_model);
   o.td.td0_s = td0_ms * 1e-3;
   o.td.bias_s_per_s = td_bias * 1e-3;

@@ -2,6 +2,7 @@
 #include "ov_core/eval/metrics.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/types/errors.h"
+#include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/progress.h"
 #include "tools/run_pipeline.h"
@@ -34,12 +35,8 @@ int cmd_run(const Args &args) {
       ("max-images", po::value(&req.max_images), "stop after this many images")                           //
       ("quiet,q", po::bool_switch(&quiet), "no progress bar, no option listing");
   po::variables_map vm;
-  po::store(po::command_line_parser(args).options(desc).run(), vm);
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return 0;
-  }
-  po::notify(vm);
+  if (!parse_command_line(args, desc, vm))
+    return 0; // --help
   if (format != "csv" && format != "tum")
     throw ov_core::UsageError("--format must be csv or tum");
   req.tum = format == "tum";

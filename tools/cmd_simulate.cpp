@@ -2,6 +2,7 @@
 #include "ov_core/io/dataset.h"
 #include "ov_core/sim/simulator.h"
 #include "ov_core/types/errors.h"
+#include "tools/cli.h"
 #include "tools/commands.h"
 
 #include <boost/program_options.hpp>
@@ -92,12 +93,8 @@ int cmd_simulate(const Args &args) {
       ("force", "replace OUT/mav0 if it exists")                                                              //
       ("quiet,q", "no progress output");
   po::variables_map vm;
-  po::store(po::command_line_parser(args).options(desc).run(), vm);
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return 0;
-  }
-  po::notify(vm);
+  if (!parse_command_line(args, desc, vm))
+    return 0; // --help
   const bool bench = vm.count("benchmark") > 0;
   if (out.empty() && !bench)
     throw ov_core::UsageError("--out is required");

@@ -1,6 +1,7 @@
 #include "ov_core/eval/diagnose.h"
 #include "ov_core/eval/plot.h"
 #include "ov_core/io/csv.h"
+#include "ov_core/io/text_format.h"
 #include "ov_core/types/errors.h"
 
 #include <Eigen/Dense>
@@ -756,44 +757,13 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
 
 namespace {
 
-std::string fmt(double v, int prec) {
-  if (!std::isfinite(v))
-    return "n/a";
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(prec) << v;
-  return os.str();
-}
-
-std::string jnum(double v) {
-  if (!std::isfinite(v))
-    return "null";
-  std::ostringstream os;
-  os << std::setprecision(10) << v;
-  return os.str();
-}
-
-std::string jstr(const std::string &s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\')
-      out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-      continue;
-    }
-    out += c;
-  }
-  return out + "\"";
-}
-
 std::string estimates_text(const CandidateResult &c) {
   std::string s;
   for (const auto &e : c.estimates) {
     if (!s.empty())
       s += "; ";
-    s += e.name + " " + fmt(e.value, 3) + " ± " + fmt(e.stderr_, 3) + (e.unit.empty() ? "" : " " + e.unit);
+    s += e.name + " " + format_fixed(e.value, 3) + " ± " + format_fixed(e.stderr_, 3) +
+         (e.unit.empty() ? "" : " " + e.unit);
   }
   return s.empty() ? "-" : s;
 }
@@ -853,7 +823,7 @@ void plot_td_bins(const DiagnoseReport &rep, const std::string &file) {
   for (const auto &c : rep.candidates)
     if (c.key == "td_drift" && c.estimates.size() >= 3)
       p.add_line(c.estimates[0].value, c.estimates[2].value - c.estimates[0].value * 0.5 * rep.duration_s,
-                 "td_drift fit: " + fmt(c.estimates[0].value, 3) + " ms/s");
+                 "td_drift fit: " + format_fixed(c.estimates[0].value, 3) + " ms/s");
   p.add_hline(0.0);
   p.save_png(file);
 }
@@ -865,9 +835,10 @@ std::string format_ranking(const DiagnoseReport &rep) {
   os << "rank  candidate         verdict        alone[%]  added[%]   sigma  estimate\n";
   for (const auto &c : rep.candidates) {
     os << std::left << std::setw(6) << c.rank << std::setw(18) << c.key << std::setw(15)
-       << (c.explained ? "EXPLAINED" : "not explained") << std::right << std::setw(8) << fmt(100 * c.explained_alone, 2)
-       << std::setw(10) << fmt(100 * c.explained_added, 2) << std::setw(8) << fmt(c.sigma, 1) << "  "
-       << estimates_text(c) << (c.note.empty() ? "" : "  [" + c.note + "]") << "\n";
+       << (c.explained ? "EXPLAINED" : "not explained") << std::right << std::setw(8)
+       << format_fixed(100 * c.explained_alone, 2) << std::setw(10) << format_fixed(100 * c.explained_added, 2)
+       << std::setw(8) << format_fixed(c.sigma, 1) << "  " << estimates_text(c)
+       << (c.note.empty() ? "" : "  [" + c.note + "]") << "\n";
   }
   return os.str();
 }
@@ -906,27 +877,28 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
      << "- rows read " << rep.rows_read << "; used " << rep.rows_used << " observations in " << rep.tracks_used
      << " tracks (accepted + chi-square gated); " << rep.rows_triangulation_failed << " triangulation-failure rows and "
      << rep.rows_without_velocity << " rows without image velocity left out\n"
-     << "- span " << fmt(rep.duration_s, 1) << " s; residual RMS " << fmt(rep.residual_rms_px, 3)
-     << " px, robust sigma " << fmt(rep.robust_sigma_px, 3) << " px\n"
+     << "- span " << format_fixed(rep.duration_s, 1) << " s; residual RMS " << format_fixed(rep.residual_rms_px, 3)
+     << " px, robust sigma " << format_fixed(rep.robust_sigma_px, 3) << " px\n"
      << "- intrinsics " << (rep.intrinsics_fitted ? "fitted from the log" : "from the dataset") << ": fu "
-     << fmt(rep.fu, 1) << ", fv " << fmt(rep.fv, 1) << ", cu " << fmt(rep.cu, 1) << ", cv " << fmt(rep.cv, 1)
-     << " px; image height " << rep.image_height << " px; image velocity "
+     << format_fixed(rep.fu, 1) << ", fv " << format_fixed(rep.fv, 1) << ", cu " << format_fixed(rep.cu, 1) << ", cv "
+     << format_fixed(rep.cv, 1) << " px; image height " << rep.image_height << " px; image velocity "
      << (o.use_logged_velocity ? "from the log's column" : "from the track's neighbouring pixels") << "\n"
      << "- verdict rule: EXPLAINED when selected by forward stepwise regression: significance >= "
-     << fmt(o.min_sigma, 1) << " sigma (Wald, track-clustered) and >= " << fmt(100 * o.min_explained, 1)
+     << format_fixed(o.min_sigma, 1)
+     << " sigma (Wald, track-clustered) and >= " << format_fixed(100 * o.min_explained, 1)
      << " % of the residual's Huber loss removed beyond the candidates selected before it\n\n";
   const auto first = std::find_if(rep.candidates.begin(), rep.candidates.end(), [](auto &c) { return c.explained; });
   if (first == rep.candidates.end())
     md << "**No candidate explains the residuals** (nothing passes both thresholds).\n\n";
   else
     md << "**Top effect: " << first->key << "** — " << first->description << "; " << estimates_text(*first)
-       << "; removes " << fmt(100 * first->explained_added, 1) << " % of the residual loss.\n\n";
+       << "; removes " << format_fixed(100 * first->explained_added, 1) << " % of the residual loss.\n\n";
   md << "| rank | candidate | verdict | explained alone [%] | added [%] | sigma | estimate (± 1 SE) | note |\n"
      << "|---:|---|---|---:|---:|---:|---|---|\n";
   for (const auto &c : rep.candidates)
     md << "| " << c.rank << " | " << c.key << " | " << (c.explained ? "**explained**" : "not explained") << " | "
-       << fmt(100 * c.explained_alone, 2) << " | " << fmt(100 * c.explained_added, 2) << " | " << fmt(c.sigma, 1)
-       << " | " << estimates_text(c) << " | " << c.note << " |\n";
+       << format_fixed(100 * c.explained_alone, 2) << " | " << format_fixed(100 * c.explained_added, 2) << " | "
+       << format_fixed(c.sigma, 1) << " | " << estimates_text(c) << " | " << c.note << " |\n";
   md << "\nModels:\n\n";
   for (const auto &c : rep.candidates)
     md << "- `" << c.key << "`: " << c.description << "\n";
@@ -935,8 +907,9 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
        << "| t [s] | δt [ms] | SE [ms] | filter t̂_d [ms] | t̂_d + δt [ms] | observations |\n"
        << "|---:|---:|---:|---:|---:|---:|\n";
     for (const auto &b : rep.td_bins)
-      md << "| " << fmt(b.t_s, 1) << " | " << fmt(b.td_ms, 3) << " | " << fmt(b.td_se_ms, 3) << " | "
-         << fmt(b.td_filter_ms, 3) << " | " << fmt(b.td_filter_ms + b.td_ms, 3) << " | " << b.observations << " |\n";
+      md << "| " << format_fixed(b.t_s, 1) << " | " << format_fixed(b.td_ms, 3) << " | " << format_fixed(b.td_se_ms, 3)
+         << " | " << format_fixed(b.td_filter_ms, 3) << " | " << format_fixed(b.td_filter_ms + b.td_ms, 3) << " | "
+         << b.observations << " |\n";
   }
   if (!plots.empty()) {
     md << "\nPlots:\n\n";
@@ -952,33 +925,37 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
   files.insert(files.begin(), md_file);
 
   std::ostringstream js;
-  js << "{\n  \"log\": " << jstr(rep.log_file) << ",\n  \"rows_read\": " << rep.rows_read
+  js << "{\n  \"log\": " << json_string(rep.log_file) << ",\n  \"rows_read\": " << rep.rows_read
      << ",\n  \"rows_used\": " << rep.rows_used << ",\n  \"tracks_used\": " << rep.tracks_used
      << ",\n  \"rows_triangulation_failed\": " << rep.rows_triangulation_failed
      << ",\n  \"rows_without_velocity\": " << rep.rows_without_velocity
-     << ",\n  \"duration_s\": " << jnum(rep.duration_s) << ",\n  \"residual_rms_px\": " << jnum(rep.residual_rms_px)
-     << ",\n  \"robust_sigma_px\": " << jnum(rep.robust_sigma_px) << ",\n  \"intrinsics\": {\"fu\": " << jnum(rep.fu)
-     << ", \"fv\": " << jnum(rep.fv) << ", \"cu\": " << jnum(rep.cu) << ", \"cv\": " << jnum(rep.cv)
+     << ",\n  \"duration_s\": " << json_number(rep.duration_s)
+     << ",\n  \"residual_rms_px\": " << json_number(rep.residual_rms_px)
+     << ",\n  \"robust_sigma_px\": " << json_number(rep.robust_sigma_px)
+     << ",\n  \"intrinsics\": {\"fu\": " << json_number(rep.fu) << ", \"fv\": " << json_number(rep.fv)
+     << ", \"cu\": " << json_number(rep.cu) << ", \"cv\": " << json_number(rep.cv)
      << ", \"fitted\": " << (rep.intrinsics_fitted ? "true" : "false") << "},\n  \"image_height\": " << rep.image_height
-     << ",\n  \"min_sigma\": " << jnum(o.min_sigma) << ",\n  \"min_explained\": " << jnum(o.min_explained)
-     << ",\n  \"top\": " << (first == rep.candidates.end() ? "null" : jstr(first->key)) << ",\n  \"candidates\": [";
+     << ",\n  \"min_sigma\": " << json_number(o.min_sigma) << ",\n  \"min_explained\": " << json_number(o.min_explained)
+     << ",\n  \"top\": " << (first == rep.candidates.end() ? "null" : json_string(first->key))
+     << ",\n  \"candidates\": [";
   for (size_t c = 0; c < rep.candidates.size(); ++c) {
     const auto &cr = rep.candidates[c];
-    js << (c ? "," : "") << "\n    {\"rank\": " << cr.rank << ", \"key\": " << jstr(cr.key)
-       << ", \"model\": " << jstr(cr.description) << ", \"explained\": " << (cr.explained ? "true" : "false")
-       << ", \"explained_alone\": " << jnum(cr.explained_alone) << ", \"explained_added\": " << jnum(cr.explained_added)
-       << ", \"sigma\": " << jnum(cr.sigma) << ", \"note\": " << jstr(cr.note) << ", \"estimates\": [";
+    js << (c ? "," : "") << "\n    {\"rank\": " << cr.rank << ", \"key\": " << json_string(cr.key)
+       << ", \"model\": " << json_string(cr.description) << ", \"explained\": " << (cr.explained ? "true" : "false")
+       << ", \"explained_alone\": " << json_number(cr.explained_alone)
+       << ", \"explained_added\": " << json_number(cr.explained_added) << ", \"sigma\": " << json_number(cr.sigma)
+       << ", \"note\": " << json_string(cr.note) << ", \"estimates\": [";
     for (size_t e = 0; e < cr.estimates.size(); ++e)
-      js << (e ? ", " : "") << "{\"name\": " << jstr(cr.estimates[e].name)
-         << ", \"unit\": " << jstr(cr.estimates[e].unit) << ", \"value\": " << jnum(cr.estimates[e].value)
-         << ", \"stderr\": " << jnum(cr.estimates[e].stderr_) << "}";
+      js << (e ? ", " : "") << "{\"name\": " << json_string(cr.estimates[e].name)
+         << ", \"unit\": " << json_string(cr.estimates[e].unit) << ", \"value\": " << json_number(cr.estimates[e].value)
+         << ", \"stderr\": " << json_number(cr.estimates[e].stderr_) << "}";
     js << "]}";
   }
   js << "\n  ],\n  \"td_bins\": [";
   for (size_t b = 0; b < rep.td_bins.size(); ++b) {
     const auto &tb = rep.td_bins[b];
-    js << (b ? "," : "") << "\n    {\"t_s\": " << jnum(tb.t_s) << ", \"td_error_ms\": " << jnum(tb.td_ms)
-       << ", \"td_error_se_ms\": " << jnum(tb.td_se_ms) << ", \"td_filter_ms\": " << jnum(tb.td_filter_ms)
+    js << (b ? "," : "") << "\n    {\"t_s\": " << json_number(tb.t_s) << ", \"td_error_ms\": " << json_number(tb.td_ms)
+       << ", \"td_error_se_ms\": " << json_number(tb.td_se_ms) << ", \"td_filter_ms\": " << json_number(tb.td_filter_ms)
        << ", \"observations\": " << tb.observations << "}";
   }
   js << "\n  ]\n}\n";

@@ -1,5 +1,6 @@
 #include "ov_core/eval/report.h"
 #include "ov_core/eval/plot.h"
+#include "ov_core/io/text_format.h"
 #include "ov_core/types/errors.h"
 
 #include <algorithm>
@@ -39,23 +40,6 @@ void write_file_atomically(const std::string &file, const std::string &text) {
   fs::rename(tmp, file, ec);
   if (ec)
     throw DataError(file, "cannot move " + tmp + " into place: " + ec.message());
-}
-
-std::string fmt(double v, int decimals, const char *missing = "n/a") {
-  if (!std::isfinite(v))
-    return missing;
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.*f", decimals, v);
-  return buf;
-}
-
-/// Full precision for the CSV; empty for a metric that does not apply (pandas and spreadsheets read it as missing).
-std::string csv_num(double v) {
-  if (!std::isfinite(v))
-    return "";
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.9g", v);
-  return buf;
 }
 
 std::string csv_field(const std::string &s) {
@@ -163,10 +147,10 @@ void write_results_csv(const std::string &file, const std::vector<ReportRow> &ro
   os << "mode,status,ape_rmse_m,are_deg,tpe_rmse_mm,cit_frames,final_td_ms,td_sigma_ms,runtime_s,realtime_factor,"
         "ms_per_frame\n";
   for (const auto &r : rows)
-    os << csv_field(r.name) << ',' << csv_field(r.status) << ',' << csv_num(r.ape_rmse_m) << ',' << csv_num(r.are_deg)
-       << ',' << csv_num(r.tpe_rmse_mm) << ',' << (r.has_cit ? std::to_string(r.cit) : "") << ','
-       << csv_num(r.final_td_ms) << ',' << csv_num(r.td_sigma_ms) << ',' << csv_num(r.runtime_s) << ','
-       << csv_num(r.realtime_factor) << ',' << csv_num(r.ms_per_frame) << '\n';
+    os << csv_field(r.name) << ',' << csv_field(r.status) << ',' << csv_number(r.ape_rmse_m) << ','
+       << csv_number(r.are_deg) << ',' << csv_number(r.tpe_rmse_mm) << ',' << (r.has_cit ? std::to_string(r.cit) : "")
+       << ',' << csv_number(r.final_td_ms) << ',' << csv_number(r.td_sigma_ms) << ',' << csv_number(r.runtime_s) << ','
+       << csv_number(r.realtime_factor) << ',' << csv_number(r.ms_per_frame) << '\n';
   write_file_atomically(file, os.str());
 }
 
@@ -177,10 +161,11 @@ std::string results_markdown_table(const std::vector<ReportRow> &rows) {
   os << "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   for (const auto &r : rows) {
     const std::string cit = !r.has_cit ? "n/a" : r.cit < 0 ? "never" : std::to_string(r.cit);
-    os << "| " << md_cell(r.name) << " | " << md_cell(r.status) << " | " << fmt(r.ape_rmse_m, 4) << " | "
-       << fmt(r.are_deg, 3) << " | " << fmt(r.tpe_rmse_mm, 3) << " | " << cit << " | " << fmt(r.final_td_ms, 3) << " | "
-       << fmt(r.td_sigma_ms, 4) << " | " << fmt(r.runtime_s, 2) << " | " << fmt(r.realtime_factor, 2) << " | "
-       << fmt(r.ms_per_frame, 2) << " |\n";
+    os << "| " << md_cell(r.name) << " | " << md_cell(r.status) << " | " << format_fixed(r.ape_rmse_m, 4) << " | "
+       << format_fixed(r.are_deg, 3) << " | " << format_fixed(r.tpe_rmse_mm, 3) << " | " << cit << " | "
+       << format_fixed(r.final_td_ms, 3) << " | " << format_fixed(r.td_sigma_ms, 4) << " | "
+       << format_fixed(r.runtime_s, 2) << " | " << format_fixed(r.realtime_factor, 2) << " | "
+       << format_fixed(r.ms_per_frame, 2) << " |\n";
   }
   return os.str();
 }
@@ -196,7 +181,7 @@ void write_results_md(const std::string &file, const std::vector<ReportRow> &row
   os << "## Dataset\n\n";
   os << "- folder: `" << data.root << "` (" << data.kind << "), " << data.images.size() << " images";
   if (data.images.size() > 1)
-    os << " over " << fmt(ns_to_s(data.images.back().t_cam_ns - data.images.front().t_cam_ns), 1) << " s";
+    os << " over " << format_fixed(ns_to_s(data.images.back().t_cam_ns - data.images.front().t_cam_ns), 1) << " s";
   os << ", " << data.imu.size() << " IMU readings\n";
   if (data.has_groundtruth())
     os << "- ground truth: " << data.groundtruth.size() << " samples"
@@ -207,13 +192,13 @@ void write_results_md(const std::string &file, const std::vector<ReportRow> &row
     double lo = data.td_truth.front().td_s, hi = lo;
     for (const auto &s : data.td_truth)
       lo = std::min(lo, s.td_s), hi = std::max(hi, s.td_s);
-    os << "- time-offset truth: " << data.td_truth.size() << " samples, from " << fmt(lo * 1e3, 3) << " to "
-       << fmt(hi * 1e3, 3) << " ms (first " << fmt(data.td_truth.front().td_s * 1e3, 3) << ", last "
-       << fmt(data.td_truth.back().td_s * 1e3, 3) << ")\n";
+    os << "- time-offset truth: " << data.td_truth.size() << " samples, from " << format_fixed(lo * 1e3, 3) << " to "
+       << format_fixed(hi * 1e3, 3) << " ms (first " << format_fixed(data.td_truth.front().td_s * 1e3, 3) << ", last "
+       << format_fixed(data.td_truth.back().td_s * 1e3, 3) << ")\n";
   } else
     os << "- time-offset truth: none (no TPE, no CIT against the truth, no `oracle`)\n";
   if (data.td_prior_s != 0.0)
-    os << "- calibration t_d prior: " << fmt(data.td_prior_s * 1e3, 3) << " ms\n";
+    os << "- calibration t_d prior: " << format_fixed(data.td_prior_s * 1e3, 3) << " ms\n";
   os << "- estimator config: " << (info.config.empty() ? "built-in defaults" : "`" + info.config + "`") << "\n\n";
 
   os << "## Results\n\n" << results_markdown_table(rows) << "\n";
@@ -221,7 +206,7 @@ void write_results_md(const std::string &file, const std::vector<ReportRow> &row
   os << "APE and ARE are RMSEs after " << to_string(opt.eval.align)
      << " alignment of the whole estimate to the ground truth. TPE is the RMSE of (t_d estimate - t_d truth) x |v "
         "estimate| (paper eq. 16). CIT is the first frame with |t_d - t_d truth| <= "
-     << fmt(cit.eps1_s * 1e3, 2) << " ms and |t_d(k) - t_d(k-1)| <= " << fmt(cit.eps2_s * 1e3, 2)
+     << format_fixed(cit.eps1_s * 1e3, 2) << " ms and |t_d(k) - t_d(k-1)| <= " << format_fixed(cit.eps2_s * 1e3, 2)
      << " ms (paper eq. 15), \"never\" if that does not happen. final t_d and its sigma are the filter's values at the "
         "last frame. Runtime is the wall-clock time of the replay with "
      << info.jobs << (info.jobs == 1 ? " run" : " runs")

@@ -1,0 +1,14 @@
+#pragma once
+// Flag parsing shared by every subcommand.
+#include "tools/commands.h"
+
+#include <boost/program_options.hpp>
+
+namespace ovton {
+
+/// Parses args into vm; on --help prints `desc` to stdout and returns false (the command then exits with 0).
+/// Missing required options and malformed values throw boost::program_options::error (main() reports them).
+bool parse_command_line(const Args &args, const boost::program_options::options_description &desc,
+                        boost::program_options::variables_map &vm);
+
+} // namespace ovton
