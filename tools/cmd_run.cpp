@@ -9,6 +9,7 @@
 
 #include <boost/program_options.hpp>
 #include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <limits>
@@ -19,7 +20,7 @@ namespace ovton {
 
 int cmd_run(const Args &args) {
   po::options_description desc("ovton run: replay a dataset folder through the MSCKF and write its trajectory");
-  std::string config, dataset, mode, format = "csv", init;
+  std::string config, dataset, mode, format = "csv", init, nees_log;
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
   bool quiet = false;
   RunRequest req;
@@ -32,7 +33,8 @@ int cmd_run(const Args &args) {
       ("residual-log", po::value(&req.residual_log), "write every feature residual of every update here") //
       ("init", po::value(&init), "static|groundtruth (overrides the config)")                             //
       ("td-init-ms", po::value(&td_init_ms), "initial / fixed t_d [ms] (overrides the config)")           //
-      ("max-images", po::value(&req.max_images), "stop after this many images")                           //
+      ("nees-log", po::value(&nees_log), "with --init groundtruth: write per-frame NEES (t_ns,ori,pos) here")(
+          "max-images", po::value(&req.max_images), "stop after this many images") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bar, no option listing");
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
@@ -80,6 +82,14 @@ int cmd_run(const Args &args) {
   if (!r.traj.empty())
     std::cout << "final t_d " << r.traj.back().td_s * 1e3 << " ms (sigma " << r.traj.back().td_sigma_s * 1e3
               << " ms)\n";
+  if (!nees_log.empty()) {
+    std::ofstream out(nees_log);
+    if (!out)
+      throw ov_core::DataError(nees_log, "cannot open for writing");
+    out << "t_ns,nees_orientation,nees_position\n";
+    for (const auto &n : r.nees.per_frame)
+      out << n.t_ns << ',' << n.ori << ',' << n.pos << '\n';
+  }
   if (r.nees.count > 0)
     std::cout << "NEES orientation " << r.nees.ori() << ", position " << r.nees.pos() << " (average over "
               << r.nees.count << " frames; 3 is ideal)\n";

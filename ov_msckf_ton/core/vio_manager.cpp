@@ -374,9 +374,11 @@ void VioManager::accumulate_nees() {
   const Eigen::Vector3d e_p = g.p - s.imu.p;
   const Eigen::Matrix3d P_th = s.P.block<3, 3>(ImuState::kTheta, ImuState::kTheta);
   const Eigen::Matrix3d P_p = s.P.block<3, 3>(ImuState::kPos, ImuState::kPos);
-  nees_.ori_sum += e_th.dot(P_th.ldlt().solve(e_th));
-  nees_.pos_sum += e_p.dot(P_p.ldlt().solve(e_p));
+  const double n_ori = e_th.dot(P_th.ldlt().solve(e_th)), n_pos = e_p.dot(P_p.ldlt().solve(e_p));
+  nees_.ori_sum += n_ori;
+  nees_.pos_sum += n_pos;
   ++nees_.count;
+  nees_.per_frame.push_back({s.t_imu_ns, n_ori, n_pos});
 }
 
 ov_core::StateSample VioManager::snapshot() const {

@@ -46,6 +46,11 @@ struct VioCounters {
 struct NeesStats {
   double ori_sum = 0, pos_sum = 0;
   long count = 0;
+  struct Sample {
+    int64_t t_ns;
+    double ori, pos;
+  };
+  std::vector<Sample> per_frame; ///< for `ovton run --nees-log`
   double ori() const { return count ? ori_sum / count : 0.0; }
   double pos() const { return count ? pos_sum / count : 0.0; }
 };
