@@ -358,6 +358,11 @@ void VioManager::tpn_after_image(int64_t t_cam_ns) {
   last_image_ns_ = t_cam_ns;
   if (!tpn_)
     return;
+  // The labels are the filter's own estimates: while t_d is still converging (σ above tpn_start_sigma_s) they
+  // trace the convergence transient, not the offset's motion, and a network trained on them extrapolates the
+  // transient (measured: on a constant +10 ms offset, t_d overshot to 14 ms and the trajectory diverged).
+  if (state_->td_sigma() > opt_.tpn_start_sigma_s)
+    return;
   const auto t0 = Clock::now();
   tpn_->step(state_->td);
   times_.networks += ms_since(t0);

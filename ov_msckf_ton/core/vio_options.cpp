@@ -45,6 +45,7 @@ std::map<std::string, Field> fields(VioOptions &o) {
   f["tpn_epochs"] = field(o.tpn_epochs, "tpn_epochs");
   f["tpn_min_labels"] = field(o.tpn_min_labels, "tpn_min_labels");
   f["td_rate_max"] = field(o.td_rate_max, "td_rate_max");
+  f["tpn_start_sigma_s"] = field(o.tpn_start_sigma_s, "tpn_start_sigma_s");
   f["max_clones"] = field(o.max_clones, "max_clones");
   f["min_track_length"] = field(o.min_track_length, "min_track_length");
   f["sigma_px"] = field(o.sigma_px, "sigma_px");

@@ -21,16 +21,17 @@ struct VioOptions {
 
   // Networks (paper Table I), trained online. Epochs are per training call, i.e. per frame; lower them to trade
   // accuracy for per-frame cost.
-  int fvon_max_labels = 40;    ///< labels per FVON training call (ITS pairs / F2F points)
-  int fvon_min_f2f_labels = 5; ///< F2F predicts for a frame only with this many labelled features in it
-  int its_epochs = 1000;       ///< ITS-FVON epochs per call (Table I)
-  int f2f_epochs = 1500;       ///< F2F-FVON epochs per call (Table I)
-  int tpn_epochs = 1000;       ///< TPN epochs per frame (Table I)
-  int tpn_min_labels = 5;      ///< TPN drives t_d only once its buffer holds this many estimates
-  double td_rate_max = 0.01;   ///< s/s bound on TPN's J_td (tpn_driver.h says why)
+  int fvon_max_labels = 40;         ///< labels per FVON training call (ITS pairs / F2F points)
+  int fvon_min_f2f_labels = 5;      ///< F2F predicts for a frame only with this many labelled features in it
+  int its_epochs = 1000;            ///< ITS-FVON epochs per call (Table I)
+  int f2f_epochs = 1500;            ///< F2F-FVON epochs per call (Table I)
+  int tpn_epochs = 1000;            ///< TPN epochs per frame (Table I)
+  int tpn_min_labels = 5;           ///< TPN drives t_d only once its buffer holds this many estimates
+  double td_rate_max = 0.001;       ///< s/s bound on TPN's J_td: 10x the paper's drift (0.1 ms/s), 1000 ppm
+  double tpn_start_sigma_s = 0.001; ///< TPN learns from t̂_d only once its σ is below this (past convergence)
 
   // Window and update.
-  int max_clones = 20; ///< 1 s at 20 Hz: MSCKF-only accuracy and consistency improve markedly over 11 (README)
+  int max_clones = 20;          ///< 1 s at 20 Hz: MSCKF-only accuracy and consistency improve markedly over 11 (README)
   int min_track_length = 3;     ///< observations (at clones) a feature needs to enter an MSCKF update
   double sigma_px = 1.0;        ///< pixel noise of a KLT observation
   double chi2_multiplier = 1.0; ///< scales the 95% chi-square gate
