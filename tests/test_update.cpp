@@ -627,3 +627,28 @@ TEST(UpdateMsckf, ResidualLogHasHeaderAndOneRowPerObservation) {
   EXPECT_EQ(rows, expected_rows);
   EXPECT_THROW(ResidualLogWriter("/nonexistent_dir_ovton/x.csv"), ov_core::DataError);
 }
+
+TEST(UpdateVelocity, CentralDifferenceIsCentredAndSkipsTheObservation) {
+  // Image motion x(t) = a + b t + c t²: the central difference is exact at t_k for equal intervals, the backward
+  // difference (eq. 2) is half a frame late. The central value must not depend on observation k's own position.
+  ov_core::FeatureDatabase db;
+  const double a = 0.1, b = 0.8, c = 3.0;
+  for (int k = 0; k < 5; ++k) {
+    const double t = 0.05 * k;
+    const Eigen::Vector2d xy(a + b * t + c * t * t, -0.2);
+    db.add_observation(7, 1000000000LL + 50000000LL * k, 458.0 * xy, xy);
+  }
+  const ov_core::Feature &f = *db.get(7);
+  CentralVelocityProvider central;
+  VelocityProvider backward;
+  Eigen::Vector2d vc, vb;
+  int src = 0;
+  ASSERT_TRUE(central.velocity(f, 2, vc, src));
+  ASSERT_TRUE(backward.velocity(f, 2, vb, src));
+  const double truth = b + 2 * c * 0.10;
+  EXPECT_NEAR(vc.x(), truth, 1e-9);
+  EXPECT_GT(std::abs(vb.x() - truth), 0.1);
+  EXPECT_FALSE(central.velocity(f, 0, vc, src)) << "a first observation has no velocity";
+  ASSERT_TRUE(central.velocity(f, 4, vc, src)); // newest: falls back to the backward difference
+  EXPECT_NEAR(vc.x(), f.obs[4].vel_xy.x(), 1e-12);
+}

@@ -293,7 +293,9 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
   }
   if (!feats.empty()) {
     std::vector<ResidualRecord> records;
-    const VelocityProvider *velocities = &tracked_velocities_;
+    const VelocityProvider *velocities = opt_.sir_velocity == "central"
+                                             ? static_cast<const VelocityProvider *>(&central_velocities_)
+                                             : &tracked_velocities_;
     if (fvon_) {
       const auto t0 = Clock::now();
       fvon_->prepare(s, feats, updater_);

@@ -123,6 +123,7 @@ private:
   bool initialized_ = false;
   std::string init_msg_;
   VelocityProvider tracked_velocities_;            ///< constant-speed velocities of the front end (paper eq. 2)
+  CentralVelocityProvider central_velocities_;     ///< option sir_velocity: central
   std::unique_ptr<FvonVelocityProvider> fvon_;     ///< modes fvon, ton
   std::unique_ptr<TpnDriver> tpn_;                 ///< modes tpn, ton
   int64_t last_image_ns_ = -1;                     ///< camera stamp of the previous processed image

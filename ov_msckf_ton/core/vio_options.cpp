@@ -45,6 +45,7 @@ std::map<std::string, Field> fields(VioOptions &o) {
   f["tpn_epochs"] = field(o.tpn_epochs, "tpn_epochs");
   f["tpn_min_labels"] = field(o.tpn_min_labels, "tpn_min_labels");
   f["td_rate_max"] = field(o.td_rate_max, "td_rate_max");
+  f["sir_velocity"] = field(o.sir_velocity, "sir_velocity");
   f["tpn_start_sigma_s"] = field(o.tpn_start_sigma_s, "tpn_start_sigma_s");
   f["max_clones"] = field(o.max_clones, "max_clones");
   f["min_track_length"] = field(o.min_track_length, "min_track_length");
@@ -107,6 +108,8 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
       throw ov_core::DataError(file, kv.first.Mark().line + 1, "unknown key '" + key + "'");
     }
   }
+  if (o.sir_velocity != "backward" && o.sir_velocity != "central")
+    throw ov_core::DataError(file, "sir_velocity must be backward or central");
   if (o.max_clones < 3)
     throw ov_core::DataError(file, "max_clones must be at least 3");
   if (o.sigma_px <= 0 || o.td_sigma_init_s <= 0)

@@ -30,6 +30,10 @@ struct VioOptions {
   double td_rate_max = 0.001;       ///< s/s bound on TPN's J_td: 10x the paper's drift (0.1 ms/s), 1000 ppm
   double tpn_start_sigma_s = 0.001; ///< TPN learns from t̂_d only once its σ is below this (past convergence)
 
+  /// Image-plane velocity of the tracked observations: "backward" is the paper's eq. 2 (previous observation);
+  /// "central" leaves the observation's own noise out (see CentralVelocityProvider; not the paper's SIR).
+  std::string sir_velocity = "backward";
+
   // Window and update.
   int max_clones = 20;          ///< 1 s at 20 Hz: MSCKF-only accuracy and consistency improve markedly over 11 (README)
   int min_track_length = 3;     ///< observations (at clones) a feature needs to enter an MSCKF update

@@ -52,4 +52,33 @@ public:
   }
 };
 
+/// Central-difference velocity (x_{k+1} − x_{k−1}) / (t_{k+1} − t_{k−1}) for observations with a neighbour on each
+/// side, the backward difference of eq. 2 for a track's newest observation. Why: eq. 2's V_k contains the pixel noise
+/// of observation k itself, which is also in that row's residual; the correlated regressor biases t̂_d (errors in
+/// variables). The central difference leaves observation k out and is centred on t_k instead of half a frame late.
+/// Not the paper's SIR: an option (`sir_velocity: central`) to measure what eq. 2 costs.
+class CentralVelocityProvider : public VelocityProvider {
+public:
+  bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
+                int &source) const override {
+    const auto &obs = feature.obs;
+    if (!obs[obs_index].vel_valid) {
+      source = kVelocityNone;
+      return false;
+    }
+    if (obs_index + 1 < obs.size() && obs[obs_index + 1].vel_valid) {
+      const double dt1 = 1e-9 * static_cast<double>(obs[obs_index + 1].t_cam_ns - obs[obs_index].t_cam_ns);
+      // The previous observation may belong to the part of the track already used and removed (its velocity was
+      // kept): then assume the frame interval was the same.
+      const double dt0 =
+          obs_index > 0 ? 1e-9 * static_cast<double>(obs[obs_index].t_cam_ns - obs[obs_index - 1].t_cam_ns) : dt1;
+      vel_xy = (obs[obs_index].vel_xy * dt0 + obs[obs_index + 1].vel_xy * dt1) / (dt0 + dt1);
+    } else {
+      vel_xy = obs[obs_index].vel_xy;
+    }
+    source = kVelocityTracked;
+    return true;
+  }
+};
+
 } // namespace ov_msckf_ton
