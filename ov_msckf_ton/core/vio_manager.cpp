@@ -243,6 +243,7 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
       propagator_.reading_at(s.t_imu_ns, at_image) ? Eigen::Vector3d(at_image.wm - s.imu.bg) : propagator_.last_w_B();
   state_helper::clone(s, t_cam_ns, opt_.td_mode == TdMode::Sr, w_B, s.imu.v);
   clone_rates_[t_cam_ns] = w_B;
+  s.clones.at(t_cam_ns).has_fej = opt_.measurement_fej;
   times_.propagation += ms_since(t0);
 
   t0 = Clock::now();

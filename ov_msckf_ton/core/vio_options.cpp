@@ -46,6 +46,7 @@ std::map<std::string, Field> fields(VioOptions &o) {
   f["tpn_min_labels"] = field(o.tpn_min_labels, "tpn_min_labels");
   f["td_rate_max"] = field(o.td_rate_max, "td_rate_max");
   f["sir_velocity"] = field(o.sir_velocity, "sir_velocity");
+  f["measurement_fej"] = field(o.measurement_fej, "measurement_fej");
   f["tpn_start_sigma_s"] = field(o.tpn_start_sigma_s, "tpn_start_sigma_s");
   f["max_clones"] = field(o.max_clones, "max_clones");
   f["min_track_length"] = field(o.min_track_length, "min_track_length");
