@@ -171,6 +171,9 @@ void Renderer::render(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, 
           face = 2 * a + (inv[a] > 0 ? 1 : 0);
         }
       }
+      // The slab test of Scene::intersect (the reference, in double), specialised for the hot loop: float, box
+      // bounds pre-shifted to the camera centre, inverse directions from the ray table, screen-space culling.
+      // tests/test_sim_render.cpp checks the rendered geometry against the camera model with planted markers.
       for (const BoxCull &c : cull) {
         if (ray.xn < c.xmin || ray.xn > c.xmax || ray.yn < c.ymin || ray.yn > c.ymax)
           continue;
