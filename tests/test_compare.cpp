@@ -25,13 +25,6 @@ using namespace ov_core;
 
 namespace {
 
-std::vector<std::string> mode_names() {
-  std::vector<std::string> names;
-  for (auto m : ov_msckf_ton::all_td_modes())
-    names.push_back(ov_msckf_ton::to_string(m));
-  return names;
-}
-
 /// results.csv as rows of cells keyed by the header (no quoted cells in these tests).
 std::vector<std::map<std::string, std::string>> read_csv(const std::string &file) {
   std::istringstream in(ovtest::read_text(file));
@@ -121,7 +114,7 @@ std::unique_ptr<Dataset> CompareTest::data_;
 TEST_F(CompareTest, ThreeModesGiveTableAndPlots) {
   const Dataset &data = *data_;
   ASSERT_TRUE(data.has_td_truth());
-  const auto names = parse_name_list("off, sr,oracle", mode_names(), "mode");
+  const auto names = parse_name_list("off, sr,oracle", ov_msckf_ton::all_td_mode_names(), "mode");
   ASSERT_EQ(names, (std::vector<std::string>{"off", "sr", "oracle"}));
 
   std::atomic<int> calls{0};
@@ -193,16 +186,16 @@ TEST_F(CompareTest, ThreeModesGiveTableAndPlots) {
 
 TEST(CompareModes, UnknownModeIsAUsageErrorNamingIt) {
   try {
-    parse_name_list("off,frobnicate,sr", mode_names(), "mode");
+    parse_name_list("off,frobnicate,sr", ov_msckf_ton::all_td_mode_names(), "mode");
     FAIL() << "unknown mode accepted";
   } catch (const UsageError &e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("'frobnicate'"), std::string::npos) << what;
     EXPECT_NE(what.find("oracle"), std::string::npos) << what; // the valid names are listed
   }
-  EXPECT_THROW(parse_name_list("off,sr,off", mode_names(), "mode"), UsageError);
-  EXPECT_THROW(parse_name_list("off,,sr", mode_names(), "mode"), UsageError);
-  EXPECT_THROW(parse_name_list("", mode_names(), "mode"), UsageError);
+  EXPECT_THROW(parse_name_list("off,sr,off", ov_msckf_ton::all_td_mode_names(), "mode"), UsageError);
+  EXPECT_THROW(parse_name_list("off,,sr", ov_msckf_ton::all_td_mode_names(), "mode"), UsageError);
+  EXPECT_THROW(parse_name_list("", ov_msckf_ton::all_td_mode_names(), "mode"), UsageError);
 }
 
 TEST(CompareRunner, FailingRunIsReportedAndTheOthersContinue) {

@@ -16,13 +16,6 @@ namespace ovton {
 
 namespace {
 
-std::vector<std::string> mode_names() {
-  std::vector<std::string> names;
-  for (auto m : ov_msckf_ton::all_td_modes())
-    names.push_back(ov_msckf_ton::to_string(m));
-  return names;
-}
-
 /// One line for the log: the numbers a user watching a long comparison wants before the table is written.
 std::string done_line(const ov_core::RunRecord &rec, const ov_core::ReportRow &row, size_t done, size_t total) {
   char buf[512];
@@ -47,7 +40,7 @@ std::string done_line(const ov_core::RunRecord &rec, const ov_core::ReportRow &r
 
 std::vector<ov_msckf_ton::TdMode> parse_compare_modes(const std::string &list) {
   std::vector<ov_msckf_ton::TdMode> modes;
-  for (const auto &name : ov_core::parse_name_list(list, mode_names(), "mode"))
+  for (const auto &name : ov_core::parse_name_list(list, ov_msckf_ton::all_td_mode_names(), "mode"))
     modes.push_back(ov_msckf_ton::parse_td_mode(name));
   return modes;
 }

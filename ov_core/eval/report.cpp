@@ -235,16 +235,31 @@ void write_results_md(const std::string &file, const std::vector<ReportRow> &row
   write_file_atomically(file, os.str());
 }
 
+namespace {
+
+/// Every comparison plot: the same size from the options, one line per mode.
+PlotOptions report_plot(const std::string &title, const char *xlabel, const char *ylabel, const ReportOptions &opt) {
+  PlotOptions po;
+  po.title = title;
+  po.xlabel = xlabel;
+  po.ylabel = ylabel;
+  po.width = opt.plot_width;
+  po.height = opt.plot_height;
+  return po;
+}
+
+void check_rows(const char *what, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows) {
+  if (rows.size() != runs.size())
+    throw UsageError(std::string(what) + ": " + std::to_string(rows.size()) + " rows for " +
+                     std::to_string(runs.size()) + " runs");
+}
+
+} // namespace
+
 bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const Dataset &data,
              const ReportOptions &opt) {
   const int64_t t0 = time_origin_ns(runs, data);
-  PlotOptions po;
-  po.title = "time offset t_d (t_imu = t_cam + t_d)";
-  po.xlabel = "time since the first image [s]";
-  po.ylabel = "t_d [ms]";
-  po.width = opt.plot_width;
-  po.height = opt.plot_height;
-  Plot plot(po);
+  Plot plot(report_plot("time offset t_d (t_imu = t_cam + t_d)", "time since the first image [s]", "t_d [ms]", opt));
   bool any = false;
   for (size_t i = 0; i < runs.size(); ++i) {
     Series s;
@@ -280,16 +295,10 @@ bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const 
 
 bool plot_ape(const std::string &file, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows,
               const Dataset &data, const ReportOptions &opt) {
-  if (rows.size() != runs.size())
-    throw UsageError("plot_ape: " + std::to_string(rows.size()) + " rows for " + std::to_string(runs.size()) + " runs");
+  check_rows("plot_ape", runs, rows);
   const int64_t t0 = time_origin_ns(runs, data);
-  PlotOptions po;
-  po.title = std::string("position error after ") + to_string(opt.eval.align) + " alignment";
-  po.xlabel = "time since the first image [s]";
-  po.ylabel = "APE [m]";
-  po.width = opt.plot_width;
-  po.height = opt.plot_height;
-  Plot plot(po);
+  Plot plot(report_plot(std::string("position error after ") + to_string(opt.eval.align) + " alignment",
+                        "time since the first image [s]", "APE [m]", opt));
   bool any = false;
   for (size_t i = 0; i < runs.size(); ++i) {
     if (!rows[i].evaluated)
@@ -317,12 +326,9 @@ bool plot_ape(const std::string &file, const std::vector<RunRecord> &runs, const
 
 bool plot_top(const std::string &file, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows,
               const Dataset &data, const ReportOptions &opt) {
-  if (rows.size() != runs.size())
-    throw UsageError("plot_top: " + std::to_string(rows.size()) + " rows for " + std::to_string(runs.size()) + " runs");
-  PlotOptions po;
-  po.title = std::string("top view (estimates after ") + to_string(opt.eval.align) + " alignment)";
-  po.xlabel = "x [m]";
-  po.ylabel = "y [m]";
+  check_rows("plot_top", runs, rows);
+  PlotOptions po = report_plot(std::string("top view (estimates after ") + to_string(opt.eval.align) + " alignment)",
+                               "x [m]", "y [m]", opt);
   po.width = std::max(opt.plot_height, 400) + 200; // near-square: a top view's spans are alike
   po.height = std::max(opt.plot_height, 400);
   po.equal_aspect = true;

@@ -17,6 +17,13 @@ std::string to_string(TdMode m) {
   return kNames[static_cast<int>(m)];
 }
 
+std::vector<std::string> all_td_mode_names() {
+  std::vector<std::string> names;
+  for (TdMode m : all_td_modes())
+    names.push_back(to_string(m));
+  return names;
+}
+
 TdMode parse_td_mode(const std::string &s) {
   for (TdMode m : all_td_modes())
     if (to_string(m) == s)
