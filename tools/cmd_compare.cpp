@@ -65,8 +65,8 @@ int cmd_compare(const Args &args) {
   req.modes = parse_compare_modes(modes);
   if (req.jobs < 1)
     throw ov_core::UsageError("--jobs must be at least 1");
-  if (align != "posyaw" && align != "se3")
-    throw ov_core::UsageError("--align must be posyaw or se3");
+  if (align != "posyaw" && align != "se3" && align != "sim3")
+    throw ov_core::UsageError("--align must be posyaw, se3 or sim3");
   req.report.eval.align = ov_core::parse_align_mode(align);
 
   req.base = config.empty() ? ov_msckf_ton::VioOptions{} : ov_msckf_ton::load_vio_options(config);

@@ -68,7 +68,7 @@ int ovton::cmd_eval(const ovton::Args &args) {
     ("est", po::value(&est_file), "estimated trajectory (IMU clock)")
     ("gt", po::value(&gt_file), "ground-truth trajectory (IMU clock)")
     ("align", po::value(&align_str)->default_value("posyaw"),
-     "alignment before APE/ARE: posyaw (4-DOF, the VIO convention), se3, none")
+     "alignment before APE/ARE: posyaw (4-DOF, the VIO convention), se3, sim3 (also reports the scale), none")
     ("td-truth", po::value(&td_file), "true time offset per image, `timestamp_ns,td_s` (camera clock)")
     ("eps1-ms", po::value(&eps1_ms)->default_value(1.0, "1"), "CIT: |td - target| threshold [ms]")
     ("eps2-ms", po::value(&eps2_ms)->default_value(0.1, "0.1"), "CIT: |td(k) - td(k-1)| threshold [ms]")
@@ -115,7 +115,11 @@ int ovton::cmd_eval(const ovton::Args &args) {
      << "matched      " << r.n_matched << " of " << r.n_est << " estimates\n"
      << "alignment    " << ov_core::to_string(r.align_mode) << "  (t = [" << ov_core::format_fixed(r.alignment.t.x(), 3)
      << ", " << ov_core::format_fixed(r.alignment.t.y(), 3) << ", " << ov_core::format_fixed(r.alignment.t.z(), 3)
-     << "] m, yaw " << ov_core::format_fixed(yaw_deg, 2) << " deg)\n\n";
+     << "] m, yaw " << ov_core::format_fixed(yaw_deg, 2) << " deg";
+  if (r.align_mode == ov_core::AlignMode::Sim3)
+    os << ", scale " << ov_core::format_fixed(r.alignment.s, 4) << ": estimate "
+       << ov_core::format_fixed(100.0 * (1.0 / r.alignment.s - 1.0), 2) << " % too large";
+  os << ")\n\n";
   os << "metric                 value\n"
      << "APE RMSE [m]           " << ov_core::format_fixed(r.ape_rmse_m, 4) << "\n"
      << "APE mean [m]           " << ov_core::format_fixed(r.ape_mean_m, 4) << "\n"
@@ -138,7 +142,8 @@ int ovton::cmd_eval(const ovton::Args &args) {
   if (!json_file.empty()) {
     std::ofstream out = open_out(json_file);
     out << "{\n  \"est\": " << ov_core::json_string(est_file) << ",\n  \"gt\": " << ov_core::json_string(gt_file)
-        << ",\n  \"align\": " << ov_core::json_string(ov_core::to_string(r.align_mode)) << ",\n  \"n_est\": " << r.n_est
+        << ",\n  \"align\": " << ov_core::json_string(ov_core::to_string(r.align_mode))
+        << ",\n  \"align_scale\": " << ov_core::json_number(r.alignment.s) << ",\n  \"n_est\": " << r.n_est
         << ",\n  \"n_matched\": " << r.n_matched << ",\n  \"ape_rmse_m\": " << ov_core::json_number(r.ape_rmse_m)
         << ",\n  \"ape_mean_m\": " << ov_core::json_number(r.ape_mean_m)
         << ",\n  \"ape_max_m\": " << ov_core::json_number(r.ape_max_m)

@@ -90,7 +90,9 @@ AlignMode parse_align_mode(const std::string &s) {
     return AlignMode::PosYaw;
   if (s == "se3")
     return AlignMode::SE3;
-  throw UsageError("unknown alignment '" + s + "' (expected posyaw, se3 or none)");
+  if (s == "sim3")
+    return AlignMode::Sim3;
+  throw UsageError("unknown alignment '" + s + "' (expected posyaw, se3, sim3 or none)");
 }
 
 const char *to_string(AlignMode m) {
@@ -101,6 +103,8 @@ const char *to_string(AlignMode m) {
     return "posyaw";
   case AlignMode::SE3:
     return "se3";
+  case AlignMode::Sim3:
+    return "sim3";
   }
   return "?";
 }
@@ -162,11 +166,14 @@ Alignment align(const Association &a, AlignMode mode) {
   mu_e /= static_cast<double>(n);
   mu_g /= static_cast<double>(n);
 
-  if (mode == AlignMode::SE3) {
-    // Umeyama 1991 without scale: maximise tr(R^T Sigma) with Sigma = sum g_c e_c^T.
+  if (mode == AlignMode::SE3 || mode == AlignMode::Sim3) {
+    // Umeyama 1991: maximise tr(R^T Sigma) with Sigma = sum g_c e_c^T; with scale, s = tr(D S) / sum |e_c|^2.
     Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();
-    for (size_t i = 0; i < n; ++i)
+    double var_e = 0.0;
+    for (size_t i = 0; i < n; ++i) {
       sigma += (a.gt[i].p - mu_g) * (a.est[i].p - mu_e).transpose();
+      var_e += (a.est[i].p - mu_e).squaredNorm();
+    }
     // A single point (or all identical) leaves the rotation free; keep identity rather than an SVD artefact.
     if (sigma.norm() > 1e-300) {
       Eigen::JacobiSVD<Eigen::Matrix3d> svd(sigma, Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -174,6 +181,8 @@ Alignment align(const Association &a, AlignMode mode) {
       if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0.0)
         S(2, 2) = -1.0; // the best proper rotation, not a reflection
       out.R = svd.matrixU() * S * svd.matrixV().transpose();
+      if (mode == AlignMode::Sim3 && var_e > 1e-300)
+        out.s = (svd.singularValues().asDiagonal() * S).trace() / var_e;
     }
   } else {
     // Maximise sum g_c . Rz(theta) e_c = A cos(theta) + B sin(theta)  =>  theta = atan2(B, A).
@@ -204,7 +213,7 @@ Alignment align(const Association &a, AlignMode mode) {
     }
     out.R = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   }
-  out.t = mu_g - out.R * mu_e;
+  out.t = mu_g - out.s * (out.R * mu_e);
   return out;
 }
 
@@ -227,7 +236,6 @@ EvalResult evaluate(const std::vector<StateSample> &est, const std::vector<State
   r.n_matched = static_cast<int>(n);
   r.alignment = align(a, opt.align);
   const Eigen::Matrix3d &R_al = r.alignment.R;
-  const Eigen::Vector3d &t_al = r.alignment.t;
   const Eigen::Quaterniond q_al(R_al);
 
   // APE and ARE.
@@ -235,7 +243,7 @@ EvalResult evaluate(const std::vector<StateSample> &est, const std::vector<State
   double ape_sq = 0.0, ape_sum = 0.0, are_sq = 0.0;
   r.ape_per_pose_m.resize(n);
   for (size_t i = 0; i < n; ++i) {
-    const double e = (R_al * a.est[i].p + t_al - a.gt[i].p).norm();
+    const double e = (r.alignment.apply(a.est[i].p) - a.gt[i].p).norm();
     r.ape_per_pose_m[i] = e;
     ape_sq += e * e;
     ape_sum += e;
@@ -280,7 +288,7 @@ EvalResult evaluate(const std::vector<StateSample> &est, const std::vector<State
         r_sq += dr * dr;
       } else {
         // Without truth orientation there is no body frame: compare world displacements after alignment.
-        const double dt = (R_al * (ej.p - ei.p) - (gj.p - gi.p)).norm();
+        const double dt = (r.alignment.s * (R_al * (ej.p - ei.p)) - (gj.p - gi.p)).norm();
         t_sq += dt * dt;
       }
       ++rr.count;

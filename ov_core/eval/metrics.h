@@ -6,14 +6,16 @@
 
 namespace ov_core {
 
-enum class AlignMode { None, PosYaw, SE3 };
-AlignMode parse_align_mode(const std::string &s); ///< "none" | "posyaw" | "se3"; throws UsageError
+enum class AlignMode { None, PosYaw, SE3, Sim3 };
+AlignMode parse_align_mode(const std::string &s); ///< "none" | "posyaw" | "se3" | "sim3"; throws UsageError
 const char *to_string(AlignMode m);               ///< the same strings parse_align_mode accepts
 
-/// Rigid transform (and optionally yaw-only rotation) mapping estimate frame into ground-truth frame.
+/// Transform (rigid, yaw-only, or with scale for sim3) mapping the estimate frame into the ground-truth frame.
 struct Alignment {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  double s = 1.0; ///< scale; differs from 1 only for sim3, where it measures the estimate's scale error
+  Eigen::Vector3d apply(const Eigen::Vector3d &p) const { return s * (R * p) + t; }
 };
 
 /// Pairs of estimate and ground truth at the estimate's stamps (ground truth interpolated:
@@ -27,10 +29,10 @@ struct Association {
 };
 Association associate(const std::vector<StateSample> &est, const std::vector<StateSample> &gt, double max_gap_s = 0.1);
 
-/// Transform with gt.p ~= R * est.p + t, fitted on positions only (so it works with position-only truth).
-/// SE3: Umeyama without scale, reflection fixed. PosYaw: translation + rotation about world z only, closed form
-/// theta = atan2(sum(x_e*y_g - y_e*x_g), sum(x_e*x_g + y_e*y_g)) on centred points. None: identity.
-/// Throws UsageError on an empty association.
+/// Transform with gt.p ~= s R est.p + t, fitted on positions only (so it works with position-only truth).
+/// SE3: Umeyama without scale, reflection fixed. Sim3: Umeyama with scale (s < 1: the estimate is too large). PosYaw:
+/// translation + rotation about world z only, closed form theta = atan2(sum(x_e*y_g - y_e*x_g), sum(x_e*x_g + y_e*y_g))
+/// on centred points. None: identity. Throws UsageError on an empty association.
 Alignment align(const Association &a, AlignMode mode);
 
 struct RpeResult {

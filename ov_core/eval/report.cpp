@@ -354,7 +354,7 @@ bool plot_top(const std::string &file, const std::vector<RunRecord> &runs, const
     s.color = run_color(i);
     const Alignment al = rows[i].evaluated ? rows[i].eval.alignment : Alignment{};
     for (const auto &e : runs[i].traj) {
-      const Eigen::Vector3d p = al.R * e.p + al.t;
+      const Eigen::Vector3d p = al.apply(e.p);
       s.x.push_back(p.x());
       s.y.push_back(p.y());
     }
