@@ -50,6 +50,7 @@ FvonProviderOptions fvon_options(const VioOptions &o) {
   FvonProviderOptions f;
   f.max_labels = o.fvon_max_labels;
   f.min_f2f_labels = o.fvon_min_f2f_labels;
+  f.gate_px_s = o.fvon_gate_px_s;
   f.its.train.max_epochs = o.its_epochs;
   f.f2f.train.max_epochs = o.f2f_epochs;
   return f;

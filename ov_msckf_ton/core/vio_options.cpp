@@ -40,6 +40,7 @@ std::map<std::string, Field> fields(VioOptions &o) {
   f["td_random_walk_tpn"] = field(o.td_random_walk_tpn, "td_random_walk_tpn");
   f["fvon_max_labels"] = field(o.fvon_max_labels, "fvon_max_labels");
   f["fvon_min_f2f_labels"] = field(o.fvon_min_f2f_labels, "fvon_min_f2f_labels");
+  f["fvon_gate_px_s"] = field(o.fvon_gate_px_s, "fvon_gate_px_s");
   f["its_epochs"] = field(o.its_epochs, "its_epochs");
   f["f2f_epochs"] = field(o.f2f_epochs, "f2f_epochs");
   f["tpn_epochs"] = field(o.tpn_epochs, "tpn_epochs");
@@ -116,9 +117,9 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
   if (o.sigma_px <= 0 || o.td_sigma_init_s <= 0)
     throw ov_core::DataError(file, "sigma_px and td_sigma_init_s must be positive");
   if (o.fvon_max_labels < 1 || o.fvon_min_f2f_labels < 1 || o.its_epochs < 0 || o.f2f_epochs < 0 || o.tpn_epochs < 0 ||
-      o.tpn_min_labels < 2 || o.td_rate_max < 0)
-    throw ov_core::DataError(file, "network options out of range (labels >= 1, tpn_min_labels >= 2, epochs and "
-                                   "td_rate_max >= 0)");
+      o.tpn_min_labels < 2 || o.td_rate_max < 0 || o.fvon_gate_px_s < 0)
+    throw ov_core::DataError(file, "network options out of range (labels >= 1, tpn_min_labels >= 2, epochs, "
+                                   "td_rate_max and fvon_gate_px_s >= 0)");
   if (print)
     print_vio_options(o, *print);
   return o;

@@ -21,8 +21,11 @@ struct VioOptions {
 
   // Networks (paper Table I), trained online. Epochs are per training call, i.e. per frame; lower them to trade
   // accuracy for per-frame cost.
-  int fvon_max_labels = 40;         ///< labels per FVON training call (ITS pairs / F2F points)
-  int fvon_min_f2f_labels = 5;      ///< F2F predicts for a frame only with this many labelled features in it
+  int fvon_max_labels = 40;    ///< labels per FVON training call (ITS pairs / F2F points)
+  int fvon_min_f2f_labels = 5; ///< F2F predicts for a frame only with this many labelled features in it
+  /// A prediction for a first observation enters the update only if it agrees with the track's next measured
+  /// velocity within this (px/s; 0 = no check). 80 px/s is ~3σ of a 1 px backward difference at 20 Hz.
+  double fvon_gate_px_s = 80.0;
   int its_epochs = 1000;            ///< ITS-FVON epochs per call (Table I)
   int f2f_epochs = 1500;            ///< F2F-FVON epochs per call (Table I)
   int tpn_epochs = 1000;            ///< TPN epochs per frame (Table I)

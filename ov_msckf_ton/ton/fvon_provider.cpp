@@ -36,6 +36,18 @@ FvonVelocityProvider::FvonVelocityProvider(const ov_core::CameraCalib &calib, co
     throw ov_core::UsageError("FvonVelocityProvider: focal lengths must be positive");
   if (opt_.max_labels < 1 || opt_.min_f2f_labels < 1 || opt_.its_min_later < 1)
     throw ov_core::UsageError("FvonVelocityProvider: max_labels, min_f2f_labels and its_min_later must be >= 1");
+  if (!(opt_.gate_px_s >= 0))
+    throw ov_core::UsageError("FvonVelocityProvider: gate_px_s must be >= 0");
+}
+
+bool FvonVelocityProvider::keep_prediction(const ov_core::Feature &f, const Prediction &p) {
+  if (opt_.gate_px_s > 0 && f.obs.size() >= 2 && f.obs[1].vel_valid &&
+      (p.vel_xy - f.obs[1].vel_xy).norm() * focal_ > opt_.gate_px_s) {
+    ++stats_.gated;
+    return false;
+  }
+  predictions_[f.id] = p;
+  return true;
 }
 
 void FvonVelocityProvider::prepare(const State &state, const std::vector<const ov_core::Feature *> &features,
@@ -88,8 +100,8 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
       p.t_cam_ns = f->obs.front().t_cam_ns;
       p.vel_xy = its_.predict(seq) / focal_;
       p.source = kVelocityItsFvon;
-      predictions_[f->id] = p;
       ++stats_.its_predictions;
+      keep_prediction(*f, p);
     }
   }
   if (need_f2f.empty())
@@ -151,8 +163,8 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
       p.t_cam_ns = t;
       p.vel_xy = f2f_.predict(p_C) / focal_;
       p.source = kVelocityF2fFvon;
-      predictions_[f->id] = p;
       ++stats_.f2f_predictions;
+      keep_prediction(*f, p);
     }
   }
 }

@@ -30,6 +30,11 @@ struct FvonProviderOptions {
   int min_f2f_labels = 5;
   /// Algorithm 1: a new feature "tracked over 3 consecutive frames" gets ITS, otherwise F2F.
   int its_min_later = 3;
+  /// Sanity check before a prediction enters the update [px/s; 0 = none]: under the constant-speed model the first
+  /// observation's velocity equals the next one's, which the track measures. A network extrapolating outside its
+  /// labels (F2F on a handful of points, ITS on an unusual track) can be off by hundreds of px/s, and every such
+  /// velocity becomes a wrong t_d regressor; a missing velocity only costs the feature its t_d column.
+  double gate_px_s = 80.0;
 };
 
 /// Counts of what prepare() did since construction (diagnostics; the updater counts what was used).
@@ -37,6 +42,7 @@ struct FvonStats {
   long its_trainings = 0, f2f_trainings = 0;
   long its_predictions = 0, f2f_predictions = 0;
   long no_prediction = 0; ///< first observations left without a velocity (too few labels, untriangulable point)
+  long gated = 0;         ///< predictions dropped by the sanity check (gate_px_s)
 };
 
 /// Not thread-safe; one per filter. Call prepare() before each update with the features of that update, then pass
@@ -62,6 +68,9 @@ private:
     Eigen::Vector2d vel_xy = Eigen::Vector2d::Zero();
     int source = kVelocityNone;
   };
+
+  /// Stores the prediction unless the sanity check rejects it; returns whether it was kept.
+  bool keep_prediction(const ov_core::Feature &f, const Prediction &p);
 
   FvonProviderOptions opt_;
   Eigen::Matrix3d R_BC_;
