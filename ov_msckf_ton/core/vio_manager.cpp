@@ -34,6 +34,7 @@ UpdaterMSCKFOptions updater_options(const VioOptions &o) {
   u.sigma_px = o.sigma_px;
   u.chi2_multiplier = o.chi2_multiplier;
   u.min_observations = o.min_track_length;
+  u.min_parallax_deg = o.min_parallax_deg;
   u.max_features = o.max_features_per_update;
   return u;
 }

@@ -51,6 +51,7 @@ std::map<std::string, Field> fields(VioOptions &o) {
   f["tpn_start_sigma_s"] = field(o.tpn_start_sigma_s, "tpn_start_sigma_s");
   f["max_clones"] = field(o.max_clones, "max_clones");
   f["min_track_length"] = field(o.min_track_length, "min_track_length");
+  f["min_parallax_deg"] = field(o.min_parallax_deg, "min_parallax_deg");
   f["sigma_px"] = field(o.sigma_px, "sigma_px");
   f["chi2_multiplier"] = field(o.chi2_multiplier, "chi2_multiplier");
   f["max_features_per_update"] = field(o.max_features_per_update, "max_features_per_update");
@@ -112,6 +113,8 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
   }
   if (o.sir_velocity != "backward" && o.sir_velocity != "central")
     throw ov_core::DataError(file, "sir_velocity must be backward or central");
+  if (!(o.min_parallax_deg >= 0))
+    throw ov_core::DataError(file, "min_parallax_deg must be >= 0");
   if (o.max_clones < 3)
     throw ov_core::DataError(file, "max_clones must be at least 3");
   if (o.sigma_px <= 0 || o.td_sigma_init_s <= 0)

@@ -41,10 +41,11 @@ struct VioOptions {
   /// Measurement Jacobians at each clone's first estimate (OpenVINS' FEJ). Measured both ways in the README: with it
   /// orientation stays consistent, without it APE was lower on two of three simulations but yaw over-confident.
   bool measurement_fej = true;
-  int max_clones = 20;          ///< 1 s at 20 Hz: MSCKF-only accuracy and consistency improve markedly over 11 (README)
-  int min_track_length = 3;     ///< observations (at clones) a feature needs to enter an MSCKF update
-  double sigma_px = 1.0;        ///< pixel noise of a KLT observation
-  double chi2_multiplier = 1.0; ///< scales the 95% chi-square gate
+  int max_clones = 20;      ///< 1 s at 20 Hz: MSCKF-only accuracy and consistency improve markedly over 11 (README)
+  int min_track_length = 3; ///< observations (at clones) a feature needs to enter an MSCKF update
+  double min_parallax_deg = 0.2; ///< triangulation: features with less parallax over their track are not used
+  double sigma_px = 1.0;         ///< pixel noise of a KLT observation
+  double chi2_multiplier = 1.0;  ///< scales the 95% chi-square gate
   int max_features_per_update = 80;
 
   // Zero-velocity update: when the features do not move on the image the platform is taken as still, the state
