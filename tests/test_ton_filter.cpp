@@ -61,6 +61,14 @@ std::unique_ptr<ov_core::Dataset> simulate(const ovtest::TempDir &dir, ov_core::
   return std::make_unique<ov_core::Dataset>(ov_core::load_dataset(o.out_dir));
 }
 
+/// The 8 s, constant +10 ms simulation the FVON tests share.
+std::unique_ptr<ov_core::Dataset> simulate_constant_10ms(const ovtest::TempDir &dir) {
+  ov_core::sim::TdModelOptions td;
+  td.kind = ov_core::sim::TdModelKind::Constant;
+  td.td0_s = 0.010;
+  return simulate(dir, td, 8.0);
+}
+
 /// Fewer epochs than Table I keep the suite fast; the counts checked here do not depend on how well the networks
 /// fit, only on FVON supplying a velocity where the constant-speed model has none.
 VioOptions fast_networks() {
@@ -75,10 +83,7 @@ VioOptions fast_networks() {
 
 TEST(TonFilter, FvonGivesMoreFeaturesATdConstraintThanSir) {
   ovtest::TempDir dir;
-  ov_core::sim::TdModelOptions td;
-  td.kind = ov_core::sim::TdModelKind::Constant;
-  td.td0_s = 0.010;
-  const auto data = simulate(dir, td, 8.0);
+  const auto data = simulate_constant_10ms(dir);
 
   const ModeRun sir = run_mode(*data, TdMode::Sir, fast_networks());
   const ModeRun fvon = run_mode(*data, TdMode::Fvon, fast_networks());
@@ -117,10 +122,7 @@ TEST(TonFilter, FvonGivesMoreFeaturesATdConstraintThanSir) {
 
 TEST(TonFilter, FvonGateKeepsOnlyPredictionsThatAgreeWithTheTrack) {
   ovtest::TempDir dir;
-  ov_core::sim::TdModelOptions td;
-  td.kind = ov_core::sim::TdModelKind::Constant;
-  td.td0_s = 0.010;
-  const auto data = simulate(dir, td, 8.0);
+  const auto data = simulate_constant_10ms(dir);
   VioOptions open = fast_networks(), shut = fast_networks(), normal = fast_networks();
   open.fvon_gate_px_s = 0.0;  // no check
   shut.fvon_gate_px_s = 1e-6; // nothing agrees this well with a noisy track

@@ -7,6 +7,7 @@ cd "$(dirname "$0")/../.."
 OUT=${1:-results/consistency}
 DUR=${2:-60}
 BIN=build/ovton
+source scripts/experiments/run_summary.sh
 [ -x "$BIN" ] || scripts/build.sh
 mkdir -p "$OUT"
 {
@@ -29,14 +30,10 @@ for T in $TRAJS; do
   fi
   for M in oracle sr; do
     LINE=$("$BIN" run --dataset "$DS" --td-mode "$M" --init groundtruth --output "$OUT/traj_${T}_$M.csv" -q)
-    NEES_O=$(echo "$LINE" | sed -n 's/^NEES orientation \([0-9.]*\), position \([0-9.]*\).*/\1/p')
-    NEES_P=$(echo "$LINE" | sed -n 's/^NEES orientation \([0-9.]*\), position \([0-9.]*\).*/\2/p')
-    APE=$(echo "$LINE" | sed -n 's/^APE \([0-9.]*\) m.*/\1/p')
-    TD=$(echo "$LINE" | sed -n 's/^final t_d \([-0-9.]*\) ms.*/\1/p')
     # The sim(3) fit's scale: the position inconsistency shows up as the whole trajectory being too large.
-    SCALE=$("$BIN" eval --est "$OUT/traj_${T}_$M.csv" --gt "$DS/mav0/state_groundtruth_estimate0/data.csv" --align sim3 |
-      sed -n 's/.*scale [0-9.]*: estimate \([-0-9.]*\) % too large.*/\1/p')
-    echo "| $T | $M | $NEES_O | $NEES_P | $APE | ${SCALE} % | $TD |" >> "$OUT/summary.md"
+    SCALE=$(scale_error_pct "$BIN" "$OUT/traj_${T}_$M.csv" "$DS/mav0/state_groundtruth_estimate0/data.csv")
+    echo "| $T | $M | $(nees_ori "$LINE") | $(nees_pos "$LINE") | $(ape_m "$LINE") | ${SCALE} % | $(final_td_ms "$LINE") |" \
+      >> "$OUT/summary.md"
   done
 done
 cat "$OUT/summary.md"

@@ -9,6 +9,7 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 OUT=${1:-results/scale_bias}
 BIN=build/ovton
+source scripts/experiments/run_summary.sh
 [ -x "$BIN" ] || scripts/build.sh
 GT=../shared/data/euroc_groundtruth/V1_03_difficult.txt
 if [ ! -f "$GT" ]; then
@@ -47,13 +48,9 @@ row() { # pixel noise, lever, options (YAML lines separated by ';')
   cfg="$OUT/cfg_$1_$2_$(echo "$3" | tr -c 'a-z0-9' '_').yaml"
   { echo "sigma_px: $1"; echo "$3" | tr ';' '\n'; } >"$cfg"
   line=$("$BIN" run --config "$cfg" --dataset "$ds" --td-mode oracle --init groundtruth --output "$cfg.csv" -q)
-  local o p a s
-  o=$(echo "$line" | sed -n 's/^NEES orientation \([0-9.]*\), position \([0-9.]*\).*/\1/p')
-  p=$(echo "$line" | sed -n 's/^NEES orientation \([0-9.]*\), position \([0-9.]*\).*/\2/p')
-  a=$(echo "$line" | sed -n 's/^APE \([0-9.]*\) m.*/\1/p')
-  s=$("$BIN" eval --est "$cfg.csv" --gt "$ds/mav0/state_groundtruth_estimate0/data.csv" --align sim3 |
-    sed -n 's/.*scale [0-9.]*: estimate \([-0-9.]*\) % too large.*/\1/p')
-  echo "| $1 | $2 | ${3:-defaults} | $o | $p | $a | $s % |" >>"$OUT/summary.md"
+  local s
+  s=$(scale_error_pct "$BIN" "$cfg.csv" "$ds/mav0/state_groundtruth_estimate0/data.csv")
+  echo "| $1 | $2 | ${3:-defaults} | $(nees_ori "$line") | $(nees_pos "$line") | $(ape_m "$line") | $s % |" >>"$OUT/summary.md"
 }
 
 row 1 yes ""
