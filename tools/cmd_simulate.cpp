@@ -66,7 +66,7 @@ int cmd_simulate(const Args &args) {
       "Convention: t_imu = t_cam + td; image k shows the scene at IMU time t_k and is stamped t_k - td(k)");
   ov_core::sim::SimOptions o;
   std::string out, gt, td_model = "constant", cam_yaml, imu_yaml;
-  double td0_ms = 10.0, td_bias = 0.1, td_noise = 0.1;
+  double td0_ms = 10.0, td_bias = 0.1, td_noise = 0.1, readout_ms = 0.0, focal_error_pct = 0.0;
   int bench_frames = 100;
   desc.add_options()("help,h", "this help")                                                                   //
       ("out,o", po::value(&out), "output folder (mav0/ and sim.yaml are written inside)")                     //
@@ -79,18 +79,22 @@ int cmd_simulate(const Args &args) {
       ("td0-ms", po::value(&td0_ms)->default_value(10.0), "offset at the first image [ms]")                   //
       ("td-bias-ms-per-s", po::value(&td_bias)->default_value(0.1), "drift: growth [ms/s]")                   //
       ("td-noise-ms-per-sqrt-s", po::value(&td_noise)->default_value(0.1), "drift: random walk [ms/sqrt(s)]") //
-      ("imu-from", po::value(&o.imu_from), "semi-real: take imu0/data.csv from this EuRoC folder")            //
-      ("features-only", "write mav0/cam0/features.csv (timestamp_ns,feature_id,u,v) instead of images")       //
-      ("no-images", "write no images and no features (IMU, ground truth, stamps)")                            //
-      ("no-imu-noise", "noise-free IMU (no white noise, no bias walk)")                                       //
-      ("knot-dt-s", po::value(&o.knot_dt_s)->default_value(0.1), "B-spline knot spacing of the gt fit [s]")   //
-      ("cam-yaml", po::value(&cam_yaml), "EuRoC cam0/sensor.yaml to use (default: built-in EuRoC cam0)")      //
-      ("imu-yaml", po::value(&imu_yaml), "EuRoC imu0/sensor.yaml to use (default: built-in ADIS16448)")       //
-      ("pixel-noise", po::value(&o.features.pixel_noise)->default_value(1.0), "features-only: noise [px]")    //
-      ("max-tracks", po::value(&o.features.max_tracks)->default_value(200), "features-only: live tracks")     //
-      ("benchmark", "measure render speed (one core) and disk size per minute; --out optional")               //
-      ("benchmark-frames", po::value(&bench_frames)->default_value(100), "frames rendered by --benchmark")    //
-      ("force", "replace OUT/mav0 if it exists")                                                              //
+      ("readout-ms", po::value(&readout_ms)->default_value(0.0),
+       "rolling shutter: row v is exposed at the image's instant + v/height * readout; stamp = row 0 [ms]") //
+      ("focal-error-pct", po::value(&focal_error_pct)->default_value(0.0),
+       "data made with focal lengths (1 + P/100) x those written to cam0/sensor.yaml [%]")                  //
+      ("imu-from", po::value(&o.imu_from), "semi-real: take imu0/data.csv from this EuRoC folder")          //
+      ("features-only", "write mav0/cam0/features.csv (timestamp_ns,feature_id,u,v) instead of images")     //
+      ("no-images", "write no images and no features (IMU, ground truth, stamps)")                          //
+      ("no-imu-noise", "noise-free IMU (no white noise, no bias walk)")                                     //
+      ("knot-dt-s", po::value(&o.knot_dt_s)->default_value(0.1), "B-spline knot spacing of the gt fit [s]") //
+      ("cam-yaml", po::value(&cam_yaml), "EuRoC cam0/sensor.yaml to use (default: built-in EuRoC cam0)")    //
+      ("imu-yaml", po::value(&imu_yaml), "EuRoC imu0/sensor.yaml to use (default: built-in ADIS16448)")     //
+      ("pixel-noise", po::value(&o.features.pixel_noise)->default_value(1.0), "features-only: noise [px]")  //
+      ("max-tracks", po::value(&o.features.max_tracks)->default_value(200), "features-only: live tracks")   //
+      ("benchmark", "measure render speed (one core) and disk size per minute; --out optional")             //
+      ("benchmark-frames", po::value(&bench_frames)->default_value(100), "frames rendered by --benchmark")  //
+      ("force", "replace OUT/mav0 if it exists")                                                            //
       ("quiet,q", "no progress output");
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
@@ -113,6 +117,8 @@ int cmd_simulate(const Args &args) {
   o.td.td0_s = td0_ms * 1e-3;
   o.td.bias_s_per_s = td_bias * 1e-3;
   o.td.noise_s_per_sqrt_s = td_noise * 1e-3;
+  o.readout_s = readout_ms * 1e-3;
+  o.focal_error = focal_error_pct * 1e-2;
   if (!cam_yaml.empty()) {
     o.cam = ov_core::load_euroc_camera_yaml(cam_yaml);
     o.cam_source = cam_yaml;

@@ -1,6 +1,7 @@
 #include "ov_core/sim/feature_sim.h"
 #include "ov_core/types/errors.h"
 #include <algorithm>
+#include <cmath>
 
 namespace ov_core {
 namespace sim {
@@ -22,12 +23,32 @@ FeatureSimulator::FeatureSimulator(const CameraModel &cam, const Scene &scene, c
   live_.assign(landmarks_.size(), -1);
 }
 
-bool FeatureSimulator::visible(size_t lm, const Eigen::Matrix3d &R_CW, const Eigen::Vector3d &p_WC,
-                               Eigen::Vector2d &uv) const {
-  const Eigen::Vector3d d_W = landmarks_[lm] - p_WC;
-  const Eigen::Vector3d p_C = R_CW * d_W;
-  if (!cam_.project(p_C, uv, nullptr, opt_.min_depth_m) || !cam_.in_image(uv, opt_.border_px))
+bool FeatureSimulator::visible(size_t lm, const FramePose &pose, Eigen::Vector2d &uv) const {
+  Eigen::Matrix3d R_WC = pose.R_WC;
+  Eigen::Vector3d p_WC = pose.p_WC;
+  const auto project = [&](Eigen::Vector2d &out) {
+    return cam_.project(R_WC.transpose() * (landmarks_[lm] - p_WC), out, nullptr, opt_.min_depth_m);
+  };
+  if (!project(uv))
     return false;
+  if (pose.at_row) {
+    // Row v is exposed from at_row(v): iterate v -> pose -> projected row until it stands still.
+    constexpr int kMaxIter = 20;
+    int it = 0;
+    for (; it < kMaxIter; ++it) {
+      const double row = uv.y();
+      pose.at_row(row, R_WC, p_WC);
+      if (!project(uv))
+        return false;
+      if (std::abs(uv.y() - row) < 1e-10)
+        break;
+    }
+    if (it == kMaxIter)
+      return false; // no consistent row (far outside any realistic readout): treat as not seen
+  }
+  if (!cam_.in_image(uv, opt_.border_px))
+    return false;
+  const Eigen::Vector3d d_W = landmarks_[lm] - p_WC;
   const double dist = d_W.norm();
   RayHit hit;
   // Occluded when another face is hit clearly before the landmark's own face.
@@ -36,7 +57,13 @@ bool FeatureSimulator::visible(size_t lm, const Eigen::Matrix3d &R_CW, const Eig
 
 std::vector<FeatureObservation> FeatureSimulator::step(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC,
                                                        int64_t t_cam_ns) {
-  const Eigen::Matrix3d R_CW = R_WC.transpose();
+  FramePose pose;
+  pose.R_WC = R_WC;
+  pose.p_WC = p_WC;
+  return step(pose, t_cam_ns);
+}
+
+std::vector<FeatureObservation> FeatureSimulator::step(const FramePose &pose, int64_t t_cam_ns) {
   const int n_cells = opt_.grid_cols * opt_.grid_rows;
   const int per_cell = std::max(1, opt_.max_tracks / n_cells);
   std::vector<int> cell_count(n_cells, 0);
@@ -53,7 +80,7 @@ std::vector<FeatureObservation> FeatureSimulator::step(const Eigen::Matrix3d &R_
     if (live_[lm] < 0)
       continue;
     Eigen::Vector2d uv;
-    const bool vis = visible(lm, R_CW, p_WC, uv);
+    const bool vis = visible(lm, pose, uv);
     const bool drop = rng_.uniform() < p_drop; // drawn for every live track so streams stay aligned
     if (!vis || drop) {
       live_[lm] = -1;
@@ -67,7 +94,7 @@ std::vector<FeatureObservation> FeatureSimulator::step(const Eigen::Matrix3d &R_
   std::vector<std::pair<size_t, Eigen::Vector2d>> cand;
   for (size_t lm = 0; lm < landmarks_.size(); ++lm) {
     Eigen::Vector2d uv;
-    if (live_[lm] < 0 && visible(lm, R_CW, p_WC, uv))
+    if (live_[lm] < 0 && visible(lm, pose, uv))
       cand.emplace_back(lm, uv);
   }
   for (size_t i = cand.size(); i > 1; --i)

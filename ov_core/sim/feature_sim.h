@@ -3,6 +3,7 @@
 // model, organised into tracks that start and end the way a KLT front end's do. For filter tests that must
 // not depend on the tracker.
 #include "ov_core/cam/camera_model.h"
+#include "ov_core/sim/frame_pose.h"
 #include "ov_core/sim/random.h"
 #include "ov_core/sim/scene.h"
 #include <cstdint>
@@ -34,13 +35,16 @@ public:
 
   /// Observations of one frame: the camera at (R_WC, p_WC) at its true instant, stamped t_cam_ns.
   std::vector<FeatureObservation> step(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, int64_t t_cam_ns);
+  /// Same with a rolling shutter when pose.at_row is set: a landmark is seen from the pose of the row it lands in,
+  /// found by fixed-point iteration on the row (it converges by the factor image velocity × row time per step).
+  std::vector<FeatureObservation> step(const FramePose &pose, int64_t t_cam_ns);
 
   const std::vector<Eigen::Vector3d> &landmarks() const { return landmarks_; }
   /// Landmark observed by a feature id (ids are never reused; a re-detected landmark gets a new id).
   size_t landmark_of(uint64_t feature_id) const { return track_landmark_.at(feature_id); }
 
 private:
-  bool visible(size_t lm, const Eigen::Matrix3d &R_CW, const Eigen::Vector3d &p_WC, Eigen::Vector2d &uv) const;
+  bool visible(size_t lm, const FramePose &pose, Eigen::Vector2d &uv) const;
   const CameraModel &cam_;
   const Scene &scene_;
   FeatureSimOptions opt_;

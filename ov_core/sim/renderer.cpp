@@ -73,8 +73,29 @@ Renderer::Renderer(const CameraModel &cam, const Scene &scene, const RenderOptio
 
 void Renderer::render(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, uint64_t noise_seed,
                       cv::Mat &out) const {
-  const int w = cam_.width(), h = cam_.height();
-  out.create(h, w, CV_8U);
+  out.create(cam_.height(), cam_.width(), CV_8U);
+  render_rows(R_WC, p_WC, 0, cam_.height(), noise_seed, out);
+}
+
+void Renderer::render(const FramePose &pose, uint64_t noise_seed, cv::Mat &out) const {
+  if (!pose.at_row) {
+    render(pose.R_WC, pose.p_WC, noise_seed, out);
+    return;
+  }
+  // One pose per row; the per-frame tables below are rebuilt per row (boxes and mip levels: cheap next to a row of
+  // ray casts).
+  out.create(cam_.height(), cam_.width(), CV_8U);
+  Eigen::Matrix3d R_WC;
+  Eigen::Vector3d p_WC;
+  for (int v = 0; v < cam_.height(); ++v) {
+    pose.at_row(static_cast<double>(v), R_WC, p_WC);
+    render_rows(R_WC, p_WC, v, v + 1, noise_seed, out);
+  }
+}
+
+void Renderer::render_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, int v_begin, int v_end,
+                           uint64_t noise_seed, cv::Mat &out) const {
+  const int w = cam_.width();
   const auto &surfs = scene_.surfaces();
   const auto &boxes = scene_.boxes();
   const auto &room = scene_.room();
@@ -152,7 +173,7 @@ void Renderer::render(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, 
   const float noise_scale = static_cast<float>(opt_.noise_sigma * std::sqrt(6.0) / 65536.0);
   const float inf = std::numeric_limits<float>::infinity();
 
-  for (int v = 0; v < h; ++v) {
+  for (int v = v_begin; v < v_end; ++v) {
     uint8_t *row = out.ptr<uint8_t>(v);
     for (int u = 0; u < w; ++u) {
       const Ray &ray = rays_[static_cast<size_t>(v) * w + u];

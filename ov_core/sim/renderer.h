@@ -1,6 +1,7 @@
 #pragma once
 // Per-pixel ray caster: distorted pixel -> precomputed camera ray -> first scene face -> mip-mapped texture.
 #include "ov_core/cam/camera_model.h"
+#include "ov_core/sim/frame_pose.h"
 #include "ov_core/sim/scene.h"
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -23,8 +24,13 @@ public:
   /// Renders the view of a camera at pose (R_WC, p_WC) into an 8-bit image of the camera's size.
   /// noise_seed selects the sensor-noise pattern (use e.g. the frame index): same inputs, same pixels.
   void render(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, uint64_t noise_seed, cv::Mat &out) const;
+  /// Same with a rolling shutter when pose.at_row is set: pixel row v is drawn from the pose at_row(v).
+  void render(const FramePose &pose, uint64_t noise_seed, cv::Mat &out) const;
 
 private:
+  /// Rows [v_begin, v_end) of the view from (R_WC, p_WC); `out` already has the camera's size.
+  void render_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, int v_begin, int v_end,
+                   uint64_t noise_seed, cv::Mat &out) const;
   struct Ray {
     float x, y, z;  ///< unit ray in the camera frame
     float xn, yn;   ///< undistorted normalised coordinates (x/z, y/z), for box culling

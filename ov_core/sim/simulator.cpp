@@ -45,7 +45,7 @@ std::vector<int64_t> image_times(const Trajectory &traj, const SimOptions &opt) 
   std::vector<int64_t> t;
   for (int64_t k = 0;; ++k) {
     const int64_t tk = first + std::llround(k * 1e9 / rate);
-    if (tk > traj.t_end_ns())
+    if (tk + s_to_ns(opt.readout_s) > traj.t_end_ns()) // a rolling shutter's last row, too, lies on the trajectory
       break;
     t.push_back(tk);
   }
@@ -66,6 +66,30 @@ std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt) {
     throw DataError(opt.gt_file, "no poses");
   const int64_t t0 = gt.front().t_ns + s_to_ns(opt.start_s);
   return std::make_unique<SplineTrajectory>(gt, t0, t0 + s_to_ns(opt.duration_s), opt.knot_dt_s, "fit:" + opt.gt_file);
+}
+
+CameraCalib true_camera(const SimOptions &opt) {
+  CameraCalib c = opt.cam;
+  c.intrinsics.head<2>() *= 1.0 + opt.focal_error;
+  return c;
+}
+
+int64_t row_time_ns(int64_t t_imu_ns, double row, int height, double readout_s) {
+  return t_imu_ns + std::llround(row / height * readout_s * 1e9);
+}
+
+FramePose frame_pose(const Trajectory &traj, const SimOptions &opt, int64_t t_imu_ns) {
+  FramePose fp;
+  camera_pose(traj.sample(t_imu_ns), opt.cam.T_BC, fp.R_WC, fp.p_WC);
+  if (opt.readout_s > 0.0) {
+    const Eigen::Matrix4d T_BC = opt.cam.T_BC;
+    const int height = opt.cam.height;
+    const double readout = opt.readout_s;
+    fp.at_row = [&traj, T_BC, height, readout, t_imu_ns](double row, Eigen::Matrix3d &R_WC, Eigen::Vector3d &p_WC) {
+      camera_pose(traj.sample(row_time_ns(t_imu_ns, row, height, readout)), T_BC, R_WC, p_WC);
+    };
+  }
+  return fp;
 }
 
 void camera_pose(const TrajectorySample &s, const Eigen::Matrix4d &T_BC, Eigen::Matrix3d &R_WC, Eigen::Vector3d &p_WC) {
@@ -114,6 +138,14 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::Key << "rate_hz" << YAML::Value << opt.cam.rate_hz;
   e << YAML::Key << "first_image_s" << YAML::Value << opt.first_image_s;
   e << YAML::Key << "output" << YAML::Value << (opt.no_images ? "none" : (opt.features_only ? "features" : "images"));
+  // Planted camera effects (docs/simulate.md): what the data carry and cam0/sensor.yaml does not say.
+  e << YAML::Key << "rolling_shutter_readout_s" << YAML::Value << opt.readout_s;
+  e << YAML::Key << "rolling_shutter_convention" << YAML::Value
+    << "row v exposed at the image's IMU-clock instant + v/height * readout; the stamp belongs to row 0";
+  e << YAML::Key << "focal_error" << YAML::Value << opt.focal_error;
+  const CameraCalib tc = true_camera(opt);
+  e << YAML::Key << "true_intrinsics" << YAML::Value << YAML::Flow
+    << std::vector<double>{tc.intrinsics(0), tc.intrinsics(1), tc.intrinsics(2), tc.intrinsics(3)};
   e << YAML::EndMap;
   e << YAML::Key << "time_offset" << YAML::Value << YAML::BeginMap;
   e << YAML::Key << "convention" << YAML::Value << "t_imu = t_cam + td";
@@ -150,6 +182,11 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
 SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   if (opt.out_dir.empty())
     throw UsageError("no output folder");
+  const double frame_s = 1.0 / (opt.cam.rate_hz > 0 ? opt.cam.rate_hz : 20.0);
+  if (!(opt.readout_s >= 0.0 && opt.readout_s <= frame_s))
+    throw UsageError("rolling-shutter readout must lie in [0, one frame interval = " + std::to_string(frame_s) + " s]");
+  if (!(std::abs(opt.focal_error) < 0.5))
+    throw UsageError("focal error must lie in (-0.5, 0.5) (relative)");
   const auto wall0 = std::chrono::steady_clock::now();
   SimReport rep;
   const std::unique_ptr<Trajectory> traj = make_trajectory(opt);
@@ -245,7 +282,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     if (progress)
       progress("building scene", 0, frames.size());
     scene = std::make_unique<Scene>(make_scene(*traj, opt));
-    cam = std::make_unique<CameraModel>(opt.cam);
+    cam = std::make_unique<CameraModel>(true_camera(opt)); // sensor.yaml above keeps opt.cam
   }
   if (render)
     renderer = std::make_unique<Renderer>(*cam, *scene, opt.render);
@@ -261,12 +298,10 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   for (size_t k = 0; k < frames.size(); ++k) {
     const TimedImage &fr = frames[k];
     const std::string name = std::to_string(fr.t_cam_ns) + ".png";
-    Eigen::Matrix3d R_WC;
-    Eigen::Vector3d p_WC;
-    camera_pose(traj->sample(fr.t_imu_ns), opt.cam.T_BC, R_WC, p_WC);
+    const FramePose pose = frame_pose(*traj, opt, fr.t_imu_ns);
     if (render) {
       const auto r0 = std::chrono::steady_clock::now();
-      renderer->render(R_WC, p_WC, derive_seed(opt.seed, kRenderNoise) + k, img);
+      renderer->render(pose, derive_seed(opt.seed, kRenderNoise) + k, img);
       rep.render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
       const fs::path file = mav0 / "cam0" / "data" / name;
       if (!cv::imwrite(file.string(), img, png_params))
@@ -274,7 +309,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     }
     if (feats) {
       char buf[128];
-      for (const auto &o : feats->step(R_WC, p_WC, fr.t_cam_ns)) {
+      for (const auto &o : feats->step(pose, fr.t_cam_ns)) {
         std::snprintf(buf, sizeof(buf), "%lld,%llu,%.4f,%.4f\n", static_cast<long long>(o.t_cam_ns),
                       static_cast<unsigned long long>(o.feature_id), o.uv.x(), o.uv.y());
         feat_out << buf;

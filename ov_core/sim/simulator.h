@@ -29,7 +29,13 @@ struct SimOptions {
   bool imu_bias_walk = true;
   std::string imu_from; ///< semi-real: copy imu0/data.csv of this folder instead of synthesising
   TdModelOptions td;    ///< its seed is derived from `seed`
-  SceneOptions scene;   ///< its seed is derived from `seed`
+  /// Rolling shutter: image row v (distorted pixel row, continuous) is exposed at the frame's IMU-clock instant
+  /// + v / height · readout_s; the stamp (and td_truth) belongs to row 0. 0: global shutter.
+  double readout_s = 0.0;
+  /// Focal-length error: the data are made with focal lengths (1 + focal_error)·(fu, fv) of `cam`, while
+  /// cam0/sensor.yaml keeps `cam`'s. A filter reading the yaml then has f too small by this factor.
+  double focal_error = 0.0;
+  SceneOptions scene; ///< its seed is derived from `seed`
   RenderOptions render;
   FeatureSimOptions features; ///< its seed is derived from `seed`
   bool features_only = false; ///< write cam0/features.csv instead of images
@@ -54,6 +60,15 @@ std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt);
 
 /// Camera pose in the world at a body sample: R_WC = R_WB R_BC, p_WC = p_WB + R_WB p_BC.
 void camera_pose(const TrajectorySample &s, const Eigen::Matrix4d &T_BC, Eigen::Matrix3d &R_WC, Eigen::Vector3d &p_WC);
+
+/// The intrinsics the data are made with: `cam` with its focal lengths scaled by 1 + focal_error.
+CameraCalib true_camera(const SimOptions &opt);
+
+/// IMU-clock instant at which image row `row` of a frame whose row 0 is exposed at t_imu_ns is exposed.
+int64_t row_time_ns(int64_t t_imu_ns, double row, int height, double readout_s);
+
+/// The camera's pose over the exposure of a frame whose row 0 is exposed at t_imu_ns (rolling when readout_s > 0).
+FramePose frame_pose(const Trajectory &traj, const SimOptions &opt, int64_t t_imu_ns);
 
 /// Scene around the trajectory (uses the options' scene seed).
 Scene make_scene(const Trajectory &traj, const SimOptions &opt);
