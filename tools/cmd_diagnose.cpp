@@ -25,7 +25,8 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
     ("help,h", "print this help")
     ("log", po::value(&log_file), "residual log CSV (ovton run --residual-log)")
     ("dataset", po::value(&dataset_dir),
-     "dataset folder the log was made from: image height and intrinsics (default: taken from the log)")
+     "dataset folder the log was made from: image height, intrinsics and camera-body rotation (default: height\n"
+     "and intrinsics from the log, no camera rotation along a track)")
     ("out", po::value(&out_dir), "output folder (default: <log without extension>_diagnose beside the log)")
     ("min-sigma", po::value(&opt.min_sigma)->default_value(opt.min_sigma, "5"),
      "significance a candidate needs [Gaussian sigma]")
@@ -49,6 +50,9 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
     opt.image_height = data.cam.height;
     opt.fu = data.cam.intrinsics(0), opt.fv = data.cam.intrinsics(1);
     opt.cu = data.cam.intrinsics(2), opt.cv = data.cam.intrinsics(3);
+    opt.camera = data.cam;
+    opt.have_camera = true;
+    opt.imu = data.imu;
   }
   if (out_dir.empty()) {
     std::filesystem::path p(log_file);

@@ -1,7 +1,9 @@
 #include "ov_core/eval/diagnose.h"
+#include "ov_core/cam/camera_model.h"
 #include "ov_core/eval/plot.h"
 #include "ov_core/io/csv.h"
 #include "ov_core/io/text_format.h"
+#include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
 
 #include <Eigen/Dense>
@@ -90,6 +92,7 @@ ResidualLog load_residual_log(const std::string &file) {
     max_col = std::max(max_col, it->second);
   }
   const auto idx = [&](const char *name) { return col.at(name); };
+  const size_t depth_col = col.count("depth_m") ? col.at("depth_m") : std::numeric_limits<size_t>::max();
   while (have_row) {
     if (f.size() <= max_col)
       rd.fail("row has " + std::to_string(f.size()) + " fields, the header names " + std::to_string(col.size()));
@@ -120,6 +123,7 @@ ResidualLog load_residual_log(const std::string &file) {
     r.w_z = finite_number(rd, f[idx("w_z")], "w_z");
     r.w_valid = static_cast<int>(rd.to_int64(f[idx("w_valid")], "w_valid"));
     r.td_s = finite_number(rd, f[idx("td_s")], "td_s");
+    r.depth_m = depth_col < f.size() ? parse_number(rd, f[depth_col], "depth_m") : std::nan("");
     log.rows.push_back(r);
     have_row = rd.next(f);
   }
@@ -285,6 +289,33 @@ Eigen::Matrix<double, 2, 3> rot_flow(double x, double y) {
   return B;
 }
 
+/// Replaces every column x of X, within each track (rows [begin, end) of one cluster), by x − J·(J⁺x): what the
+/// track's triangulated point could not absorb. J (2m × 3) is the track's point Jacobian.
+void project_out_points(const MatrixXd &J_point, const std::vector<int> &cluster, MatrixXd &X) {
+  const Eigen::Index n = X.rows();
+  for (Eigen::Index i0 = 0; i0 < n;) {
+    Eigen::Index i1 = i0;
+    while (i1 < n && cluster[i1] == cluster[i0])
+      ++i1;
+    // Rank-revealing: under pure rotation (or without parallax) the point's depth changes nothing, J has rank 2, and a
+    // plain QR would remove an arbitrary third direction.
+    Eigen::ColPivHouseholderQR<MatrixXd> qr(J_point.middleRows(i0, i1 - i0));
+    qr.setThreshold(1e-9);
+    const MatrixXd Q1 = qr.householderQ() * MatrixXd::Identity(i1 - i0, qr.rank());
+    X.middleRows(i0, i1 - i0) -= Q1 * (Q1.transpose() * X.middleRows(i0, i1 - i0));
+    i0 = i1;
+  }
+}
+
+/// Derivative at t of the parabola through (t0, x0), (t1, x1), (t2, x2) (distinct times).
+Eigen::Vector2d lagrange_derivative(double t0, double t1, double t2, const Eigen::Vector2d &x0,
+                                    const Eigen::Vector2d &x1, const Eigen::Vector2d &x2, double t) {
+  const double l0 = ((t - t1) + (t - t2)) / ((t0 - t1) * (t0 - t2));
+  const double l1 = ((t - t0) + (t - t2)) / ((t1 - t0) * (t1 - t2));
+  const double l2 = ((t - t0) + (t - t1)) / ((t2 - t0) * (t2 - t1));
+  return l0 * x0 + l1 * x1 + l2 * x2;
+}
+
 double median(std::vector<double> v) {
   if (v.empty())
     return 0;
@@ -402,6 +433,250 @@ BinnedCurve make_curve(const CandidateDef &c, const Design &d, const Fit &fit, c
   return cur;
 }
 
+using TrackMap = std::map<std::pair<uint64_t, uint64_t>, std::vector<const ResidualLogRow *>>;
+
+/// Forward stepwise selection among `family` (indices into defs) on design d; fills res[c] for each member and returns
+/// the selected ones in selection order. A candidate that strictly contains a passing one (drift ⊃ constant offset)
+/// waits a round and, when selected later, takes the contained one's place.
+std::vector<size_t> stepwise(const Design &d, const std::vector<CandidateDef> &defs, const std::vector<size_t> &family,
+                             const DiagnoseOptions &opt, const DiagnoseReport &rep, std::vector<CandidateResult> &res) {
+  std::vector<size_t> order;
+  if (family.empty())
+    return order;
+  const double k = opt.huber_k;
+  const double loss0 = fit_cols(d, {}, k).loss;
+  std::vector<bool> usable(defs.size(), false), taken(defs.size(), false);
+  for (size_t c : family) {
+    usable[c] = true;
+    if (defs[c].needs_velocity && !d.have_velocity) {
+      usable[c] = false;
+      res[c].note = "skipped: fewer than " + std::to_string(int(100 * opt.min_velocity_share)) +
+                    "% of rows carry an image velocity";
+    }
+    if (defs[c].needs_rate && !d.have_rate) {
+      usable[c] = false;
+      res[c].note = "skipped: most tracks lack body rates (w_valid)";
+    }
+    if (usable[c])
+      res[c].explained_alone = 1.0 - fit_cols(d, defs[c].cols, k).loss / loss0;
+  }
+  std::vector<int> selected_cols;
+  double loss_sel = loss0;
+  std::vector<Fit> last_fit(defs.size());
+  std::vector<std::vector<int>> last_joint(defs.size());
+  const auto strictly_contains = [&](size_t a, size_t b) {
+    if (defs[a].cols.size() <= defs[b].cols.size())
+      return false;
+    for (int col : defs[b].cols)
+      if (std::find(defs[a].cols.begin(), defs[a].cols.end(), col) == defs[a].cols.end())
+        return false;
+    return true;
+  };
+  while (true) {
+    int best = -1;
+    std::vector<bool> passes(defs.size(), false);
+    for (size_t c : family) {
+      if (!usable[c] || taken[c])
+        continue;
+      std::vector<int> joint = selected_cols, own;
+      for (int col : defs[c].cols)
+        if (std::find(joint.begin(), joint.end(), col) == joint.end())
+          joint.push_back(col), own.push_back(col);
+      CandidateResult &cr = res[c];
+      if (own.empty()) {
+        cr.explained_added = 0, cr.sigma = 0;
+        cr.note = "nested in a selected candidate: adds no term";
+        last_fit[c] = Fit();
+        last_joint[c].clear();
+        continue;
+      }
+      const Fit f = fit_cols(d, joint, k);
+      const Eigen::Index q = static_cast<Eigen::Index>(own.size());
+      const VectorXd bo = f.beta.tail(q);
+      const MatrixXd Co = f.cov.bottomRightCorner(q, q);
+      const double W = bo.dot(Co.ldlt().solve(bo));
+      cr.sigma = wald_to_sigma(W, static_cast<int>(q));
+      cr.explained_added = (loss_sel - f.loss) / loss0;
+      cr.estimates = estimates_of(defs[c].key, defs[c].cols, f, joint, rep, d);
+      last_fit[c] = f;
+      last_joint[c] = joint;
+      passes[c] = cr.sigma >= opt.min_sigma && cr.explained_added >= opt.min_explained;
+    }
+    for (size_t c : family) {
+      if (!passes[c])
+        continue;
+      bool nests = false;
+      for (size_t b : family)
+        nests = nests || (b != c && passes[b] && strictly_contains(c, b));
+      if (!nests && (best < 0 || res[c].explained_added > res[best].explained_added))
+        best = static_cast<int>(c);
+    }
+    if (best < 0)
+      break;
+    taken[best] = true;
+    res[best].explained = true;
+    loss_sel -= res[best].explained_added * loss0;
+    // A selected extension (drift) supersedes the candidate it contains (constant offset): it takes that one's rank
+    // and the contained one is no longer the name of the effect.
+    for (size_t q = 0; q < order.size(); ++q)
+      if (strictly_contains(best, order[q])) {
+        res[order[q]].explained = false;
+        res[order[q]].note = "contained in " + defs[best].key + " (selected)";
+        res[best].explained_added += res[order[q]].explained_added;
+        res[order[q]].explained_added = 0;
+        order.erase(order.begin() + q);
+        break;
+      }
+    res[best].curve = make_curve(defs[best], d, last_fit[best], last_joint[best], opt.plot_bins);
+    order.push_back(best);
+    for (int col : defs[best].cols)
+      if (std::find(selected_cols.begin(), selected_cols.end(), col) == selected_cols.end())
+        selected_cols.push_back(col);
+  }
+  for (size_t c : family)
+    if (!taken[c] && usable[c] && !last_joint[c].empty())
+      res[c].curve = make_curve(defs[c], d, last_fit[c], last_joint[c], opt.plot_bins);
+  return order;
+}
+
+/// Gyro reading at t (linear interpolation; clamped at the ends).
+Eigen::Vector3d gyro_at(const std::vector<ImuData> &imu, double t_ns) {
+  const auto it =
+      std::lower_bound(imu.begin(), imu.end(), t_ns, [](const ImuData &m, double t) { return double(m.t_imu_ns) < t; });
+  if (it == imu.begin())
+    return imu.front().wm;
+  if (it == imu.end())
+    return imu.back().wm;
+  const auto &a = *(it - 1), &b = *it;
+  const double u = (t_ns - double(a.t_imu_ns)) / double(b.t_imu_ns - a.t_imu_ns);
+  return a.wm + u * (b.wm - a.wm);
+}
+
+/// The design of the time candidates on rates: per image, the camera's angular rate seen in the images (ω_vis, from
+/// the measured image velocities of its features, their depths and the flow model ẋ = B(x)·ω + A(x)·v/z) against the
+/// gyro's at the filter's image time t_cam + t̂_d. A time-offset error δt = t_d − t̂_d shows as ω_vis − ω_gyro =
+/// α·δt, α the angular acceleration; the gyro bias b is removed per 5-s bin. Rows are whitened per axis by ω_vis's
+/// standard error. Measured image velocities (not predicted ones) keep the filter's state out of it.
+bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const DiagnoseReport &rep, int64_t t_first,
+                       Design &dr, std::string &why) {
+  struct FlowObs {
+    Eigen::Vector2d x, xdot;
+    double inv_z;
+  };
+  std::map<int64_t, std::vector<FlowObs>> frames;
+  std::map<int64_t, double> frame_td;
+  for (auto &kv : tracks) {
+    const auto &tr = kv.second;
+    const size_t m = tr.size();
+    for (size_t j = 1; j + 1 < m; ++j) {
+      const ResidualLogRow *r = tr[j];
+      if (!(std::isfinite(r->depth_m) && r->depth_m > 0))
+        continue;
+      // Local slope of a quadratic through up to five measured positions around j (least squares).
+      const size_t a = j >= 2 ? j - 2 : 0, b = std::min(m - 1, j + 2);
+      Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+      Eigen::Matrix<double, 3, 2> B = Eigen::Matrix<double, 3, 2>::Zero();
+      for (size_t q = a; q <= b; ++q) {
+        const double tau = 1e-9 * double(tr[q]->t_cam_ns - r->t_cam_ns);
+        const Eigen::Vector3d h(1.0, tau, tau * tau);
+        A += h * h.transpose();
+        B += h * Eigen::RowVector2d(tr[q]->x_norm, tr[q]->y_norm);
+      }
+      const Eigen::Matrix<double, 3, 2> c = A.ldlt().solve(B);
+      frames[r->t_cam_ns].push_back({Eigen::Vector2d(r->x_norm, r->y_norm), c.row(1).transpose(), 1.0 / r->depth_m});
+      frame_td[r->t_cam_ns] = r->td_s;
+    }
+  }
+  const Eigen::Matrix3d R_BC = opt.camera.T_BC.block<3, 3>(0, 0);
+  struct FrameRate {
+    double t; ///< s from t_first
+    Eigen::Vector3d e, alpha, se;
+  };
+  std::vector<FrameRate> fr;
+  const double h_ns = 50e6; // ±50 ms for the angular acceleration: the gyro noise of a difference shrinks with it
+  for (const auto &[t_cam, obs] : frames) {
+    if (obs.size() < 12)
+      continue;
+    const Eigen::Index no = static_cast<Eigen::Index>(obs.size());
+    MatrixXd H(2 * no, 6);
+    VectorXd y(2 * no), w = VectorXd::Ones(2 * no);
+    for (Eigen::Index q = 0; q < no; ++q) {
+      const auto &o = obs[q];
+      H.block<2, 3>(2 * q, 0) = rot_flow(o.x.x(), o.x.y());
+      H.block<2, 3>(2 * q, 3) << -o.inv_z, 0, o.x.x() * o.inv_z, 0, -o.inv_z, o.x.y() * o.inv_z;
+      y.segment<2>(2 * q) = o.xdot;
+    }
+    VectorXd sol;
+    double s2 = 0;
+    for (int it = 0; it < 3; ++it) { // Huber IRLS, scale from the previous pass
+      const MatrixXd Hw = w.asDiagonal() * H;
+      sol = (H.transpose() * Hw).ldlt().solve(Hw.transpose() * y);
+      const VectorXd e = y - H * sol;
+      std::vector<double> ae(e.size());
+      for (Eigen::Index q = 0; q < e.size(); ++q)
+        ae[q] = std::abs(e(q));
+      const double sc = std::max(1e-12, 1.4826 * median(ae));
+      s2 = sc * sc;
+      for (Eigen::Index q = 0; q < e.size(); ++q)
+        w(q) = std::abs(e(q)) <= 3 * sc ? 1.0 : 3 * sc / std::abs(e(q));
+    }
+    const Eigen::Matrix3d C =
+        s2 * (H.transpose() * w.asDiagonal() * H).ldlt().solve(MatrixXd::Identity(6, 6)).topLeftCorner<3, 3>();
+    const Eigen::Matrix3d Cb = R_BC * C * R_BC.transpose();
+    const double t_imu = double(t_cam) + 1e9 * frame_td.at(t_cam);
+    FrameRate f;
+    f.t = 1e-9 * double(t_cam - t_first);
+    f.e = R_BC * sol.head<3>() - gyro_at(opt.imu, t_imu);
+    f.alpha = (gyro_at(opt.imu, t_imu + h_ns) - gyro_at(opt.imu, t_imu - h_ns)) / (2e-9 * h_ns);
+    f.se = Cb.diagonal().cwiseMax(1e-20).cwiseSqrt();
+    fr.push_back(f);
+  }
+  if (fr.size() < 50) {
+    why = "only " + std::to_string(fr.size()) + " images with 12+ features of known depth";
+    return false;
+  }
+  // Gyro bias per 5-s bin and axis: weighted means removed from the mismatch and the regressors (Frisch-Waugh).
+  const int nb = std::max(1, static_cast<int>(std::lround(rep.duration_s / 5.0)));
+  const auto bin = [&](double t) {
+    return std::min(nb - 1, static_cast<int>(nb * t / std::max(1e-9, rep.duration_s)));
+  };
+  const double t_mid = 0.5 * rep.duration_s;
+  std::vector<Eigen::Vector3d> sw(nb, Eigen::Vector3d::Zero()), se(nb, Eigen::Vector3d::Zero()),
+      sa(nb, Eigen::Vector3d::Zero()), sat(nb, Eigen::Vector3d::Zero());
+  for (const auto &f : fr) {
+    const Eigen::Vector3d w = f.se.cwiseInverse().cwiseAbs2();
+    const int b = bin(f.t);
+    sw[b] += w, se[b] += w.cwiseProduct(f.e), sa[b] += w.cwiseProduct(f.alpha);
+    sat[b] += w.cwiseProduct(f.alpha) * (f.t - t_mid);
+  }
+  const Eigen::Index n = 3 * static_cast<Eigen::Index>(fr.size());
+  dr.D = MatrixXd::Zero(n, kNumCols);
+  dr.r.resize(n);
+  dr.cluster.resize(n);
+  dr.t_s.resize(n);
+  dr.t_mid = t_mid;
+  dr.have_velocity = true;
+  dr.have_rate = false;
+  Eigen::Index i = 0;
+  for (const auto &f : fr) {
+    const int b = bin(f.t);
+    for (int a = 0; a < 3; ++a, ++i) {
+      const double sq = 1.0 / f.se(a);
+      dr.r(i) = sq * (f.e(a) - se[b](a) / sw[b](a));
+      dr.D(i, kV) = sq * (f.alpha(a) - sa[b](a) / sw[b](a));
+      dr.D(i, kVt) = sq * (f.alpha(a) * (f.t - t_mid) - sat[b](a) / sw[b](a));
+      dr.cluster[i] = static_cast<int>(f.t); // one cluster per second: neighbouring images share tracks
+      dr.t_s[i] = f.t;
+    }
+  }
+  dr.n_clusters = static_cast<int>(fr.back().t) + 1;
+  std::vector<double> absr(n);
+  for (Eigen::Index q = 0; q < n; ++q)
+    absr[q] = std::abs(dr.r(q));
+  dr.scale = std::max(1e-12, 1.4826 * median(absr));
+  return true;
+}
+
 } // namespace
 
 // ---------------------------------------------------------------------------------------------------------------
@@ -439,10 +714,9 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
     rep.rows_without_velocity = static_cast<long>(rows.size() - kept.size());
     rows.swap(kept);
   }
-  // Tracks: one feature in one update. A track needs two rows to say anything once its mean is removed, three when
-  // the velocity comes from the neighbouring rows
-  // (two interior rows).
-  const size_t min_track = opt.use_logged_velocity ? 2 : 4;
+  // Tracks: one feature in one update. Three rows at least: the velocity is a three-point derivative, and the point
+  // projection takes three of the 2m residual components.
+  const size_t min_track = 3;
   std::map<std::pair<uint64_t, uint64_t>, std::vector<const ResidualLogRow *>> tracks;
   for (auto *r : rows)
     tracks[{r->update_id, r->feature_id}].push_back(r);
@@ -450,15 +724,19 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
     it = it->second.size() < min_track ? tracks.erase(it) : std::next(it);
   long n_obs = 0;
   for (auto &kv : tracks)
-    n_obs += static_cast<long>(kv.second.size()) - (opt.use_logged_velocity ? 0 : 2);
+    n_obs += static_cast<long>(kv.second.size());
   if (n_obs < 50)
     throw DataError(log.file, "only " + std::to_string(n_obs) +
-                                  " usable observations (accepted or gated, in tracks of 2+): too few to diagnose");
+                                  " usable observations (accepted or gated, in tracks of 3+): too few to diagnose");
   rep.rows_used = n_obs;
   rep.tracks_used = static_cast<long>(tracks.size());
 
-  // Intrinsics: given, or fitted from the log (u ≈ cu + fu·x near the centre, where distortion is small).
-  if (opt.fu > 0 && opt.fv > 0) {
+  // Intrinsics: the dataset's camera, given, or fitted from the log (u ≈ cu + fu·x near the centre, where distortion is
+  // small).
+  if (opt.have_camera) {
+    rep.fu = opt.camera.intrinsics(0), rep.fv = opt.camera.intrinsics(1);
+    rep.cu = opt.camera.intrinsics(2), rep.cv = opt.camera.intrinsics(3);
+  } else if (opt.fu > 0 && opt.fv > 0) {
     rep.fu = opt.fu, rep.fv = opt.fv, rep.cu = opt.cu, rep.cv = opt.cv;
   } else {
     rep.intrinsics_fitted = true;
@@ -486,7 +764,12 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   double vmax = 0;
   for (auto *r : rows)
     vmax = std::max(vmax, r->v_px);
-  rep.image_height = opt.image_height > 0 ? opt.image_height : static_cast<int>(std::ceil(vmax + 0.5));
+  rep.image_height = opt.image_height > 0                       ? opt.image_height
+                     : opt.have_camera && opt.camera.height > 0 ? opt.camera.height
+                                                                : static_cast<int>(std::ceil(vmax + 0.5));
+  std::unique_ptr<CameraModel> cam;
+  if (opt.have_camera)
+    cam = std::make_unique<CameraModel>(opt.camera);
 
   // Design matrix.
   Design d;
@@ -498,58 +781,86 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   d.n_clusters = static_cast<int>(tracks.size());
   d.have_velocity = use_vel;
   int64_t t_first = std::numeric_limits<int64_t>::max(), t_last = std::numeric_limits<int64_t>::min();
-  for (auto *r : rows)
-    t_first = std::min(t_first, r->t_cam_ns), t_last = std::max(t_last, r->t_cam_ns);
+  for (auto &kv : tracks)
+    for (auto *r : kv.second)
+      t_first = std::min(t_first, r->t_cam_ns), t_last = std::max(t_last, r->t_cam_ns);
   rep.duration_s = 1e-9 * double(t_last - t_first);
   d.t_mid = 0.5 * rep.duration_s;
+  MatrixXd J_point(n, 3); // per track: the point Jacobian (pixels per metre, in the track's first camera frame)
   long rate_rows = 0;
   Eigen::Index i = 0;
   int g = 0;
   for (auto &kv : tracks) {
     auto &tr = kv.second;
     std::sort(tr.begin(), tr.end(), [](auto *a, auto *b) { return a->t_cam_ns < b->t_cam_ns; });
-    const Eigen::Index i0 = i;
-    bool rates = true;
-    for (auto *r : tr)
-      rates = rates && r->w_valid;
-    // Velocity of row j from rows other than j: the central difference of its neighbours, exact for a quadratic
-    // image track at 20 Hz spacing. End rows have no such pair (a one-sided difference is the velocity half a frame
-    // away and biases δt by ~15 %, an extrapolation triples the noise), so without the logged velocity they only
-    // serve the neighbours and are dropped below.
     const size_t m = tr.size();
-    std::vector<Eigen::Vector2d> vel(m, Eigen::Vector2d::Zero());
+    bool rates = true, depths = true;
+    for (auto *r : tr) {
+      rates = rates && r->w_valid;
+      depths = depths && std::isfinite(r->depth_m) && r->depth_m > 0;
+    }
+    // Regressors are built from the filter's PREDICTED observations ẑ = z − r, not from the measured pixels: a
+    // measured pixel carries the noise that is also in its residual, and regressing on it fakes effects (an offset of
+    // σ²/(Δt·var V) from a velocity, a focal error from a position). ẑ's own error is the triangulated point's
+    // J·δp, which the point projection below removes. Velocity: three-point derivative of f·ẑ (exact for a
+    // quadratic image track), at every row.
+    std::vector<Eigen::Vector2d> xh(m), vel(m, Eigen::Vector2d::Zero());
+    std::vector<double> ts(m);
+    for (size_t j = 0; j < m; ++j) {
+      xh[j] = Eigen::Vector2d(tr[j]->x_norm - tr[j]->res_u_px / rep.fu, tr[j]->y_norm - tr[j]->res_v_px / rep.fv);
+      ts[j] = 1e-9 * double(tr[j]->t_cam_ns - t_first);
+    }
     for (size_t j = 0; j < m; ++j) {
       if (opt.use_logged_velocity) {
         vel[j] = Eigen::Vector2d(tr[j]->vel_u_px_s, tr[j]->vel_v_px_s);
         continue;
       }
-      if (j == 0 || j + 1 == m)
-        continue;
-      const double dt = 1e-9 * double(tr[j + 1]->t_cam_ns - tr[j - 1]->t_cam_ns);
-      if (dt > 0)
-        vel[j] = Eigen::Vector2d(tr[j + 1]->u_px - tr[j - 1]->u_px, tr[j + 1]->v_px - tr[j - 1]->v_px) / dt;
+      const size_t a = j == 0 ? 0 : (j + 1 == m ? m - 3 : j - 1); // the three rows around j
+      vel[j] = Eigen::Vector2d(rep.fu, rep.fv)
+                   .cwiseProduct(lagrange_derivative(ts[a], ts[a + 1], ts[a + 2], xh[a], xh[a + 1], xh[a + 2], ts[j]));
     }
-    if (!opt.use_logged_velocity) { // keep the interior rows
-      tr = std::vector<const ResidualLogRow *>(tr.begin() + 1, tr.end() - 1);
-      vel = std::vector<Eigen::Vector2d>(vel.begin() + 1, vel.end() - 1);
+    // Camera rotation along the track (R_C0Cj) from the logged body rates, for the point projection.
+    std::vector<Eigen::Matrix3d> R_C0C(m, Eigen::Matrix3d::Identity());
+    if (rates && opt.have_camera) {
+      const Eigen::Matrix3d R_BC = opt.camera.T_BC.block<3, 3>(0, 0);
+      Eigen::Matrix3d R_B0B = Eigen::Matrix3d::Identity();
+      for (size_t j = 1; j < m; ++j) {
+        const Eigen::Vector3d w0(tr[j - 1]->w_x, tr[j - 1]->w_y, tr[j - 1]->w_z),
+            w1(tr[j]->w_x, tr[j]->w_y, tr[j]->w_z);
+        R_B0B = R_B0B * so3_exp(0.5 * (w0 + w1) * 1e-9 * double(tr[j]->t_cam_ns - tr[j - 1]->t_cam_ns));
+        R_C0C[j] = R_BC.transpose() * R_B0B * R_BC;
+      }
     }
-    size_t j_row = 0;
     Eigen::Vector3d theta = Eigen::Vector3d::Zero(), w_prev = Eigen::Vector3d::Zero();
     int64_t t_prev = tr.front()->t_cam_ns;
-    for (auto *r : tr) {
-      const double t = 1e-9 * double(r->t_cam_ns - t_first);
-      const Eigen::Vector2d V = vel[j_row++];
-      const Eigen::Vector2d fxy(rep.fu * r->x_norm, rep.fv * r->y_norm);
-      const double row_frac = r->v_px / rep.image_height - 0.5;
-      const double r2 = r->x_norm * r->x_norm + r->y_norm * r->y_norm;
+    for (size_t j = 0; j < m; ++j) {
+      const ResidualLogRow *r = tr[j];
+      const double t = ts[j];
+      const Eigen::Vector2d V = vel[j];
+      const double row_frac = (r->v_px - r->res_v_px) / rep.image_height - 0.5;
+      const double r2 = xh[j].squaredNorm();
+      // Focal and k1 errors act on the distorted point; the filter undistorts, so their effect on the residual (in
+      // undistorted coordinates) is the distorted change mapped through the inverse of the distortion's Jacobian.
+      Eigen::Vector2d scale_dir = xh[j], k1_dir = r2 * xh[j];
+      if (cam) {
+        Eigen::Matrix2d Jd;
+        const Eigen::Vector2d xd = cam->distort_normalized(xh[j], &Jd);
+        const Eigen::PartialPivLU<Eigen::Matrix2d> lu(Jd);
+        scale_dir = lu.solve(xd);
+        k1_dir = lu.solve(r2 * xh[j]);
+      }
       const Eigen::Vector3d w(r->w_x, r->w_y, r->w_z);
       if (rates) { // trapezoid integral of the body rate since the track's first row
         theta += 0.5 * (w + w_prev) * 1e-9 * double(r->t_cam_ns - t_prev);
-        if (r == tr.front())
+        if (j == 0)
           theta.setZero();
         w_prev = w, t_prev = r->t_cam_ns;
       }
-      const Eigen::Matrix<double, 2, 3> B = rot_flow(r->x_norm, r->y_norm);
+      const double inv_z = depths ? 1.0 / r->depth_m : 1.0;
+      const Eigen::Matrix<double, 2, 3> B = rot_flow(xh[j].x(), xh[j].y());
+      Eigen::Matrix<double, 2, 3> Jpt;
+      Jpt << inv_z, 0.0, -xh[j].x() * inv_z, 0.0, inv_z, -xh[j].y() * inv_z;
+      Jpt = Jpt * R_C0C[j].transpose(); // a shift of the point, expressed in the track's first camera frame
       for (int a = 0; a < 2; ++a, ++i) {
         const double fa = a == 0 ? rep.fu : rep.fv;
         d.r(i) = a == 0 ? r->res_u_px : r->res_v_px;
@@ -558,33 +869,37 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
         d.D(i, kV) = V(a);
         d.D(i, kVt) = V(a) * (t - d.t_mid);
         d.D(i, kVrow) = V(a) * row_frac;
-        d.D(i, kFocal) = fxy(a);
+        d.D(i, kFocal) = fa * scale_dir(a);
         d.D(i, kPpU) = a == 0 ? 1.0 : 0.0;
         d.D(i, kPpV) = a == 1 ? 1.0 : 0.0;
-        d.D(i, kRadial) = r2 * fxy(a);
+        d.D(i, kRadial) = fa * k1_dir(a);
         if (rates)
           for (int c = 0; c < 3; ++c)
-            for (int j = 0; j < 3; ++j)
-              d.D(i, kGyro0 + 3 * c + j) = fa * B(a, c) * theta(j);
+            for (int q = 0; q < 3; ++q)
+              d.D(i, kGyro0 + 3 * c + q) = fa * B(a, c) * theta(q);
+        J_point.row(i) = fa * Jpt.row(a);
       }
       rate_rows += rates;
     }
-    // The triangulated point absorbs what is common to a track's observations (to first order a constant image
-    // shift per coordinate); regressing on the within-track variation removes that part from the regressors too,
-    // which keeps the estimates unbiased whether or not the logged residual had it removed.
-    for (int c = 0; c < kNumCols; ++c) {
-      if (c == kPpU || c == kPpV)
-        continue; // constant per track: nothing is left after demeaning (docs/diagnose.md: weakly observable)
-      for (int a = 0; a < 2; ++a) {
-        double m = 0;
-        for (Eigen::Index k = i0 + a; k < i; k += 2)
-          m += d.D(k, c);
-        m /= double(tr.size());
-        for (Eigen::Index k = i0 + a; k < i; k += 2)
-          d.D(k, c) -= m;
-      }
-    }
     ++g;
+  }
+  // Point projection: the filter triangulates each track's point from its observations, so whatever a shift of the
+  // point can produce (J_point·δp) is absorbed by it and is not in the residual. Only the part of an effect orthogonal
+  // to J_point's columns can show: residual and regressors are projected onto that complement (docs/diagnose.md). A
+  // constant image shift lies (nearly) in J_point's span: the principal point column is kept raw and is weak.
+  {
+    std::vector<int> cols;
+    for (int c = 0; c < kNumCols; ++c)
+      if (c != kPpU && c != kPpV)
+        cols.push_back(c);
+    MatrixXd X(n, cols.size() + 1);
+    for (size_t c = 0; c < cols.size(); ++c)
+      X.col(c) = d.D.col(cols[c]);
+    X.col(cols.size()) = d.r;
+    project_out_points(J_point, d.cluster, X);
+    for (size_t c = 0; c < cols.size(); ++c)
+      d.D.col(cols[c]) = X.col(c);
+    d.r = X.col(cols.size());
   }
   d.have_rate = rate_rows >= 0.5 * n_obs;
   {
@@ -597,116 +912,49 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
     rep.robust_sigma_px = d.scale;
   }
 
-  // Forward stepwise selection.
+  // The time candidates: a time-offset error is a per-frame pose change, which a filter whose poses follow the images
+  // absorbs (docs/diagnose.md), so with the raw gyro at hand they are tested on the camera's angular rate seen in the
+  // images against the gyro's at the filter's image time, not on the residual.
+  Design dr;
   const auto defs = candidate_defs();
-  const double k = opt.huber_k;
-  const double loss0 = fit_cols(d, {}, k).loss;
   std::vector<CandidateResult> res(defs.size());
-  std::vector<bool> usable(defs.size(), true);
+  for (size_t c = 0; c < defs.size(); ++c)
+    res[c].key = defs[c].key, res[c].description = defs[c].description;
+  bool rate_time = false;
+  std::string rate_why;
+  if (!opt.imu.empty() && opt.have_camera) {
+    rate_time = build_rate_design(tracks, opt, rep, t_first, dr, rate_why);
+  } else {
+    rate_why = "no raw gyro (pass --dataset)";
+  }
+  rep.time_from_rates = rate_time;
+  std::vector<size_t> residual_family, rate_family;
   for (size_t c = 0; c < defs.size(); ++c) {
-    res[c].key = defs[c].key;
-    res[c].description = defs[c].description;
-    if (defs[c].needs_velocity && !d.have_velocity) {
-      usable[c] = false;
-      res[c].note = "skipped: fewer than " + std::to_string(int(100 * opt.min_velocity_share)) +
-                    "% of rows carry an image velocity";
-    }
-    if (defs[c].needs_rate && !d.have_rate) {
-      usable[c] = false;
-      res[c].note = "skipped: most tracks lack body rates (w_valid)";
-    }
-    if (usable[c])
-      res[c].explained_alone = 1.0 - fit_cols(d, defs[c].cols, k).loss / loss0;
+    const bool time = defs[c].key == "td_const" || defs[c].key == "td_drift";
+    (time && rate_time ? rate_family : residual_family).push_back(c);
+    if (time && rate_time)
+      res[c].description += " — fitted on vision vs gyro rate: ω_vis − ω_gyro = α·δt(t) − b";
+    else if (time)
+      res[c].note = "on the residual (" + rate_why + "): a lower bound, the poses absorb most of an offset";
   }
-  std::vector<int> selected_cols;
-  std::vector<size_t> order;
-  std::vector<bool> taken(defs.size(), false);
-  double loss_sel = loss0;
-  std::vector<Fit> last_fit(defs.size());
-  std::vector<std::vector<int>> last_joint(defs.size());
-  const auto strictly_contains = [&](size_t a, size_t b) {
-    if (defs[a].cols.size() <= defs[b].cols.size())
-      return false;
-    for (int col : defs[b].cols)
-      if (std::find(defs[a].cols.begin(), defs[a].cols.end(), col) == defs[a].cols.end())
-        return false;
-    return true;
-  };
-  while (true) {
-    int best = -1;
-    std::vector<bool> passes(defs.size(), false);
-    for (size_t c = 0; c < defs.size(); ++c) {
-      if (!usable[c] || taken[c])
-        continue;
-      std::vector<int> joint = selected_cols, own;
-      for (int col : defs[c].cols)
-        if (std::find(joint.begin(), joint.end(), col) == joint.end())
-          joint.push_back(col), own.push_back(col);
-      CandidateResult &cr = res[c];
-      if (own.empty()) {
-        cr.explained_added = 0, cr.sigma = 0;
-        cr.note = "nested in a selected candidate: adds no term";
-        last_fit[c] = Fit();
-        last_joint[c].clear();
-        continue;
-      }
-      const Fit f = fit_cols(d, joint, k);
-      const Eigen::Index p0 = static_cast<Eigen::Index>(selected_cols.size()),
-                         q = static_cast<Eigen::Index>(own.size());
-      const VectorXd bo = f.beta.tail(q);
-      const MatrixXd Co = f.cov.bottomRightCorner(q, q);
-      const double W = bo.dot(Co.ldlt().solve(bo));
-      (void)p0;
-      cr.sigma = wald_to_sigma(W, static_cast<int>(q));
-      cr.explained_added = (loss_sel - f.loss) / loss0;
-      cr.estimates = estimates_of(defs[c].key, defs[c].cols, f, joint, rep, d);
-      last_fit[c] = f;
-      last_joint[c] = joint;
-      passes[c] = cr.sigma >= opt.min_sigma && cr.explained_added >= opt.min_explained;
-    }
-    // Parsimony: a candidate whose terms strictly contain a passing candidate's (drift ⊃ constant offset) waits for
-    // the next round, where it is credited only with what its extra terms add.
-    for (size_t c = 0; c < defs.size(); ++c) {
-      if (!passes[c])
-        continue;
-      bool nests = false;
-      for (size_t b = 0; b < defs.size(); ++b)
-        nests = nests || (b != c && passes[b] && strictly_contains(c, b));
-      if (!nests && (best < 0 || res[c].explained_added > res[best].explained_added))
-        best = static_cast<int>(c);
-    }
-    if (best < 0)
-      break;
-    taken[best] = true;
-    res[best].explained = true;
-    loss_sel -= res[best].explained_added * loss0;
-    // A selected extension (drift) supersedes the candidate it contains (constant offset): it takes that one's rank
-    // and the contained one is no longer the name of the effect.
-    for (size_t q = 0; q < order.size(); ++q)
-      if (strictly_contains(best, order[q])) {
-        res[order[q]].explained = false;
-        res[order[q]].note = "contained in " + defs[best].key + " (selected)";
-        res[best].explained_added += res[order[q]].explained_added;
-        res[order[q]].explained_added = 0;
-        order.erase(order.begin() + q);
-        break;
-      }
-    res[best].curve = make_curve(defs[best], d, last_fit[best], last_joint[best], opt.plot_bins);
-    order.push_back(best);
-    for (int col : defs[best].cols)
-      if (std::find(selected_cols.begin(), selected_cols.end(), col) == selected_cols.end())
-        selected_cols.push_back(col);
+  const auto sel_res = stepwise(d, defs, residual_family, opt, rep, res);
+  const auto sel_rate = stepwise(dr, defs, rate_family, opt, rep, res);
+  for (size_t c : rate_family) {
+    res[c].curve.xlabel = "angular acceleration alpha, per axis, bias removed, / SE of w_vis [1/s]";
+    res[c].curve.ylabel = "w_vis - w_gyro, bias removed, / SE (bin mean +- SE)";
   }
+  // Ranking: the selected candidates of both families by the share they explain of their own data, then the rest.
+  std::vector<size_t> order(sel_res.begin(), sel_res.end());
+  order.insert(order.end(), sel_rate.begin(), sel_rate.end());
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return res[a].explained_added > res[b].explained_added; });
   std::vector<size_t> rest;
   for (size_t c = 0; c < defs.size(); ++c)
-    if (!taken[c]) {
+    if (std::find(order.begin(), order.end(), c) == order.end())
       rest.push_back(c);
-      if (usable[c] && !last_joint[c].empty())
-        res[c].curve = make_curve(defs[c], d, last_fit[c], last_joint[c], opt.plot_bins);
-    }
   std::stable_sort(rest.begin(), rest.end(), [&](size_t a, size_t b) {
-    if (usable[a] != usable[b])
-      return bool(usable[a]);
+    if ((res[a].sigma > 0) != (res[b].sigma > 0))
+      return res[a].sigma > 0;
     if (res[a].explained_added != res[b].explained_added)
       return res[a].explained_added > res[b].explained_added;
     return res[a].explained_alone > res[b].explained_alone;
@@ -716,13 +964,16 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
     res[order[r]].rank = static_cast<int>(r + 1);
     rep.candidates.push_back(res[order[r]]);
   }
+  const double k = opt.huber_k;
 
   // δt per time bin (the trend a drift shows), each bin fitted on its own rows, nothing else removed.
-  if (d.have_velocity) {
+  const Design &dt = rate_time ? dr : d;
+  if (dt.have_velocity) {
     const int bins = opt.time_bins;
-    std::vector<int> bin_of(n);
-    for (Eigen::Index k2 = 0; k2 < n; ++k2)
-      bin_of[k2] = std::min(bins - 1, static_cast<int>(bins * d.t_s[k2] / std::max(1e-9, rep.duration_s)));
+    const Eigen::Index nt = dt.r.size();
+    std::vector<int> bin_of(nt);
+    for (Eigen::Index k2 = 0; k2 < nt; ++k2)
+      bin_of[k2] = std::min(bins - 1, static_cast<int>(bins * dt.t_s[k2] / std::max(1e-9, rep.duration_s)));
     std::vector<double> td_sum(bins, 0.0);
     std::vector<long> td_cnt(bins, 0);
     for (auto &kv : tracks)
@@ -732,19 +983,19 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
         td_sum[b] += r->td_s, ++td_cnt[b];
       }
     for (int b = 0; b < bins; ++b) {
-      std::vector<char> mask(n);
+      std::vector<char> mask(nt);
       long cnt = 0;
-      for (Eigen::Index k2 = 0; k2 < n; ++k2)
+      for (Eigen::Index k2 = 0; k2 < nt; ++k2)
         cnt += (mask[k2] = bin_of[k2] == b);
-      if (cnt < 40)
+      if (cnt < (rate_time ? 15 : 40))
         continue;
-      const Fit f = fit_cols(d, {kV}, k, &mask);
+      const Fit f = fit_cols(dt, {kV}, k, &mask);
       TimeBin tb;
       tb.t_s = (b + 0.5) * rep.duration_s / bins;
       tb.td_ms = 1e3 * f.beta(0);
       tb.td_se_ms = 1e3 * std::sqrt(std::max(0.0, f.cov(0, 0)));
       tb.td_filter_ms = td_cnt[b] ? 1e3 * td_sum[b] / td_cnt[b] : 0.0;
-      tb.observations = cnt / 2;
+      tb.observations = rate_time ? cnt / 3 : cnt / 2;
       rep.td_bins.push_back(tb);
     }
   }

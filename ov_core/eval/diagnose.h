@@ -8,6 +8,9 @@
 // if it passes, it joins the model and the remaining candidates are tested for what they add beyond it. Nested
 // candidates (offset drift contains a constant offset) are thereby credited only with what their extra terms add.
 // docs/diagnose.md gives each model, its sign convention and the thresholds.
+#include "ov_core/cam/camera_calib.h"
+#include "ov_core/types/sensor_data.h"
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -27,7 +30,8 @@ struct ResidualLogRow {
   double w_x = 0, w_y = 0, w_z = 0;
   int w_valid = 0;
   double td_s = 0;
-  int status = 0; ///< 0 accepted, 1 chi-square gated, 2 triangulation failed
+  double depth_m = 0; ///< z of the triangulated point in this camera; NaN (or a log without the column) if unknown
+  int status = 0;     ///< 0 accepted, 1 chi-square gated, 2 triangulation failed
 };
 
 struct ResidualLog {
@@ -43,11 +47,21 @@ ResidualLog load_residual_log(const std::string &file);
 struct DiagnoseOptions {
   int image_height = 0;                  ///< rows of the image; 0: the largest v_px in the log
   double fu = 0, fv = 0, cu = 0, cv = 0; ///< intrinsics [px]; fu 0: fitted from (u_px, x_norm) in the log
-  double min_sigma = 5.0;                ///< significance a candidate needs (Gaussian-equivalent σ)
-  double min_explained = 0.02;           ///< share of the residual loss it must remove
-  double huber_k = 3.0;                  ///< Huber threshold in robust σ of the residual components
-  int time_bins = 12;                    ///< bins of the per-time-bin δt(t) estimate
-  int plot_bins = 16;                    ///< quantile bins of the residual-vs-variable plots
+  /// The dataset's camera (ovton diagnose --dataset). When set it also gives fu..cv, the image height, the distortion
+  /// (focal and k1 effects are mapped through it exactly) and the camera-body rotation, with which the camera's
+  /// rotation along a track is integrated from the logged body rates for the point projection (docs/diagnose.md);
+  /// without it the distortion is ignored and the camera is taken as not rotating along a track.
+  CameraCalib camera;
+  bool have_camera = false;
+  /// The dataset's raw IMU readings (IMU clock). With them and the camera, the time candidates are tested on the
+  /// camera's angular rate seen in the images against the gyro's (docs/diagnose.md), not on the residual, where a
+  /// filter's poses absorb a time offset.
+  std::vector<ImuData> imu;
+  double min_sigma = 5.0;      ///< significance a candidate needs (Gaussian-equivalent σ)
+  double min_explained = 0.02; ///< share of the residual loss it must remove
+  double huber_k = 3.0;        ///< Huber threshold in robust σ of the residual components
+  int time_bins = 12;          ///< bins of the per-time-bin δt(t) estimate
+  int plot_bins = 16;          ///< quantile bins of the residual-vs-variable plots
   /// false (default): the image velocity of an observation is the central difference of its track's neighbouring
   /// pixels, which leaves the observation's own pixel out. The logged velocity (a backward difference that includes
   /// the observation's own noise, as the filter's SIR shift uses it) correlates with the residual through that noise
@@ -101,6 +115,7 @@ struct DiagnoseReport {
   DiagnoseOptions options;
   std::vector<CandidateResult> candidates; ///< in rank order
   std::vector<TimeBin> td_bins;            ///< empty without velocities
+  bool time_from_rates = false;            ///< time candidates fitted on vision vs gyro rates (else on the residual)
 };
 
 /// Runs every candidate on the log. Throws DataError when the log has too few usable rows to say anything.

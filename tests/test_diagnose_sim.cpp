@@ -1,0 +1,269 @@
+// `diagnose` on residual logs of SIMULATED data with planted effects (ovton simulate --features-only):
+//  - true-pose logs: every feature track triangulated with the TRUE camera poses, so that only its point can absorb
+//    an effect. Checks diagnose's point projection and the sizes of the camera-side effects against a known truth.
+//  - the filter's own logs (VioManager with a residual log, as `ovton run --residual-log`): a time-offset drift and
+//    clean data. A planted readout time or focal error is absorbed by the filter's state: those tests are disabled,
+//    with the measured numbers (docs/diagnose.md).
+#include "ov_core/eval/diagnose.h"
+#include "ov_core/io/dataset.h"
+#include "ov_core/io/replay.h"
+#include "ov_core/sim/simulator.h"
+#include "ov_msckf_ton/core/vio_manager.h"
+#include "ov_msckf_ton/update/residual_log.h"
+#include "test_util.h"
+
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <map>
+
+using namespace ov_core;
+
+namespace {
+
+/// A feature-level simulation along the built-in flight with planted effects.
+struct Plant {
+  double td0_s = 0.010, td_rate = 0.0; ///< time offset; drift: deterministic rate, no random walk
+  double readout_s = 0.0;              ///< rolling shutter
+  double focal_error = 0.0;            ///< relative
+  double duration_s = 20.0;
+};
+
+sim::SimOptions sim_options(const std::string &dir, const Plant &p) {
+  sim::SimOptions o;
+  o.out_dir = dir;
+  o.duration_s = p.duration_s;
+  o.seed = 7;
+  o.features_only = true;
+  o.td.kind = p.td_rate != 0.0 ? sim::TdModelKind::Drift : sim::TdModelKind::Constant;
+  o.td.td0_s = p.td0_s;
+  o.td.bias_s_per_s = p.td_rate;
+  o.td.noise_s_per_sqrt_s = 0.0;
+  o.readout_s = p.readout_s;
+  o.focal_error = p.focal_error;
+  return o;
+}
+
+/// What `ovton diagnose --dataset DIR` passes: the dataset's camera and raw IMU.
+DiagnoseOptions diagnose_options(const Dataset &data) {
+  DiagnoseOptions d;
+  d.camera = data.cam;
+  d.have_camera = true;
+  d.imu = data.imu;
+  return d;
+}
+
+/// Residual log with the TRUE camera poses at t_cam + td_model (td_model NaN: each image's true offset). Every track is
+/// cut into windows of at most 20 frames as the filter's, its point triangulated (Gauss-Newton on the normalised
+/// reprojection error) with the camera of sensor.yaml, and its residuals written as the filter writes them.
+void write_true_pose_log(const sim::SimOptions &o, const Dataset &data, double td_model_s, const std::string &file) {
+  const auto traj = sim::make_trajectory(o);
+  const CameraModel cam(data.cam);
+  struct Obs {
+    size_t frame;
+    Eigen::Vector2d uv, xn;
+  };
+  std::map<size_t, std::vector<Obs>> tracks;
+  const size_t nf = data.images.size();
+  std::vector<Eigen::Matrix3d> R_WC(nf);
+  std::vector<Eigen::Vector3d> p_WC(nf), w_B(nf);
+  std::vector<double> td(nf);
+  for (size_t k = 0; k < nf; ++k) {
+    const int64_t t_cam = data.images[k].t_cam_ns;
+    td[k] = std::isnan(td_model_s) ? data.td_truth_at(t_cam) : td_model_s;
+    const auto s = traj->sample(t_cam + s_to_ns(td[k]));
+    sim::camera_pose(s, data.cam.T_BC, R_WC[k], p_WC[k]);
+    w_B[k] = s.w_B;
+    for (const auto &f : *data.images[k].features)
+      tracks[f.id].push_back({k, f.uv, cam.undistort(f.uv)});
+  }
+  ov_msckf_ton::ResidualLogWriter log(file);
+  const double fu = data.cam.intrinsics(0), fv = data.cam.intrinsics(1);
+  for (const auto &[id, all] : tracks) {
+    for (size_t c0 = 0; c0 + 3 <= all.size(); c0 += 20) {
+      const std::vector<Obs> tr(all.begin() + c0, all.begin() + std::min(all.size(), c0 + 20));
+      // Linear start (the point closest to the bearings), then Gauss-Newton.
+      Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d b = Eigen::Vector3d::Zero();
+      for (const auto &ob : tr) {
+        const Eigen::Vector3d dir = (R_WC[ob.frame] * ob.xn.homogeneous()).normalized();
+        const Eigen::Matrix3d Pm = Eigen::Matrix3d::Identity() - dir * dir.transpose();
+        A += Pm, b += Pm * p_WC[ob.frame];
+      }
+      Eigen::Vector3d P = A.ldlt().solve(b);
+      for (int it = 0; it < 8; ++it) {
+        Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d g = Eigen::Vector3d::Zero();
+        for (const auto &ob : tr) {
+          const Eigen::Vector3d pc = R_WC[ob.frame].transpose() * (P - p_WC[ob.frame]);
+          Eigen::Matrix<double, 2, 3> J;
+          J << 1 / pc.z(), 0, -pc.x() / (pc.z() * pc.z()), 0, 1 / pc.z(), -pc.y() / (pc.z() * pc.z());
+          J = J * R_WC[ob.frame].transpose();
+          const Eigen::Vector2d e = ob.xn - pc.head<2>() / pc.z();
+          H += J.transpose() * J, g += J.transpose() * e;
+        }
+        P += H.ldlt().solve(g);
+      }
+      std::vector<ov_msckf_ton::ResidualRecord> recs;
+      for (size_t j = 0; j < tr.size(); ++j) {
+        const Obs &ob = tr[j];
+        const Eigen::Vector3d pc = R_WC[ob.frame].transpose() * (P - p_WC[ob.frame]);
+        ov_msckf_ton::ResidualRecord r;
+        r.update_id = tr.back().frame; // the filter updates a track when it ends: tracks ending together share clones
+        r.t_cam_ns = data.images[ob.frame].t_cam_ns;
+        r.feature_id = id;
+        r.obs_index = static_cast<int>(j);
+        r.track_length = static_cast<int>(tr.size());
+        r.res_u_px = fu * (ob.xn.x() - pc.x() / pc.z());
+        r.res_v_px = fv * (ob.xn.y() - pc.y() / pc.z());
+        r.u_px = ob.uv.x(), r.v_px = ob.uv.y();
+        r.x_norm = ob.xn.x(), r.y_norm = ob.xn.y();
+        r.radius_norm = ob.xn.norm();
+        r.depth_m = pc.z();
+        r.w_x = w_B[ob.frame].x(), r.w_y = w_B[ob.frame].y(), r.w_z = w_B[ob.frame].z();
+        r.w_valid = 1;
+        r.td_s = r.td_ref_s = td[ob.frame];
+        r.accepted = 1;
+        recs.push_back(r);
+      }
+      log.write(recs);
+    }
+  }
+}
+
+/// The filter on the simulation (mode, t_d fixed or started at td_init_s, ground-truth initialisation), its
+/// residual log diagnosed. Prints the ranking, the run's TPE-relevant final t_d and the wall time.
+DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_init_s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ovtest::TempDir dir;
+  const sim::SimOptions o = sim_options(dir / "sim", p);
+  sim::write_simulation(o);
+  const Dataset data = load_dataset(o.out_dir);
+  ov_msckf_ton::VioOptions opt;
+  opt.td_mode = ov_msckf_ton::parse_td_mode(mode);
+  opt.td_init_s = td_init_s;
+  opt.init_mode = ov_msckf_ton::InitMode::GroundTruth;
+  opt.sigma_px = o.features.pixel_noise;
+  ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
+  vio.set_groundtruth(data.groundtruth);
+  const std::string log_file = dir / "res.csv";
+  {
+    ov_msckf_ton::ResidualLogWriter log(log_file);
+    vio.set_residual_log(&log);
+    Replay(data).run(vio);
+    vio.set_residual_log(nullptr);
+  }
+  const DiagnoseReport rep = diagnose(load_residual_log(log_file), diagnose_options(data));
+  std::cout << format_ranking(rep) << "[ measured ] mode " << mode << ", "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n";
+  return rep;
+}
+
+DiagnoseReport true_pose_case(const Plant &p, double td_model_s) {
+  ovtest::TempDir dir;
+  const sim::SimOptions o = sim_options(dir / "sim", p);
+  sim::write_simulation(o);
+  const Dataset data = load_dataset(o.out_dir);
+  write_true_pose_log(o, data, td_model_s, dir / "res.csv");
+  const DiagnoseReport rep = diagnose(load_residual_log(dir / "res.csv"), diagnose_options(data));
+  std::cout << format_ranking(rep);
+  return rep;
+}
+
+const CandidateResult &top(const DiagnoseReport &r) {
+  return r.candidates.front();
+}
+
+double estimate(const CandidateResult &c, const std::string &name) {
+  for (const auto &e : c.estimates)
+    if (e.name == name)
+      return e.value;
+  ADD_FAILURE() << c.key << " has no estimate '" << name << "'";
+  return std::nan("");
+}
+
+void expect_nothing_flagged(const DiagnoseReport &r) {
+  for (const auto &c : r.candidates)
+    EXPECT_FALSE(c.explained) << format_ranking(r);
+}
+
+} // namespace
+
+// Camera-side effects with true poses: only the points absorb. The readout case models the right mean offset (poses
+// at the mid-row instant, as a filter estimating t_d would have them), so the row-dependent part is what is left.
+TEST(DiagnoseTruePoses, RollingShutterRankedFirstAndSized) {
+  Plant p;
+  p.readout_s = 0.025;
+  const auto r = true_pose_case(p, p.td0_s + 0.5 * p.readout_s);
+  ASSERT_TRUE(top(r).explained) << format_ranking(r);
+  EXPECT_EQ(top(r).key, "rolling_shutter");
+  EXPECT_NEAR(estimate(top(r), "readout time t_r"), 25.0, 5.0);
+}
+
+TEST(DiagnoseTruePoses, FocalErrorRankedFirstAndSized) {
+  Plant p;
+  p.focal_error = 0.01;
+  const auto r = true_pose_case(p, p.td0_s);
+  ASSERT_TRUE(top(r).explained) << format_ranking(r);
+  EXPECT_EQ(top(r).key, "focal");
+  EXPECT_NEAR(estimate(top(r), "relative focal error ε"), 1.0, 0.2);
+}
+
+TEST(DiagnoseTruePoses, CleanDataFlagsNothing) {
+  expect_nothing_flagged(true_pose_case(Plant{}, std::nan("")));
+}
+
+// Through the filter. Mode `off` holds t_d at its configured value, here the true offset at the start, so the model
+// lacks exactly the drift (1 ms/s: 10 → 40 ms over 30 s). The filter's poses absorb the offset error (the residual
+// shows < 0.1 ms of it, docs/diagnose.md); the time candidates read it from the images' angular rate against the
+// gyro's. (0.5 ms/s over 30 s is measured too: rate 0.51–0.56 ms/s, but the drift term adds 1.2–1.6 % < the 2 % bar
+// to a constant offset, so td_const is named; docs/diagnose.md.)
+TEST(DiagnoseFilterLog, TimeOffsetDriftRankedFirstAndSized) {
+  Plant p;
+  p.td_rate = 0.001;
+  p.duration_s = 30.0;
+  const auto r = filter_case(p, "off", p.td0_s);
+  ASSERT_TRUE(top(r).explained) << format_ranking(r);
+  EXPECT_EQ(top(r).key, "td_drift");
+  EXPECT_NEAR(estimate(top(r), "drift rate"), 1.0, 0.2);
+  ASSERT_GE(r.td_bins.size(), 6u);
+  EXPECT_GT(r.td_bins.back().td_ms, r.td_bins.front().td_ms + 15.0); // the per-bin trend shows the drift
+}
+
+TEST(DiagnoseFilterLog, CleanDataFlagsNothing) {
+  expect_nothing_flagged(filter_case(Plant{}, "off", Plant{}.td0_s));
+}
+
+// A constant offset the filter holds wrong (t_d fixed at 0, truth 30 ms): named and sized from the rates.
+TEST(DiagnoseFilterLog, ConstantOffsetRankedFirstAndSized) {
+  Plant p;
+  p.td0_s = 0.030;
+  p.duration_s = 10.0;
+  const auto r = filter_case(p, "off", 0.0);
+  ASSERT_TRUE(top(r).explained) << format_ranking(r);
+  EXPECT_EQ(top(r).key, "td_const");
+  EXPECT_NEAR(estimate(top(r), "offset error δt"), 30.0, 6.0);
+}
+
+// NOT met, kept disabled rather than loosened: the filter's state absorbs most of a readout time or a focal error, and
+// what is left in the residual is a fraction of the planted size. Measured with exactly these tests (20 s, seed 7,
+// mode off with the true mean offset): readout 25 ms → t_r 2.95 ± 0.42 ms (7σ but 0.07 % of the loss, rank 3);
+// focal +1 % → ε 0.064 ± 0.008 % (rank 3; clean runs give 0.02–0.05 %). With the true poses (DiagnoseTruePoses) the
+// same diagnose finds 24.7 ± 0.5 ms and 1.004 ± 0.009 %. docs/diagnose.md, "What the residuals cannot show".
+TEST(DiagnoseFilterLog, DISABLED_RollingShutterRankedFirstAndSized) {
+  Plant p;
+  p.readout_s = 0.025;
+  const auto r = filter_case(p, "off", p.td0_s + 0.5 * p.readout_s);
+  ASSERT_TRUE(top(r).explained) << format_ranking(r);
+  EXPECT_EQ(top(r).key, "rolling_shutter");
+  EXPECT_NEAR(estimate(top(r), "readout time t_r"), 25.0, 5.0);
+}
+
+TEST(DiagnoseFilterLog, DISABLED_FocalErrorRankedFirstAndSized) {
+  Plant p;
+  p.focal_error = 0.01;
+  const auto r = filter_case(p, "off", p.td0_s);
+  ASSERT_TRUE(top(r).explained) << format_ranking(r);
+  EXPECT_EQ(top(r).key, "focal");
+  EXPECT_NEAR(estimate(top(r), "relative focal error ε"), 1.0, 0.2);
+}
