@@ -1,5 +1,6 @@
 // `ovton diagnose` (ov_core/eval/diagnose.h): planted effects in synthetic residual logs are found and sized, a clean
 // log flags nothing, bad logs fail with file:line. Logs of simulated data and of the filter: test_diagnose_sim.cpp.
+#include "diagnose_test_util.h"
 #include "ov_core/eval/diagnose.h"
 #include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
@@ -12,6 +13,8 @@
 #include <random>
 
 using namespace ov_core;
+using ovtest::estimate;
+using ovtest::top;
 
 namespace {
 
@@ -136,18 +139,6 @@ DiagnoseReport run(const ovtest::TempDir &dir, const Planted &p, unsigned seed) 
   return diagnose(load_residual_log(file), opt);
 }
 
-const CandidateResult &top(const DiagnoseReport &r) {
-  return r.candidates.front();
-}
-
-double estimate(const CandidateResult &c, const std::string &name) {
-  for (const auto &e : c.estimates)
-    if (e.name == name)
-      return e.value;
-  ADD_FAILURE() << c.key << " has no estimate '" << name << "'";
-  return std::nan("");
-}
-
 } // namespace
 
 TEST(Diagnose, ConstantTimeOffsetRankedFirstAndSized) {
@@ -155,9 +146,7 @@ TEST(Diagnose, ConstantTimeOffsetRankedFirstAndSized) {
   Planted p;
   p.td0_s = 0.008;
   const auto r = run(dir, p, 11);
-  ASSERT_TRUE(top(r).explained) << format_ranking(r);
-  EXPECT_EQ(top(r).key, "td_const") << format_ranking(r);
-  EXPECT_NEAR(estimate(top(r), "offset error δt"), 8.0, 1.6) << format_ranking(r);
+  ovtest::expect_top(r, "td_const", "offset error δt", 8.0, 1.6);
   std::cout << format_ranking(r);
   EXPECT_EQ(r.rows_triangulation_failed, 1);
   for (const auto &c : r.candidates) {
@@ -173,9 +162,7 @@ TEST(Diagnose, TimeOffsetDriftRankedFirstWithItsRate) {
   p.td0_s = 0.002;
   p.td_rate = 0.0005; // 0.5 ms/s: 2 → 17 ms over the 30 s
   const auto r = run(dir, p, 12);
-  ASSERT_TRUE(top(r).explained) << format_ranking(r);
-  EXPECT_EQ(top(r).key, "td_drift") << format_ranking(r);
-  EXPECT_NEAR(estimate(top(r), "drift rate"), 0.5, 0.1) << format_ranking(r);
+  ovtest::expect_top(r, "td_drift", "drift rate", 0.5, 0.1);
   ASSERT_GE(r.td_bins.size(), 6u);
   EXPECT_GT(r.td_bins.back().td_ms, r.td_bins.front().td_ms + 8.0); // the per-bin trend shows the drift
 }
@@ -185,9 +172,7 @@ TEST(Diagnose, RollingShutterReadoutRankedFirstAndSized) {
   Planted p;
   p.readout_s = 0.025;
   const auto r = run(dir, p, 13);
-  ASSERT_TRUE(top(r).explained) << format_ranking(r);
-  EXPECT_EQ(top(r).key, "rolling_shutter") << format_ranking(r);
-  EXPECT_NEAR(estimate(top(r), "readout time t_r"), 25.0, 5.0) << format_ranking(r);
+  ovtest::expect_top(r, "rolling_shutter", "readout time t_r", 25.0, 5.0);
 }
 
 TEST(Diagnose, FocalErrorRankedFirstAndSized) {
@@ -195,16 +180,13 @@ TEST(Diagnose, FocalErrorRankedFirstAndSized) {
   Planted p;
   p.focal_eps = 0.01; // δf ≈ 4.6 px
   const auto r = run(dir, p, 14);
-  ASSERT_TRUE(top(r).explained) << format_ranking(r);
-  EXPECT_EQ(top(r).key, "focal") << format_ranking(r);
-  EXPECT_NEAR(estimate(top(r), "relative focal error ε"), 1.0, 0.2) << format_ranking(r);
+  ovtest::expect_top(r, "focal", "relative focal error ε", 1.0, 0.2);
 }
 
 TEST(Diagnose, CleanLogFlagsNothingAndWritesReport) {
   ovtest::TempDir dir;
   const auto r = run(dir, Planted{}, 15);
-  for (const auto &c : r.candidates)
-    EXPECT_FALSE(c.explained) << format_ranking(r);
+  ovtest::expect_nothing_flagged(r);
   const auto files = write_diagnose_report(r, dir / "out");
   ASSERT_GE(files.size(), 2u);
   EXPECT_TRUE(std::filesystem::exists(dir / "out/diagnose.md"));

@@ -4,6 +4,7 @@
 //  - the filter's own logs (VioManager with a residual log, as `ovton run --residual-log`): a time-offset drift and
 //    clean data. A planted readout time or focal error is absorbed by the filter's state: those tests are disabled,
 //    with the measured numbers (docs/diagnose.md).
+#include "diagnose_test_util.h"
 #include "ov_core/eval/diagnose.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/replay.h"
@@ -18,6 +19,9 @@
 #include <map>
 
 using namespace ov_core;
+using ovtest::expect_nothing_flagged;
+using ovtest::expect_top;
+using ovtest::top;
 
 namespace {
 
@@ -170,23 +174,6 @@ DiagnoseReport true_pose_case(const Plant &p, double td_model_s) {
   return rep;
 }
 
-const CandidateResult &top(const DiagnoseReport &r) {
-  return r.candidates.front();
-}
-
-double estimate(const CandidateResult &c, const std::string &name) {
-  for (const auto &e : c.estimates)
-    if (e.name == name)
-      return e.value;
-  ADD_FAILURE() << c.key << " has no estimate '" << name << "'";
-  return std::nan("");
-}
-
-void expect_nothing_flagged(const DiagnoseReport &r) {
-  for (const auto &c : r.candidates)
-    EXPECT_FALSE(c.explained) << format_ranking(r);
-}
-
 } // namespace
 
 // Camera-side effects with true poses: only the points absorb. The readout case models the right mean offset (poses
@@ -194,19 +181,13 @@ void expect_nothing_flagged(const DiagnoseReport &r) {
 TEST(DiagnoseTruePoses, RollingShutterRankedFirstAndSized) {
   Plant p;
   p.readout_s = 0.025;
-  const auto r = true_pose_case(p, p.td0_s + 0.5 * p.readout_s);
-  ASSERT_TRUE(top(r).explained) << format_ranking(r);
-  EXPECT_EQ(top(r).key, "rolling_shutter");
-  EXPECT_NEAR(estimate(top(r), "readout time t_r"), 25.0, 5.0);
+  expect_top(true_pose_case(p, p.td0_s + 0.5 * p.readout_s), "rolling_shutter", "readout time t_r", 25.0, 5.0);
 }
 
 TEST(DiagnoseTruePoses, FocalErrorRankedFirstAndSized) {
   Plant p;
   p.focal_error = 0.01;
-  const auto r = true_pose_case(p, p.td0_s);
-  ASSERT_TRUE(top(r).explained) << format_ranking(r);
-  EXPECT_EQ(top(r).key, "focal");
-  EXPECT_NEAR(estimate(top(r), "relative focal error ε"), 1.0, 0.2);
+  expect_top(true_pose_case(p, p.td0_s), "focal", "relative focal error ε", 1.0, 0.2);
 }
 
 TEST(DiagnoseTruePoses, CleanDataFlagsNothing) {
@@ -223,9 +204,7 @@ TEST(DiagnoseFilterLog, TimeOffsetDriftRankedFirstAndSized) {
   p.td_rate = 0.001;
   p.duration_s = 30.0;
   const auto r = filter_case(p, "off", p.td0_s);
-  ASSERT_TRUE(top(r).explained) << format_ranking(r);
-  EXPECT_EQ(top(r).key, "td_drift");
-  EXPECT_NEAR(estimate(top(r), "drift rate"), 1.0, 0.2);
+  expect_top(r, "td_drift", "drift rate", 1.0, 0.2);
   ASSERT_GE(r.td_bins.size(), 6u);
   EXPECT_GT(r.td_bins.back().td_ms, r.td_bins.front().td_ms + 15.0); // the per-bin trend shows the drift
 }
@@ -239,10 +218,7 @@ TEST(DiagnoseFilterLog, ConstantOffsetRankedFirstAndSized) {
   Plant p;
   p.td0_s = 0.030;
   p.duration_s = 10.0;
-  const auto r = filter_case(p, "off", 0.0);
-  ASSERT_TRUE(top(r).explained) << format_ranking(r);
-  EXPECT_EQ(top(r).key, "td_const");
-  EXPECT_NEAR(estimate(top(r), "offset error δt"), 30.0, 6.0);
+  expect_top(filter_case(p, "off", 0.0), "td_const", "offset error δt", 30.0, 6.0);
 }
 
 // NOT met, kept disabled rather than loosened: the filter's state absorbs most of a readout time or a focal error, and
@@ -253,17 +229,11 @@ TEST(DiagnoseFilterLog, ConstantOffsetRankedFirstAndSized) {
 TEST(DiagnoseFilterLog, DISABLED_RollingShutterRankedFirstAndSized) {
   Plant p;
   p.readout_s = 0.025;
-  const auto r = filter_case(p, "off", p.td0_s + 0.5 * p.readout_s);
-  ASSERT_TRUE(top(r).explained) << format_ranking(r);
-  EXPECT_EQ(top(r).key, "rolling_shutter");
-  EXPECT_NEAR(estimate(top(r), "readout time t_r"), 25.0, 5.0);
+  expect_top(filter_case(p, "off", p.td0_s + 0.5 * p.readout_s), "rolling_shutter", "readout time t_r", 25.0, 5.0);
 }
 
 TEST(DiagnoseFilterLog, DISABLED_FocalErrorRankedFirstAndSized) {
   Plant p;
   p.focal_error = 0.01;
-  const auto r = filter_case(p, "off", p.td0_s);
-  ASSERT_TRUE(top(r).explained) << format_ranking(r);
-  EXPECT_EQ(top(r).key, "focal");
-  EXPECT_NEAR(estimate(top(r), "relative focal error ε"), 1.0, 0.2);
+  expect_top(filter_case(p, "off", p.td0_s), "focal", "relative focal error ε", 1.0, 0.2);
 }

@@ -8,6 +8,7 @@
 #include "ov_core/sim/scene.h"
 #include "ov_core/sim/simulator.h"
 #include "ov_core/types/errors.h"
+#include "sim_test_util.h"
 #include "test_util.h"
 
 #include <algorithm>
@@ -18,15 +19,9 @@
 
 using namespace ov_core;
 using namespace ov_core::sim;
+using ovtest::median;
 
 namespace {
-
-double median(std::vector<double> v) {
-  if (v.empty())
-    return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 /// Pose of the camera at IMU time t.
 void pose_at(const Trajectory &traj, const SimOptions &o, int64_t t, Eigen::Matrix3d &R_WC, Eigen::Vector3d &p_WC) {
@@ -132,17 +127,10 @@ TEST(SimPlanted, FocalErrorDataUseTheTrueIntrinsicsAndTheYamlTheNominal) {
 }
 
 TEST(SimPlanted, RollingShutterRenderDrawsEachRowFromItsPose) {
-  SceneOptions so;
-  so.num_boxes = 0;
-  so.seed = 5;
-  Scene scene(AlignedBox{Eigen::Vector3d(-3, -3, 0), Eigen::Vector3d(3, 3, 3)}, {}, so);
+  Scene scene = ovtest::marker_room();
   CameraModel cam(euroc_cam0_calib());
-  RenderOptions ro;
-  ro.noise_sigma = 0.0;
-  Eigen::Matrix3d R_look; // looking along +x
-  R_look.col(0) = Eigen::Vector3d(0, -1, 0);
-  R_look.col(1) = Eigen::Vector3d(0, 0, -1);
-  R_look.col(2) = Eigen::Vector3d(1, 0, 0);
+  const RenderOptions ro = ovtest::noise_free_rendering();
+  const Eigen::Matrix3d R_look = ovtest::look_along_x();
   const Eigen::Vector3d p_WC(0.2, -0.1, 1.5);
   // The camera pans about its y axis at 1 rad/s while a 30 ms readout runs down the image: ~13 px over the rows.
   const double readout = 0.030, rate = 1.0;
@@ -173,16 +161,7 @@ TEST(SimPlanted, RollingShutterRenderDrawsEachRowFromItsPose) {
     }
     ASSERT_TRUE(cam.in_image(uv, 30)) << uv.transpose();
     const double r_px = 0.04 / (R_look.transpose() * (centres[i] - p_WC)).z() * cam.fu();
-    // Darkness-weighted centroid of the marker's dark core.
-    double sw = 0, su = 0, sv = 0;
-    for (int v = static_cast<int>(uv.y() - 1.5 * r_px - 1); v <= static_cast<int>(uv.y() + 1.5 * r_px + 1); ++v)
-      for (int u = static_cast<int>(uv.x() - 1.5 * r_px - 1); u <= static_cast<int>(uv.x() + 1.5 * r_px + 1); ++u) {
-        if ((Eigen::Vector2d(u, v) - uv).norm() > 1.5 * r_px)
-          continue;
-        const double w = std::max(0.0, 200.0 - img.at<uint8_t>(v, u));
-        sw += w, su += w * u, sv += w * v;
-      }
-    const Eigen::Vector2d got(su / sw, sv / sw);
+    const Eigen::Vector2d got = ovtest::dark_centroid(img, uv, 1.5 * r_px);
     std::cout << "[ measured ] marker " << i << ": rolling-shutter projection (" << uv.transpose() << "), drawn "
               << (got - uv).norm() << " px from it, " << (uv - uv0).norm() << " px from the row-0 projection\n";
     EXPECT_GT((uv - uv0).norm(), 3.0);

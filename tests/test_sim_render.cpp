@@ -4,6 +4,7 @@
 #include "ov_core/sim/euroc_calib.h"
 #include "ov_core/sim/renderer.h"
 #include "ov_core/sim/simulator.h"
+#include "sim_test_util.h"
 #include "test_util.h"
 
 #include <algorithm>
@@ -14,45 +15,15 @@
 using namespace ov_core;
 using namespace ov_core::sim;
 
-namespace {
-
-double median(std::vector<double> v) {
-  if (v.empty())
-    return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
-
-/// Darkness-weighted centroid inside a disc of radius r around c (the marker's dark core on a white ring).
-Eigen::Vector2d dark_centroid(const cv::Mat &img, const Eigen::Vector2d &c, double r) {
-  double sw = 0, su = 0, sv = 0;
-  for (int v = static_cast<int>(c.y() - r - 1); v <= static_cast<int>(c.y() + r + 1); ++v)
-    for (int u = static_cast<int>(c.x() - r - 1); u <= static_cast<int>(c.x() + r + 1); ++u) {
-      if (u < 0 || v < 0 || u >= img.cols || v >= img.rows || (Eigen::Vector2d(u, v) - c).norm() > r)
-        continue;
-      const double w = std::max(0.0, 200.0 - img.at<uint8_t>(v, u));
-      sw += w;
-      su += w * u;
-      sv += w * v;
-    }
-  return Eigen::Vector2d(su / sw, sv / sw);
-}
-
-} // namespace
+using ovtest::dark_centroid;
+using ovtest::median;
 
 TEST(SimRender, PlantedMarkersAppearWhereTheCameraModelProjectsThem) {
-  SceneOptions so;
-  so.num_boxes = 0;
-  so.seed = 5;
-  Scene scene(AlignedBox{Eigen::Vector3d(-3, -3, 0), Eigen::Vector3d(3, 3, 3)}, {}, so);
+  Scene scene = ovtest::marker_room();
   CameraModel cam(euroc_cam0_calib());
-  RenderOptions ro;
-  ro.noise_sigma = 0.0;
+  const RenderOptions ro = ovtest::noise_free_rendering();
   // Camera at (0,0,1.5) looking along +x, slightly yawed and rolled so markers land off-centre (distortion).
-  Eigen::Matrix3d R_look;
-  R_look.col(0) = Eigen::Vector3d(0, -1, 0);
-  R_look.col(1) = Eigen::Vector3d(0, 0, -1);
-  R_look.col(2) = Eigen::Vector3d(1, 0, 0);
+  const Eigen::Matrix3d R_look = ovtest::look_along_x();
   const Eigen::Matrix3d R_WC = Eigen::AngleAxisd(0.15, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_look *
                                Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d p_WC(0.2, -0.1, 1.5);

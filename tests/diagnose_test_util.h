@@ -1,0 +1,39 @@
+#pragma once
+// Helpers shared by the diagnose tests (test_diagnose*.cpp).
+#include "ov_core/eval/diagnose.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+namespace ovtest {
+
+inline const ov_core::CandidateResult &top(const ov_core::DiagnoseReport &r) {
+  return r.candidates.front();
+}
+
+inline double estimate(const ov_core::CandidateResult &c, const std::string &name) {
+  for (const auto &e : c.estimates)
+    if (e.name == name)
+      return e.value;
+  ADD_FAILURE() << c.key << " has no estimate '" << name << "'";
+  return std::nan("");
+}
+
+/// The planted effect is ranked first, explained, and its estimate `name` lies within tol of `value`.
+inline void expect_top(const ov_core::DiagnoseReport &r, const std::string &key, const std::string &name, double value,
+                       double tol) {
+  ASSERT_FALSE(r.candidates.empty());
+  EXPECT_TRUE(top(r).explained) << ov_core::format_ranking(r);
+  EXPECT_EQ(top(r).key, key) << ov_core::format_ranking(r);
+  if (top(r).key == key)
+    EXPECT_NEAR(estimate(top(r), name), value, tol) << ov_core::format_ranking(r);
+}
+
+inline void expect_nothing_flagged(const ov_core::DiagnoseReport &r) {
+  for (const auto &c : r.candidates)
+    EXPECT_FALSE(c.explained) << ov_core::format_ranking(r);
+}
+
+} // namespace ovtest
