@@ -16,17 +16,19 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
   ov_core::DiagnoseOptions opt;
   po::options_description desc(
       "usage: ovton diagnose --log FILE [--dataset DIR] [--out DIR]\n\n"
-      "Fits candidate effects (time-offset error constant / drifting, rolling-shutter readout, focal,\n"
-      "principal-point and radial-distortion error, gyro scale) to the residuals that\n"
-      "`ovton run --residual-log FILE` wrote, ranks them by the share of the residual they explain and\n"
-      "says which are significant. Writes diagnose.md, diagnose.json and PNG plots (docs/diagnose.md).\n\noptions");
+      "Fits candidate effects (rolling-shutter readout, focal, principal-point and radial-distortion error,\n"
+      "gyro scale) to the residuals that `ovton run --residual-log FILE` wrote, and the time-offset error\n"
+      "(constant / drifting) to the images' angular rate against the gyro's (needs --dataset: a filter's\n"
+      "poses absorb an offset, so the residual barely shows it). Ranks them by the share of their data\n"
+      "they explain and says which are significant. Writes diagnose.md, diagnose.json and PNG plots\n"
+      "(docs/diagnose.md).\n\noptions");
   // clang-format off
   desc.add_options()
     ("help,h", "print this help")
     ("log", po::value(&log_file), "residual log CSV (ovton run --residual-log)")
     ("dataset", po::value(&dataset_dir),
-     "dataset folder the log was made from: image height, intrinsics and camera-body rotation (default: height\n"
-     "and intrinsics from the log, no camera rotation along a track)")
+     "dataset folder the log was made from: camera (intrinsics, distortion, camera-body rotation, height) and "
+     "raw IMU (default: height and intrinsics from the log; time candidates on the residual)")
     ("out", po::value(&out_dir), "output folder (default: <log without extension>_diagnose beside the log)")
     ("min-sigma", po::value(&opt.min_sigma)->default_value(opt.min_sigma, "5"),
      "significance a candidate needs [Gaussian sigma]")

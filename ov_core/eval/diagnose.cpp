@@ -400,8 +400,8 @@ BinnedCurve make_curve(const CandidateDef &c, const Design &d, const Fit &fit, c
   static const std::map<std::string, std::string> xl = {
       {"td_const", "image velocity V [px/s]"},
       {"rolling_shutter", "V * (row fraction - 0.5) [px/s]"},
-      {"focal", "(fu*x, fv*y) from the track mean [px]"},
-      {"radial_k1", "|xy|^2 * (fu*x, fv*y) from the track mean [px]"}};
+      {"focal", "image position from the centre (f * x), point-absorbed part removed [px]"},
+      {"radial_k1", "|x|^2 * f * x, point-absorbed part removed [px]"}};
   cur.xlabel = xl.count(c.key) ? xl.at(c.key) : "fitted " + c.key + " effect [px]";
   cur.ylabel = "residual, other selected effects removed [px] (bin mean +- SE)";
   std::vector<Eigen::Index> order;
@@ -933,14 +933,17 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
     const bool time = defs[c].key == "td_const" || defs[c].key == "td_drift";
     (time && rate_time ? rate_family : residual_family).push_back(c);
     if (time && rate_time)
-      res[c].description += " — fitted on vision vs gyro rate: ω_vis − ω_gyro = α·δt(t) − b";
+      res[c].description = defs[c].key == "td_const"
+                               ? "constant time-offset error, from rates: ω_vis − ω_gyro = α·δt − b"
+                               : "drifting time-offset error, from rates: ω_vis − ω_gyro = α·(δt + ḋ·(t − t_mid)) − b";
     else if (time)
       res[c].note = "on the residual (" + rate_why + "): a lower bound, the poses absorb most of an offset";
   }
   const auto sel_res = stepwise(d, defs, residual_family, opt, rep, res);
   const auto sel_rate = stepwise(dr, defs, rate_family, opt, rep, res);
   for (size_t c : rate_family) {
-    res[c].curve.xlabel = "angular acceleration alpha, per axis, bias removed, / SE of w_vis [1/s]";
+    res[c].curve.xlabel = defs[c].key == "td_const" ? "angular acceleration alpha, bias removed, / SE of w_vis [1/s]"
+                                                    : "fitted alpha * dt(t), bias removed, / SE of w_vis";
     res[c].curve.ylabel = "w_vis - w_gyro, bias removed, / SE (bin mean +- SE)";
   }
   // Ranking: the selected candidates of both families by the share they explain of their own data, then the rest.
@@ -1029,11 +1032,28 @@ void write_file(const std::string &file, const std::string &text) {
     throw DataError(file, "write failed");
 }
 
+/// The plots' font is ASCII: the few Greek letters and symbols of the model texts spelled out.
+std::string ascii_text(const std::string &in) {
+  static const std::vector<std::pair<std::string, std::string>> map = {
+      {"·", "*"},     {"δ", "d"},    {"ω", "w"},  {"α", "alpha "}, {"ε", "eps"}, {"ḋ", "rate"}, {"−", "-"}, {"±", "+-"},
+      {"Θ", "Theta"}, {"∫", "int "}, {"²", "^2"}, {"‖", "|"},      {"—", "-"},   {"√", "sqrt"}, {"t̂", "t^"}};
+  std::string s = in;
+  for (const auto &[from, to] : map)
+    for (size_t p = s.find(from); p != std::string::npos; p = s.find(from, p + to.size()))
+      s.replace(p, from.size(), to);
+  std::string out;
+  for (unsigned char ch : s)
+    if (ch < 0x80)
+      out += static_cast<char>(ch);
+  return out;
+}
+
 /// Bin means with ±1 SE bars (vertical segments broken by NaN) and the fitted line.
 void plot_curve(const CandidateResult &c, const std::string &file) {
   const BinnedCurve &cu = c.curve;
   PlotOptions po;
-  po.title = "#" + std::to_string(c.rank) + " " + c.key + ": " + c.description;
+  po.title =
+      ascii_text("#" + std::to_string(c.rank) + " " + c.key + ": " + c.description.substr(0, c.description.find(':')));
   po.xlabel = cu.xlabel;
   po.ylabel = cu.ylabel;
   Plot p(po);
@@ -1048,13 +1068,14 @@ void plot_curve(const CandidateResult &c, const std::string &file) {
   Series pts("bin mean (+-1 SE)", cu.x, cu.mean, Series::Style::Points);
   pts.width = 4;
   p.add(pts);
-  p.add_line(cu.slope, cu.intercept, "fit: " + estimates_text(c).substr(0, 70));
+  p.add_line(cu.slope, cu.intercept, ascii_text("fit: " + estimates_text(c)).substr(0, 70));
   p.save_png(file);
 }
 
 void plot_td_bins(const DiagnoseReport &rep, const std::string &file) {
   PlotOptions po;
-  po.title = "time-offset error per time bin (true - filter's t_d), from r = V*dt in each bin";
+  po.title = rep.time_from_rates ? "time-offset error per time bin (true - filter's t_d), w_vis - w_gyro = alpha*dt"
+                                 : "time-offset error per time bin (true - filter's t_d), from r = V*dt in each bin";
   po.xlabel = "time since first logged row [s]";
   po.ylabel = "offset [ms]";
   Plot p(po);
@@ -1133,17 +1154,23 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
      << "- intrinsics " << (rep.intrinsics_fitted ? "fitted from the log" : "from the dataset") << ": fu "
      << format_fixed(rep.fu, 1) << ", fv " << format_fixed(rep.fv, 1) << ", cu " << format_fixed(rep.cu, 1) << ", cv "
      << format_fixed(rep.cv, 1) << " px; image height " << rep.image_height << " px; image velocity "
-     << (o.use_logged_velocity ? "from the log's column" : "from the track's neighbouring pixels") << "\n"
+     << (o.use_logged_velocity ? "from the log's column" : "from the track's predicted positions") << "\n"
+     << "- time candidates: "
+     << (rep.time_from_rates ? "the images' angular rate against the raw gyro's at the filter's image time"
+                             : "on the residual (no raw gyro: pass --dataset); a lower bound")
+     << "\n"
      << "- verdict rule: EXPLAINED when selected by forward stepwise regression: significance >= "
      << format_fixed(o.min_sigma, 1)
      << " sigma (Wald, track-clustered) and >= " << format_fixed(100 * o.min_explained, 1)
-     << " % of the residual's Huber loss removed beyond the candidates selected before it\n\n";
+     << " % of the Huber loss of its data (the residual; for time candidates from rates, the rate mismatch) removed "
+        "beyond the candidates selected before it\n\n";
   const auto first = std::find_if(rep.candidates.begin(), rep.candidates.end(), [](auto &c) { return c.explained; });
   if (first == rep.candidates.end())
     md << "**No candidate explains the residuals** (nothing passes both thresholds).\n\n";
   else
     md << "**Top effect: " << first->key << "** — " << first->description << "; " << estimates_text(*first)
-       << "; removes " << format_fixed(100 * first->explained_added, 1) << " % of the residual loss.\n\n";
+       << "; removes " << format_fixed(100 * first->explained_added, 1) << " % of the "
+       << (rep.time_from_rates && first->key.rfind("td_", 0) == 0 ? "rate mismatch's" : "residual's") << " loss.\n\n";
   md << "| rank | candidate | verdict | explained alone [%] | added [%] | sigma | estimate (± 1 SE) | note |\n"
      << "|---:|---|---|---:|---:|---:|---|---|\n";
   for (const auto &c : rep.candidates)
@@ -1167,10 +1194,9 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
     for (const auto &pl : plots)
       md << "![" << pl.first << "](" << pl.second << ")\n";
   }
-  md << "\nCaveat: residuals are logged before the MSCKF nullspace projection and after the filter has absorbed part "
-        "of "
-        "any effect into its state (biases, t̂_d, pose). Sizes are therefore lower bounds of the effect; compare "
-        "candidates with each other and with a clean run's diagnosis (docs/diagnose.md).\n";
+  md << "\nCaveat: residuals are logged after the filter has absorbed part of any effect into its state (poses, "
+        "biases, t̂_d); what the tracks' points absorb is projected out, what the poses absorb is not. Residual-based "
+        "sizes are therefore lower bounds (docs/diagnose.md, \"What the residuals cannot show\").\n";
   const std::string md_file = join_path(out_dir, "diagnose.md");
   write_file(md_file, md.str());
   files.insert(files.begin(), md_file);
