@@ -50,10 +50,14 @@ void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3
   if (Phi)
     *Phi = F;
   if (Q) {
-    // Sample noise enters exactly where the bias errors do (n_g like δb_g, n_a like δb_a).
+    // Sample noise enters the pose and velocity exactly where the bias errors do (n_g like δb_g, n_a like δb_a),
+    // but it is not a change of the bias: the bias rows of those columns (F's identity) must not carry it. They did
+    // until session 2, which let the accelerometer bias wander ~10⁴× faster than its random walk, so the filter
+    // could not take the metric scale from the accelerometer (trajectories 3–9 % too large, position NEES 10–150).
     Eigen::Matrix<double, 15, 6> Gn;
     Gn.leftCols<3>() = F.block<15, 3>(0, G);
     Gn.rightCols<3>() = F.block<15, 3>(0, A);
+    Gn.middleRows<6>(G).setZero();
     Eigen::Matrix<double, 6, 6> Qc = Eigen::Matrix<double, 6, 6>::Zero();
     Qc.topLeftCorner<3, 3>().diagonal().setConstant(noise.sigma_w * noise.sigma_w / dt);
     Qc.bottomRightCorner<3, 3>().diagonal().setConstant(noise.sigma_a * noise.sigma_a / dt);
