@@ -197,11 +197,12 @@ TEST(DiagnoseTruePoses, CleanDataFlagsNothing) {
 // Through the filter. Mode `off` holds t_d at its configured value, here the true offset at the start, so the model
 // lacks exactly the drift (1 ms/s: 10 → 40 ms over 30 s). The filter's poses absorb the offset error (the residual
 // shows < 0.1 ms of it, docs/diagnose.md); the time candidates read it from the images' angular rate against the
-// gyro's (put through the images' slope estimator), with the filter's depths corrected per track: the filter
-// triangulates with poses from the wrong instant. Without the depth correction the drift read as 0.71 ms/s and the
-// 30 ms offset below as 23.0 ms (seeds 1-4: 1.00, 0.88, 0.65, 0.95 ms/s; 15.4, 23.1, 20.3, 21.5 ms); with it and the
-// matched gyro 1.01 ± 0.09 ms/s and 31.2 ± 1.6 ms (seeds 1-4: 0.97, 1.02, 0.94, 1.07 ms/s; 26.0, 30.4, 30.5,
-// 29.1 ms). (0.5 ms/s over 30 s: docs/diagnose.md.)
+// gyro's. That rate fit needs depths, and the filter's are triangulated with poses from the wrong instant: without
+// diagnose's per-track inverse-depth correction the drift read as 0.71 ms/s and the 30 ms offset below as 23.0 ms
+// (seeds 1-4: 1.00, 0.88, 0.65, 0.95 ms/s; 15.4, 23.1, 20.3, 21.5 ms). With it: 0.96 ± 0.09 ms/s and 29.4 ± 1.6 ms
+// (seeds 1-4: 1.12, 1.10, 0.85, 1.19 ms/s; 20.3, 29.4, 27.4, 28.3 ms — the same as with the true geometry's depths
+// in place of the filter's: 1.15, 1.07, 0.90, 1.21 ms/s; 22.9, 29.0, 26.1, 28.3 ms). (0.5 ms/s over 30 s: see
+// docs/diagnose.md.)
 TEST(DiagnoseFilterLog, TimeOffsetDriftRankedFirstAndSized) {
   Plant p;
   p.td_rate = 0.001;

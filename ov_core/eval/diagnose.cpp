@@ -9,7 +9,6 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
-#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -553,44 +552,10 @@ Eigen::Vector3d gyro_at(const std::vector<ImuData> &imu, double t_ns) {
   return a.wm + u * (b.wm - a.wm);
 }
 
-/// Weights c with Σ c_q·x(t_q) = the slope at t0 of the least-squares quadratic through the five samples x(t_q).
-Eigen::Matrix<double, 1, 5> slope_weights(const std::array<int64_t, 5> &t_ns, int64_t t0_ns) {
-  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
-  Eigen::Matrix<double, 3, 5> H;
-  for (int q = 0; q < 5; ++q) {
-    const double tau = 1e-9 * double(t_ns[q] - t0_ns);
-    H.col(q) << 1.0, tau, tau * tau;
-    A += H.col(q) * H.col(q).transpose();
-  }
-  return A.ldlt().solve(H).row(1);
-}
-
-/// The gyro put through the slope estimator the image velocities went through (images at win, the image at t_cam,
-/// IMU time t_imu = t_cam + t̂_d): the rate w = Σ c_q·θ(t_q), θ the gyro's rotation vector from t_imu (small-angle
-/// sum), and its derivative by the time offset, alpha = Σ c_q·ω_gyro(t_q) (Σ c_q = 0). Against the gyro at the image
-/// instant this removes the smoothing the ±100 ms slope puts on the images' rate (measured: 30 ms offsets read ~10 %
-/// low, docs/diagnose.md).
-void gyro_as_imaged(const std::vector<ImuData> &imu, double t_imu, const std::array<int64_t, 5> &win, int64_t t_cam,
-                    Eigen::Vector3d &w, Eigen::Vector3d &alpha) {
-  const Eigen::Matrix<double, 1, 5> c = slope_weights(win, t_cam);
-  w.setZero();
-  alpha.setZero();
-  for (int q = 0; q < 5; ++q) {
-    const double tq = double(win[q] - t_cam);
-    Eigen::Vector3d theta = Eigen::Vector3d::Zero();
-    const int ns = std::max(1, static_cast<int>(std::abs(tq) / 1e6));
-    for (int k = 0; k < ns; ++k) // midpoint rule, ~1 ms steps
-      theta += gyro_at(imu, t_imu + (k + 0.5) * tq / ns) * (1e-9 * tq / ns);
-    w += c(q) * theta;
-    alpha += c(q) * gyro_at(imu, t_imu + tq);
-  }
-}
-
 /// The design of the time candidates on rates: per image, the camera's angular rate seen in the images (ω_vis, from
 /// the measured image velocities of its features, their depths corrected per track and the flow model
-/// ẋ = B(x)·ω + A(x)·v/z) against the gyro's at the filter's image time t_cam + t̂_d, put through the same slope
-/// estimator. A time-offset error δt = t_d − t̂_d shows as ω_vis − ω_gyro = α·δt, α the (equally smoothed) angular
-/// acceleration; the gyro bias b is removed per 5-s bin. Rows are
+/// ẋ = B(x)·ω + A(x)·v/z) against the gyro's at the filter's image time t_cam + t̂_d. A time-offset error δt = t_d − t̂_d
+/// shows as ω_vis − ω_gyro = α·δt, α the angular acceleration; the gyro bias b is removed per 5-s bin. Rows are
 /// whitened per axis by ω_vis's standard error. Measured image velocities (not predicted ones) keep the filter's state
 /// out of it.
 bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const DiagnoseReport &rep, int64_t t_first,
@@ -599,7 +564,6 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
     Eigen::Vector2d x, xdot;
     double inv_z;
     size_t track;
-    std::array<int64_t, 5> win; ///< the five images its velocity comes from (j − 2 … j + 2)
   };
   std::map<int64_t, std::vector<FlowObs>> frames;
   size_t n_tracks = 0;
@@ -607,41 +571,26 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
   for (auto &kv : tracks) {
     const auto &tr = kv.second;
     const size_t m = tr.size();
-    for (size_t j = 2; j + 2 < m; ++j) {
+    for (size_t j = 1; j + 1 < m; ++j) {
       const ResidualLogRow *r = tr[j];
       if (!(std::isfinite(r->depth_m) && r->depth_m > 0))
         continue;
-      // Local slope of a quadratic through the five measured positions around j (least squares).
-      std::array<int64_t, 5> win;
-      for (size_t q = 0; q < 5; ++q)
-        win[q] = tr[j - 2 + q]->t_cam_ns;
-      const Eigen::Matrix<double, 1, 5> c = slope_weights(win, r->t_cam_ns);
-      Eigen::Vector2d xdot = Eigen::Vector2d::Zero();
-      for (size_t q = 0; q < 5; ++q)
-        xdot += c(q) * Eigen::Vector2d(tr[j - 2 + q]->x_norm, tr[j - 2 + q]->y_norm);
-      frames[r->t_cam_ns].push_back({Eigen::Vector2d(r->x_norm, r->y_norm), xdot, 1.0 / r->depth_m, n_tracks, win});
+      // Local slope of a quadratic through up to five measured positions around j (least squares).
+      const size_t a = j >= 2 ? j - 2 : 0, b = std::min(m - 1, j + 2);
+      Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+      Eigen::Matrix<double, 3, 2> B = Eigen::Matrix<double, 3, 2>::Zero();
+      for (size_t q = a; q <= b; ++q) {
+        const double tau = 1e-9 * double(tr[q]->t_cam_ns - r->t_cam_ns);
+        const Eigen::Vector3d h(1.0, tau, tau * tau);
+        A += h * h.transpose();
+        B += h * Eigen::RowVector2d(tr[q]->x_norm, tr[q]->y_norm);
+      }
+      const Eigen::Matrix<double, 3, 2> c = A.ldlt().solve(B);
+      frames[r->t_cam_ns].push_back(
+          {Eigen::Vector2d(r->x_norm, r->y_norm), c.row(1).transpose(), 1.0 / r->depth_m, n_tracks});
       frame_td[r->t_cam_ns] = r->td_s;
     }
     ++n_tracks;
-  }
-  // Per image, the features whose velocity comes from the image's most common window: the gyro is then put
-  // through the same slope estimator (below), so that vision and gyro see the same smoothing of the rate.
-  std::map<int64_t, std::array<int64_t, 5>> frame_win;
-  for (auto &[t_cam, obs] : frames) {
-    std::map<std::array<int64_t, 5>, int> count;
-    for (const auto &o : obs)
-      ++count[o.win];
-    if (count.empty())
-      continue;
-    const auto best = std::max_element(count.begin(), count.end(), [](const auto &x, const auto &y) {
-                        return x.second < y.second;
-                      })->first;
-    std::vector<FlowObs> kept;
-    for (const auto &o : obs)
-      if (o.win == best)
-        kept.push_back(o);
-    obs.swap(kept);
-    frame_win[t_cam] = best;
   }
   const Eigen::Matrix3d R_BC = opt.camera.T_BC.block<3, 3>(0, 0);
   struct FrameRate {
@@ -649,6 +598,7 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
     Eigen::Vector3d e, alpha, se;
   };
   std::vector<FrameRate> fr;
+  const double h_ns = 50e6; // ±50 ms for the angular acceleration: the gyro noise of a difference shrinks with it
   // The logged depths ẑ come from the filter's triangulation. A filter holding a wrong offset triangulates with poses
   // from the wrong instant, and its points take up part of the offset: their depth errors would let the translational
   // flow absorb part of the rotation an offset error adds (measured: 30 ms read as 15-23 ms, docs/diagnose.md). Each
@@ -722,14 +672,13 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
     const double t_imu = double(t_cam) + 1e9 * frame_td.at(t_cam);
     FrameRate f;
     f.t = 1e-9 * double(t_cam - t_first);
-    Eigen::Vector3d w_gyro;
-    gyro_as_imaged(opt.imu, t_imu, frame_win.at(t_cam), t_cam, w_gyro, f.alpha);
-    f.e = R_BC * sol.head<3>() - w_gyro;
+    f.e = R_BC * sol.head<3>() - gyro_at(opt.imu, t_imu);
+    f.alpha = (gyro_at(opt.imu, t_imu + h_ns) - gyro_at(opt.imu, t_imu - h_ns)) / (2e-9 * h_ns);
     f.se = Cb.diagonal().cwiseMax(1e-20).cwiseSqrt();
     fr.push_back(f);
   }
   if (fr.size() < 50) {
-    why = "only " + std::to_string(fr.size()) + " images with 12+ features of known depth seen in five images";
+    why = "only " + std::to_string(fr.size()) + " images with 12+ features of known depth";
     return false;
   }
   // Gyro bias per 5-s bin and axis: weighted means removed from the mismatch and the regressors (Frisch-Waugh).
