@@ -27,8 +27,9 @@ inline void expect_top(const ov_core::DiagnoseReport &r, const std::string &key,
   ASSERT_FALSE(r.candidates.empty());
   EXPECT_TRUE(top(r).explained) << ov_core::format_ranking(r);
   EXPECT_EQ(top(r).key, key) << ov_core::format_ranking(r);
-  if (top(r).key == key)
+  if (top(r).key == key) { // braces: EXPECT_* expands to an if/else
     EXPECT_NEAR(estimate(top(r), name), value, tol) << ov_core::format_ranking(r);
+  }
 }
 
 inline void expect_nothing_flagged(const ov_core::DiagnoseReport &r) {
