@@ -651,6 +651,16 @@ TEST(UpdateVelocity, CentralDifferenceIsCentredAndSkipsTheObservation) {
   EXPECT_FALSE(central.velocity(f, 0, vc, src)) << "a first observation has no velocity";
   ASSERT_TRUE(central.velocity(f, 4, vc, src)); // newest: falls back to the backward difference
   EXPECT_NEAR(vc.x(), f.obs[4].vel_xy.x(), 1e-12);
+  // sir_first_velocity: next — the first observation takes the second's (backward) velocity, the others keep theirs.
+  const NextForFirstVelocityProvider next(backward);
+  ASSERT_TRUE(next.velocity(f, 0, vb, src));
+  EXPECT_EQ(src, kVelocityTracked);
+  EXPECT_NEAR(vb.x(), f.obs[1].vel_xy.x(), 1e-12);
+  ASSERT_TRUE(next.velocity(f, 3, vb, src));
+  EXPECT_NEAR(vb.x(), f.obs[3].vel_xy.x(), 1e-12);
+  ov_core::FeatureDatabase single;
+  single.add_observation(9, 1000000000LL, Eigen::Vector2d(100, 100), Eigen::Vector2d(0.1, 0.1));
+  EXPECT_FALSE(next.velocity(*single.get(9), 0, vb, src)) << "a lone observation has nothing to borrow";
 }
 
 namespace {

@@ -305,6 +305,10 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
       velocities = fvon_.get();
       times_.networks += ms_since(t0);
     }
+    // Last, so that with FVON it covers the first observations the networks could not predict (too few labels yet).
+    const NextForFirstVelocityProvider with_first(*velocities);
+    if (opt_.sir_first_velocity == "next")
+      velocities = &with_first;
     const UpdateStats st =
         updater_.update(s, feats, td_observation(opt_.td_mode), *velocities, log_ ? &records : nullptr);
     ++counters_.updates;

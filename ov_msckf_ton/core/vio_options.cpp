@@ -47,6 +47,7 @@ std::map<std::string, Field> fields(VioOptions &o) {
   f["tpn_min_labels"] = field(o.tpn_min_labels, "tpn_min_labels");
   f["td_rate_max"] = field(o.td_rate_max, "td_rate_max");
   f["sir_velocity"] = field(o.sir_velocity, "sir_velocity");
+  f["sir_first_velocity"] = field(o.sir_first_velocity, "sir_first_velocity");
   f["measurement_fej"] = field(o.measurement_fej, "measurement_fej");
   f["tpn_start_sigma_s"] = field(o.tpn_start_sigma_s, "tpn_start_sigma_s");
   f["max_clones"] = field(o.max_clones, "max_clones");
@@ -113,6 +114,8 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
   }
   if (o.sir_velocity != "backward" && o.sir_velocity != "central")
     throw ov_core::DataError(file, "sir_velocity must be backward or central");
+  if (o.sir_first_velocity != "none" && o.sir_first_velocity != "next")
+    throw ov_core::DataError(file, "sir_first_velocity must be none or next");
   if (!(o.min_parallax_deg >= 0))
     throw ov_core::DataError(file, "min_parallax_deg must be >= 0");
   if (o.max_clones < 3)

@@ -36,6 +36,12 @@ struct VioOptions {
   /// Image-plane velocity of the tracked observations: "backward" is the paper's eq. 2 (previous observation);
   /// "central" leaves the observation's own noise out (see CentralVelocityProvider; not the paper's SIR).
   std::string sir_velocity = "backward";
+  /// "none" (paper eq. 2): a track's first observation has no velocity, so a new feature constrains t_d only once
+  /// that observation has left the window; "next": it takes the next observation's (NextForFirstVelocityProvider), so
+  /// new features constrain t_d at once. In fvon/ton it covers the first observations FVON did not predict. Not the
+  /// paper's SIR, hence off by default; measured in the README (it keeps the image-plane modes from diverging on a
+  /// fast start).
+  std::string sir_first_velocity = "none";
 
   // Window and update.
   /// Measurement Jacobians at each clone's first estimate (OpenVINS' FEJ). Measured both ways in the README: with it

@@ -52,6 +52,28 @@ public:
   }
 };
 
+/// A track's first observation has no previous one, so eq. 2 gives it no velocity, and the all-or-nothing rule of
+/// the update then keeps the whole feature from constraining t_d until that observation has left the window. This
+/// gives it the velocity measured at the next observation (constant-speed model, V^0 ≈ V^1), the "copy next" rule
+/// ITS-FVON is compared with. Not the paper's SIR: an option (`sir_first_velocity: next`) for sir and tpn, where no
+/// FVON predicts first velocities.
+class NextForFirstVelocityProvider : public VelocityProvider {
+public:
+  explicit NextForFirstVelocityProvider(const VelocityProvider &base) : base_(base) {}
+  bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
+                int &source) const override {
+    if (base_.velocity(feature, obs_index, vel_xy, source))
+      return true;
+    if (obs_index + 1 < feature.obs.size() && base_.velocity(feature, obs_index + 1, vel_xy, source))
+      return true;
+    source = kVelocityNone;
+    return false;
+  }
+
+private:
+  const VelocityProvider &base_;
+};
+
 /// Central-difference velocity (x_{k+1} − x_{k−1}) / (t_{k+1} − t_{k−1}) for observations with a neighbour on each
 /// side, the backward difference of eq. 2 for a track's newest observation. Why: eq. 2's V_k contains the pixel noise
 /// of observation k itself, which is also in that row's residual; the correlated regressor biases t̂_d (errors in
