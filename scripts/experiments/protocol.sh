@@ -9,6 +9,8 @@
 #   default: rendered images (real KLT front end), 60 s per folder        (~2-3 h on 2 cores)
 #   --quick: feature-level folders with 0.3 px noise (KLT-like), 30 s     (~15 min)
 # Needs ../shared/data. Writes OUT/table3.md, OUT/table2.md and one `ovton compare` folder per case.
+# PROTOCOL_CONFIG=FILE runs every case with that estimator config instead of config/sim/estimator_config.yaml
+# (e.g. one with `sir_first_velocity: next`); the tables name it.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 OUT=${1:-results/protocol}
@@ -18,8 +20,9 @@ BIN=build/ovton
 [ -x "$BIN" ] || scripts/build.sh
 GT=../shared/data/euroc_groundtruth
 mkdir -p "$OUT"
-if [ $QUICK = 1 ]; then SIMARGS=(--features-only --pixel-noise 0.3 --duration-s 30); CFG=config/sim/estimator_config.yaml
-else SIMARGS=(--duration-s 60); CFG=config/sim/estimator_config.yaml; fi
+CFG=${PROTOCOL_CONFIG:-config/sim/estimator_config.yaml}
+if [ $QUICK = 1 ]; then SIMARGS=(--features-only --pixel-noise 0.3 --duration-s 30)
+else SIMARGS=(--duration-s 60); fi
 
 run_case() { # name, compare modes, simulate args...
   local name=$1 modes=$2; shift 2

@@ -28,7 +28,8 @@ def cell(r, key, fmt):
 
 with open(os.path.join(out, "table3.md"), "w") as f:
     f.write("# Table III layout: RMSE of TPE [mm] and APE [m] under a drifting offset\n\n")
-    f.write(f"Made by `scripts/experiments/protocol.sh{' ' + out if out else ''}{' --quick' if quick else ''}` "
+    env = f"PROTOCOL_CONFIG={os.environ['PROTOCOL_CONFIG']} " if os.environ.get("PROTOCOL_CONFIG") else ""
+    f.write(f"Made by `{env}scripts/experiments/protocol.sh{' ' + out if out else ''}{' --quick' if quick else ''}` "
             f"(commit {commit}); {data}; drift: start 10 ms, bias 0.1 ms/s, noise n_td per sqrt(s).\n\n")
     f.write("| n_td [ms] | method | " + " | ".join(f"{SHORT[s]} TPE | {SHORT[s]} APE" for s in SEQS) + " |\n")
     f.write("|---|---|" + "---|---|" * len(SEQS) + "\n")
