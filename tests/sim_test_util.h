@@ -1,12 +1,16 @@
 #pragma once
 // Helpers shared by the simulator tests (test_sim_*.cpp).
+#include "ov_core/cam/camera_model.h"
+#include "ov_core/sim/feature_sim.h"
 #include "ov_core/sim/renderer.h"
 #include "ov_core/sim/scene.h"
+#include "ov_core/sim/simulator.h"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include <algorithm>
+#include <memory>
 #include <vector>
 
 namespace ovtest {
@@ -54,5 +58,24 @@ inline ov_core::sim::RenderOptions noise_free_rendering() {
   ro.noise_sigma = 0.0;
   return ro;
 }
+
+/// The simulator's trajectory, scene and camera for `o`, with a noise-free feature simulator on them (members in
+/// construction order: the simulator keeps references to the camera and the scene).
+struct NoiseFreeFeatureSim {
+  explicit NoiseFreeFeatureSim(const ov_core::sim::SimOptions &o)
+      : traj(ov_core::sim::make_trajectory(o)), scene(ov_core::sim::make_scene(*traj, o)), cam(o.cam),
+        features(cam, scene, noise_free()) {}
+  std::unique_ptr<ov_core::sim::Trajectory> traj;
+  ov_core::sim::Scene scene;
+  ov_core::CameraModel cam;
+  ov_core::sim::FeatureSimulator features;
+
+private:
+  static ov_core::sim::FeatureSimOptions noise_free() {
+    ov_core::sim::FeatureSimOptions fo;
+    fo.pixel_noise = 0.0;
+    return fo;
+  }
+};
 
 } // namespace ovtest

@@ -216,34 +216,16 @@ TEST(Diagnose, BadLogsFailWithFileAndLine) {
   rec.res_u_px = ov_msckf_ton::ResidualRecord::kNaN;
   ovtest::write_text(dir / "nan.csv",
                      header + "\n" + good + "\n" + ov_msckf_ton::ResidualLogWriter::format(rec) + "\n");
-  try {
-    load_residual_log(dir / "nan.csv");
-    FAIL() << "no error";
-  } catch (const DataError &e) {
-    EXPECT_EQ(e.line(), 3) << e.what();
-    EXPECT_NE(std::string(e.what()).find("nan.csv:3"), std::string::npos) << e.what();
-  }
+  ovtest::expect_data_error([&] { load_residual_log(dir / "nan.csv"); }, "nan.csv", 3, "NaN residual");
   // NaN pixel on line 2.
-  std::string nan_px = good;
-  const std::string u = ov_msckf_ton::ResidualLogWriter::format(ov_msckf_ton::ResidualRecord{});
   rec = ov_msckf_ton::ResidualRecord{};
   rec.res_u_px = rec.res_v_px = 0.0;
   rec.u_px = ov_msckf_ton::ResidualRecord::kNaN;
   ovtest::write_text(dir / "nan_px.csv", header + "\n" + ov_msckf_ton::ResidualLogWriter::format(rec) + "\n");
-  try {
-    load_residual_log(dir / "nan_px.csv");
-    FAIL() << "no error";
-  } catch (const DataError &e) {
-    EXPECT_EQ(e.line(), 2) << e.what();
-  }
+  ovtest::expect_data_error([&] { load_residual_log(dir / "nan_px.csv"); }, "nan_px.csv", 2, "NaN pixel");
   // A short row and a non-number.
   ovtest::write_text(dir / "short.csv", header + "\n" + good + "\n1,2,3\n");
-  try {
-    load_residual_log(dir / "short.csv");
-    FAIL() << "no error";
-  } catch (const DataError &e) {
-    EXPECT_EQ(e.line(), 3) << e.what();
-  }
+  ovtest::expect_data_error([&] { load_residual_log(dir / "short.csv"); }, "short.csv", 3, "short row");
   // Too few rows to say anything: an error, not a verdict.
   ovtest::write_text(dir / "tiny.csv", header + "\n" + good + "\n");
   EXPECT_THROW(diagnose(load_residual_log(dir / "tiny.csv")), DataError);

@@ -9,6 +9,7 @@
 #include <sstream>
 
 using namespace ov_core;
+using ovtest::expect_data_error;
 using ovtest::TempDir;
 using ovtest::write_text;
 
@@ -63,23 +64,6 @@ std::string make_euroc(const TempDir &tmp) {
   write_text(m + "/imu0/data.csv", imu.str());
   write_text(m + "/state_groundtruth_estimate0/data.csv", gt.str());
   return tmp.str();
-}
-
-/// Runs f and checks it throws DataError whose message names `file_part` and, if line > 0, that line.
-template <typename F> void expect_data_error(F f, const std::string &file_part, long line, const std::string &why) {
-  try {
-    f();
-    ADD_FAILURE() << "expected a DataError for " << why;
-  } catch (const DataError &e) {
-    const std::string msg = e.what();
-    EXPECT_NE(msg.find(file_part), std::string::npos) << why << ": message does not name the file: " << msg;
-    if (line > 0) {
-      EXPECT_EQ(e.line(), line) << why << ": " << msg;
-      EXPECT_NE(msg.find(":" + std::to_string(line) + ":"), std::string::npos) << msg;
-    }
-  } catch (const std::exception &e) {
-    ADD_FAILURE() << why << ": wrong exception type: " << e.what();
-  }
 }
 
 void replace_line(const std::string &file, int line_no, const std::string &new_line) {

@@ -34,12 +34,10 @@ TEST(SimPlanted, RollingShutterObservationIsTheProjectionFromItsRowsInstant) {
   SimOptions o;
   o.duration_s = 3.0;
   o.readout_s = 0.030;
-  const auto traj = make_trajectory(o);
-  const Scene scene = make_scene(*traj, o);
-  CameraModel cam(o.cam);
-  FeatureSimOptions fo;
-  fo.pixel_noise = 0.0;
-  FeatureSimulator fsim(cam, scene, fo);
+  ovtest::NoiseFreeFeatureSim sim(o);
+  const auto &traj = sim.traj;
+  const CameraModel &cam = sim.cam;
+  FeatureSimulator &fsim = sim.features;
   std::vector<double> shift_px, predicted_px;
   long n = 0;
   for (int64_t t = traj->t_begin_ns(); t + s_to_ns(o.readout_s) <= traj->t_end_ns(); t += 50000000) {

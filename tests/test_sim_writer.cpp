@@ -7,6 +7,7 @@
 #include "ov_core/sim/random.h"
 #include "ov_core/sim/simulator.h"
 #include "ov_core/types/errors.h"
+#include "sim_test_util.h"
 #include "test_util.h"
 
 #include <filesystem>
@@ -173,12 +174,10 @@ TEST(SimWriter, FeatureObservationsMatchTheirLandmarks) {
   // Noise-free features: every observation is the exact projection of its landmark at the true instant.
   SimOptions o;
   o.duration_s = 2.0;
-  const auto traj = make_trajectory(o);
-  const Scene scene = make_scene(*traj, o);
-  CameraModel cam(o.cam);
-  FeatureSimOptions fo;
-  fo.pixel_noise = 0.0;
-  FeatureSimulator fs_(cam, scene, fo);
+  ovtest::NoiseFreeFeatureSim sim(o);
+  const auto &traj = sim.traj;
+  const CameraModel &cam = sim.cam;
+  FeatureSimulator &fs_ = sim.features;
   for (int64_t t = traj->t_begin_ns(); t <= traj->t_end_ns(); t += 100000000) {
     Eigen::Matrix3d R_WC;
     Eigen::Vector3d p_WC;

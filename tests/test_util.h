@@ -1,5 +1,7 @@
 #pragma once
 // Shared helpers for the test suite: temporary folders, the path of ../shared/data, small file writers.
+#include "ov_core/types/errors.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -52,6 +54,24 @@ inline void write_text(const std::string &file, const std::string &text) {
 inline std::string read_text(const std::string &file) {
   std::ifstream in(file);
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/// Runs f and checks it throws DataError whose message names `file_part` and, if line > 0, that line.
+template <typename F>
+inline void expect_data_error(F f, const std::string &file_part, long line, const std::string &why) {
+  try {
+    f();
+    ADD_FAILURE() << "expected a DataError for " << why;
+  } catch (const ov_core::DataError &e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(file_part), std::string::npos) << why << ": message does not name the file: " << msg;
+    if (line > 0) {
+      EXPECT_EQ(e.line(), line) << why << ": " << msg;
+      EXPECT_NE(msg.find(":" + std::to_string(line) + ":"), std::string::npos) << msg;
+    }
+  } catch (const std::exception &e) {
+    ADD_FAILURE() << why << ": wrong exception type: " << e.what();
+  }
 }
 
 } // namespace ovtest

@@ -82,6 +82,15 @@ cv::Scalar run_color(size_t i) {
 
 const cv::Scalar kTruthColor(0, 0, 0);
 
+/// The reference curve of a plot: black and heavier than the runs' lines.
+Series truth_series(const char *name) {
+  Series s;
+  s.name = name;
+  s.color = kTruthColor;
+  s.width = 2.5;
+  return s;
+}
+
 std::string utc_now() {
   const std::time_t t = std::time(nullptr);
   std::tm tm{};
@@ -279,10 +288,7 @@ bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const 
     return false;
   if (data.has_td_truth()) {
     // Truth is keyed by camera stamp; drawn at the IMU-clock instant it refers to, like the estimates.
-    Series s;
-    s.name = "truth";
-    s.color = kTruthColor;
-    s.width = 2.5;
+    Series s = truth_series("truth");
     for (const auto &t : data.td_truth) {
       s.x.push_back(ns_to_s(t.t_cam_ns - t0) + t.td_s);
       s.y.push_back(t.td_s * 1e3);
@@ -335,10 +341,7 @@ bool plot_top(const std::string &file, const std::vector<RunRecord> &runs, const
   Plot plot(po);
   bool any = false;
   if (data.has_groundtruth()) {
-    Series s;
-    s.name = "ground truth";
-    s.color = kTruthColor;
-    s.width = 2.5;
+    Series s = truth_series("ground truth");
     for (const auto &g : data.groundtruth) {
       s.x.push_back(g.p.x());
       s.y.push_back(g.p.y());

@@ -7,6 +7,7 @@ cd "$(dirname "$0")/../.."
 OUT=${1:-results/window_size}
 BIN=build/ovton
 [ -x "$BIN" ] || scripts/build.sh
+source scripts/experiments/run_summary.sh
 mkdir -p "$OUT"
 DS="$OUT/data_V1_03"
 [ -d "$DS/mav0" ] || "$BIN" simulate --out "$DS" --gt ../shared/data/euroc_groundtruth/V1_03_difficult.txt \
@@ -23,10 +24,7 @@ for C in 8 11 15 20 30; do
   printf "max_clones: %s\n" "$C" > "$OUT/cfg_$C.yaml"
   LINE=$("$BIN" run --dataset "$DS" --config "$OUT/cfg_$C.yaml" --td-mode oracle --init groundtruth \
     --output "$OUT/traj_$C.csv" -q)
-  NO=$(echo "$LINE" | sed -n 's/^NEES orientation \([0-9.]*\), position \([0-9.]*\).*/\1/p')
-  NP=$(echo "$LINE" | sed -n 's/^NEES orientation \([0-9.]*\), position \([0-9.]*\).*/\2/p')
-  APE=$(echo "$LINE" | sed -n 's/^APE \([0-9.]*\) m.*/\1/p')
   UPD=$(echo "$LINE" | sed -n 's/.*update \([0-9.]*\);.*/\1/p')
-  echo "| $C | $NO | $NP | $APE | $UPD |" >> "$OUT/summary.md"
+  echo "| $C | $(nees_ori "$LINE") | $(nees_pos "$LINE") | $(ape_m "$LINE") | $UPD |" >> "$OUT/summary.md"
 done
 cat "$OUT/summary.md"
