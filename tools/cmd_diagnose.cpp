@@ -16,12 +16,12 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
   ov_core::DiagnoseOptions opt;
   po::options_description desc(
       "usage: ovton diagnose --log FILE [--dataset DIR] [--out DIR]\n\n"
-      "Fits candidate effects (rolling-shutter readout, focal, principal-point and radial-distortion error,\n"
-      "gyro scale) to the residuals that `ovton run --residual-log FILE` wrote, and the time-offset error\n"
-      "(constant / drifting) to the images' angular rate against the gyro's (needs --dataset: a filter's\n"
-      "poses absorb an offset, so the residual barely shows it). Ranks them by the share of their data\n"
-      "they explain and says which are significant. Writes diagnose.md, diagnose.json and PNG plots\n"
-      "(docs/diagnose.md).\n\noptions");
+      "Tests candidate effects on the log that `ovton run --residual-log FILE` wrote. With --dataset, the\n"
+      "effects a filter's state absorbs (time offset constant / drifting, rolling-shutter readout, focal\n"
+      "error, gyro scale) are tested on the images' angular rate and its change down the rows against the\n"
+      "raw gyro; principal-point and radial-distortion error on the residuals. Without --dataset all of\n"
+      "them on the residuals (lower bounds). Ranks them by the share of their data they explain and says\n"
+      "which are significant. Writes diagnose.md, diagnose.json and PNG plots (docs/diagnose.md).\n\noptions");
   // clang-format off
   desc.add_options()
     ("help,h", "print this help")

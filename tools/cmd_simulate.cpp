@@ -68,10 +68,12 @@ int cmd_simulate(const Args &args) {
   std::string out, gt, td_model = "constant", cam_yaml, imu_yaml;
   double td0_ms = 10.0, td_bias = 0.1, td_noise = 0.1, readout_ms = 0.0, focal_error_pct = 0.0;
   int bench_frames = 100;
-  desc.add_options()("help,h", "this help")                                                                   //
-      ("out,o", po::value(&out), "output folder (mav0/ and sim.yaml are written inside)")                     //
-      ("gt", po::value(&gt), "ground-truth trajectory to follow (EuRoC .txt/.csv, project CSV)")              //
-      ("builtin", "follow the built-in Lissajous flight in a 6x6x3 m room (default when --gt is absent)")     //
+  desc.add_options()("help,h", "this help")                                                               //
+      ("out,o", po::value(&out), "output folder (mav0/ and sim.yaml are written inside)")                 //
+      ("gt", po::value(&gt), "ground-truth trajectory to follow (EuRoC .txt/.csv, project CSV)")          //
+      ("builtin", "follow the built-in Lissajous flight in a 6x6x3 m room (default when --gt is absent)") //
+      ("agility", po::value(&o.agility)->default_value(0.0),
+       "built-in flight: add faster roll/pitch/yaw oscillations, angular accelerations ~A x 1 rad/s^2 [0-3]") //
       ("start-s", po::value(&o.start_s)->default_value(0.0), "start, seconds after the first gt pose")        //
       ("duration-s", po::value(&o.duration_s)->default_value(20.0), "length [s]")                             //
       ("seed", po::value(&o.seed)->default_value(1), "random seed (same seed, same bytes)")                   //
@@ -108,6 +110,8 @@ int cmd_simulate(const Args &args) {
     throw ov_core::UsageError("--features-only and --no-images are exclusive");
   if (!o.imu_from.empty() && gt.empty())
     throw ov_core::UsageError("--imu-from needs --gt with the ground truth of the same sequence");
+  if (vm["agility"].as<double>() != 0.0 && !gt.empty())
+    throw ov_core::UsageError("--agility applies to the built-in flight, not to --gt");
   o.gt_file = gt;
   o.features_only = vm.count("features-only") > 0;
   o.overwrite = vm.count("force") > 0;

@@ -141,15 +141,16 @@ using Eigen::VectorXd;
 
 /// Columns of the design matrix; a candidate is a list of them, so nested candidates share columns.
 enum Col : int {
-  kV = 0,  ///< image velocity [px/s]
-  kVt,     ///< image velocity × (t − t_mid) [px]
-  kVrow,   ///< image velocity × (row fraction − 0.5) [px/s]
-  kFocal,  ///< (fu·x, fv·y) [px]
-  kPpU,    ///< (1, 0)
-  kPpV,    ///< (0, 1)
-  kRadial, ///< r²·(fu·x, fv·y) [px]
-  kGyro0,  ///< 9 columns B(x,y)·e_i·Θ_j [px·rad/rad]
-  kNumCols = kGyro0 + 9
+  kV = 0,                  ///< image velocity [px/s]
+  kVt,                     ///< image velocity × (t − t_mid) [px]
+  kVrow,                   ///< image velocity × (row fraction − 0.5) [px/s]
+  kFocal,                  ///< (fu·x, fv·y) [px]
+  kPpU,                    ///< (1, 0)
+  kPpV,                    ///< (0, 1)
+  kRadial,                 ///< r²·(fu·x, fv·y) [px]
+  kGyro0,                  ///< 9 columns B(x,y)·e_i·Θ_j [px·rad/rad]
+  kGyroScale = kGyro0 + 9, ///< rates only: −ω_gyro [rad/s]
+  kNumCols
 };
 
 struct Design {
@@ -351,6 +352,8 @@ std::vector<EffectEstimate> estimates_of(const std::string &key, const std::vect
     out.push_back({"δcv", "px", b(1), s(1)});
   } else if (key == "radial_k1") {
     out.push_back({"δk1", "", b(0), s(0)});
+  } else if (key == "gyro_scale" && cols.size() == 1) { // on rates: ω_vis − ω_gyro = −s·ω_gyro
+    out.push_back({"gyro scale error s", "%", 100 * b(0), 100 * s(0)});
   } else if (key == "gyro_scale") {
     // M = −s·R_CB: |M|_F = √3·|s| and det M = −s³, so s = −sign(det M)·|M|_F/√3 (delta-method σ).
     Eigen::Matrix3d M;
@@ -445,6 +448,16 @@ std::vector<size_t> stepwise(const Design &d, const std::vector<CandidateDef> &d
     return order;
   const double k = opt.huber_k;
   const double loss0 = fit_cols(d, {}, k).loss;
+  // A candidate's shares are of the loss of the rows it predicts (non-zero in one of its columns): on rates, the ω
+  // rows and the ψ rows are different data, and a candidate predicting one kind is not diluted by the other.
+  std::vector<double> own_loss0(defs.size(), loss0), gain(defs.size(), 0.0);
+  for (size_t c : family) {
+    std::vector<char> mask(d.r.size(), 0);
+    for (Eigen::Index i = 0; i < d.r.size(); ++i)
+      for (int col : defs[c].cols)
+        mask[i] = mask[i] || d.D(i, col) != 0.0;
+    own_loss0[c] = std::max(1e-300, fit_cols(d, {}, k, &mask).loss);
+  }
   std::vector<bool> usable(defs.size(), false), taken(defs.size(), false);
   for (size_t c : family) {
     usable[c] = true;
@@ -458,7 +471,7 @@ std::vector<size_t> stepwise(const Design &d, const std::vector<CandidateDef> &d
       res[c].note = "skipped: most tracks lack body rates (w_valid)";
     }
     if (usable[c])
-      res[c].explained_alone = 1.0 - fit_cols(d, defs[c].cols, k).loss / loss0;
+      res[c].explained_alone = (loss0 - fit_cols(d, defs[c].cols, k).loss) / own_loss0[c];
   }
   std::vector<int> selected_cols;
   double loss_sel = loss0;
@@ -496,7 +509,8 @@ std::vector<size_t> stepwise(const Design &d, const std::vector<CandidateDef> &d
       const MatrixXd Co = f.cov.bottomRightCorner(q, q);
       const double W = bo.dot(Co.ldlt().solve(bo));
       cr.sigma = wald_to_sigma(W, static_cast<int>(q));
-      cr.explained_added = (loss_sel - f.loss) / loss0;
+      gain[c] = loss_sel - f.loss;
+      cr.explained_added = gain[c] / own_loss0[c];
       cr.estimates = estimates_of(defs[c].key, defs[c].cols, f, joint, rep, d);
       last_fit[c] = f;
       last_joint[c] = joint;
@@ -515,7 +529,7 @@ std::vector<size_t> stepwise(const Design &d, const std::vector<CandidateDef> &d
       break;
     taken[best] = true;
     res[best].explained = true;
-    loss_sel -= res[best].explained_added * loss0;
+    loss_sel -= gain[best];
     // A selected extension (drift) supersedes the candidate it contains (constant offset): it takes that one's rank
     // and the contained one is no longer the name of the effect.
     for (size_t q = 0; q < order.size(); ++q)
@@ -539,6 +553,19 @@ std::vector<size_t> stepwise(const Design &d, const std::vector<CandidateDef> &d
   return order;
 }
 
+/// Rows of the rate design per image: ω_vis − ω_gyro and ψ_vis, three axes each.
+constexpr int kRateRowsPerImage = 6;
+
+/// The image shift a relative focal error ε makes in undistorted normalised coordinates, per unit ε: the focal scales
+/// the distorted point and the filter undistorts, so the shift is J_d⁻¹·x_d (x itself without a camera model).
+Eigen::Vector2d focal_dir(const CameraModel *cam, const Eigen::Vector2d &x) {
+  if (!cam)
+    return x;
+  Eigen::Matrix2d Jd;
+  const Eigen::Vector2d xd = cam->distort_normalized(x, &Jd);
+  return Jd.partialPivLu().solve(xd);
+}
+
 /// Gyro reading at t (linear interpolation; clamped at the ends).
 Eigen::Vector3d gyro_at(const std::vector<ImuData> &imu, double t_ns) {
   const auto it =
@@ -552,17 +579,22 @@ Eigen::Vector3d gyro_at(const std::vector<ImuData> &imu, double t_ns) {
   return a.wm + u * (b.wm - a.wm);
 }
 
-/// The design of the time candidates on rates: per image, the camera's angular rate seen in the images (ω_vis, from
-/// the measured image velocities of its features, their depths corrected per track and the flow model
-/// ẋ = B(x)·ω + A(x)·v/z) against the gyro's at the filter's image time t_cam + t̂_d. A time-offset error δt = t_d − t̂_d
-/// shows as ω_vis − ω_gyro = α·δt, α the angular acceleration; the gyro bias b is removed per 5-s bin. Rows are
-/// whitened per axis by ω_vis's standard error. Measured image velocities (not predicted ones) keep the filter's state
-/// out of it.
+/// The design of the candidates tested on rates. Per image, the measured image velocities of its features (their
+/// depths corrected per track) are fitted with the flow model ẋ = B(x)·(ω + ρ·ψ) + A(x)·v/z, ρ the row fraction − ½:
+/// ω is the camera's angular rate seen at the image's middle row, ψ its change from the top row to the bottom one.
+/// Six rows per image, whitened per axis by the fit's standard errors:
+///  - ω_vis − ω_gyro at the filter's image time t_cam + t̂_d. A time-offset error δt = t_d − t̂_d shows as α·δt, α the
+///    angular acceleration; the gyro bias b is removed per 5-s bin.
+///  - ψ_vis: a rolling shutter exposes row ρ at (ρ + ½)·t_r after row 0, so the rate changes down the image by
+///    ψ = α·t_r. Nothing in a filter's state can produce it.
+/// A relative focal error ε scales the images' rotational flow but not the gyro's: its column is the first-order
+/// response of (ω, ψ) to ε, propagated through each image's fit. Measured image velocities (not predicted ones) keep
+/// the filter's state out of it.
 bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const DiagnoseReport &rep, int64_t t_first,
                        Design &dr, std::string &why) {
   struct FlowObs {
     Eigen::Vector2d x, xdot;
-    double inv_z;
+    double rho, inv_z;
     size_t track;
   };
   std::map<int64_t, std::vector<FlowObs>> frames;
@@ -586,49 +618,78 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
         B += h * Eigen::RowVector2d(tr[q]->x_norm, tr[q]->y_norm);
       }
       const Eigen::Matrix<double, 3, 2> c = A.ldlt().solve(B);
-      frames[r->t_cam_ns].push_back(
-          {Eigen::Vector2d(r->x_norm, r->y_norm), c.row(1).transpose(), 1.0 / r->depth_m, n_tracks});
+      frames[r->t_cam_ns].push_back({Eigen::Vector2d(r->x_norm, r->y_norm), c.row(1).transpose(),
+                                     r->v_px / rep.image_height - 0.5, 1.0 / r->depth_m, n_tracks});
       frame_td[r->t_cam_ns] = r->td_s;
     }
     ++n_tracks;
   }
   const Eigen::Matrix3d R_BC = opt.camera.T_BC.block<3, 3>(0, 0);
+  const CameraModel cam(opt.camera);
+  using Vec9 = Eigen::Matrix<double, 9, 1>;
+  // The flow model's rows for one feature: ẋ = H·(ω, ψ, v).
+  const auto flow_rows = [](const Eigen::Vector2d &x, double rho, double iz) {
+    Eigen::Matrix<double, 2, 9> H;
+    H.leftCols<3>() = rot_flow(x.x(), x.y());
+    H.middleCols<3>(3) = rho * H.leftCols<3>();
+    H.rightCols<3>() << -iz, 0, x.x() * iz, 0, -iz, x.y() * iz;
+    return H;
+  };
   struct FrameRate {
-    double t; ///< s from t_first
-    Eigen::Vector3d e, alpha, se;
+    double t;                           ///< s from t_first
+    Eigen::Vector3d e, alpha, se;       ///< ω_vis − ω_gyro (body frame), α, SE of ω_vis
+    Eigen::Vector3d psi, psi_se;        ///< ψ_vis (body frame) and its SE
+    Eigen::Vector3d focal_e, focal_psi; ///< response of ω_vis and ψ_vis to a unit relative focal error
+    Eigen::Vector3d gyro;               ///< ω_gyro
   };
   std::vector<FrameRate> fr;
   const double h_ns = 50e6; // ±50 ms for the angular acceleration: the gyro noise of a difference shrinks with it
   // The logged depths ẑ come from the filter's triangulation. A filter holding a wrong offset triangulates with poses
   // from the wrong instant, and its points take up part of the offset: their depth errors would let the translational
   // flow absorb part of the rotation an offset error adds (measured: 30 ms read as 15-23 ms, docs/diagnose.md). Each
-  // track's inverse depth therefore gets a correction ε_track, alternated with the per-image fits: per image (ω, v) by
-  // Huber IRLS on the flow model with inverse depths 1/ẑ + ε_track, then every ε_track by weighted least squares on
+  // track's inverse depth therefore gets a correction ε_track, alternated with the per-image fits: per image (ω, ψ, v)
+  // by Huber IRLS on the flow model with inverse depths 1/ẑ + ε_track, then every ε_track by weighted least squares on
   // what the images' translational flow leaves of its observations.
   std::vector<double> eps(n_tracks, 0.0);
   struct FrameFit {
-    Eigen::Matrix<double, 6, 1> sol;
-    Eigen::Matrix3d C;
+    Vec9 sol, focal; ///< fitted (ω, ψ, v) and its response to a unit relative focal error
+    Eigen::Matrix<double, 9, 9> C;
     VectorXd w;
   };
-  const auto fit_frame = [&](const std::vector<FlowObs> &obs) {
+  // with_psi false: ψ fixed at 0, so ω is the rate at the features' mean row (what the time candidates compare with
+  // the gyro; fitting ψ as well costs ω precision where the features do not span the rows evenly).
+  const auto fit_frame = [&](const std::vector<FlowObs> &obs, bool with_psi) {
     const Eigen::Index no = static_cast<Eigen::Index>(obs.size());
-    MatrixXd H(2 * no, 6);
+    const int p = with_psi ? 9 : 6;
+    MatrixXd H(2 * no, p);
     VectorXd y(2 * no);
     FrameFit f;
     f.w = VectorXd::Ones(2 * no);
     for (Eigen::Index q = 0; q < no; ++q) {
-      const auto &o = obs[q];
-      const double iz = o.inv_z + eps[o.track];
-      H.block<2, 3>(2 * q, 0) = rot_flow(o.x.x(), o.x.y());
-      H.block<2, 3>(2 * q, 3) << -iz, 0, o.x.x() * iz, 0, -iz, o.x.y() * iz;
-      y.segment<2>(2 * q) = o.xdot;
+      const Eigen::Matrix<double, 2, 9> Hq = flow_rows(obs[q].x, obs[q].rho, obs[q].inv_z + eps[obs[q].track]);
+      if (with_psi)
+        H.middleRows<2>(2 * q) = Hq;
+      else
+        H.middleRows<2>(2 * q) << Hq.leftCols<3>(), Hq.rightCols<3>();
+      y.segment<2>(2 * q) = obs[q].xdot;
     }
+    // The solution and its covariance in the 9 parameters (ψ rows and columns zero without ψ).
+    const auto expand = [&](const VectorXd &v) {
+      Vec9 out = Vec9::Zero();
+      if (with_psi)
+        out = v;
+      else
+        out << v.head<3>(), Eigen::Vector3d::Zero(), v.tail<3>();
+      return out;
+    };
     double s2 = 0;
+    Eigen::LDLT<MatrixXd> N;
     for (int it = 0; it < 3; ++it) { // Huber IRLS, scale from the previous pass
       const MatrixXd Hw = f.w.asDiagonal() * H;
-      f.sol = (H.transpose() * Hw).ldlt().solve(Hw.transpose() * y);
-      const VectorXd e = y - H * f.sol;
+      N.compute(H.transpose() * Hw);
+      const VectorXd sol = N.solve(Hw.transpose() * y);
+      f.sol = expand(sol);
+      const VectorXd e = y - H * sol;
       std::vector<double> ae(e.size());
       for (Eigen::Index q = 0; q < e.size(); ++q)
         ae[q] = std::abs(e(q));
@@ -637,65 +698,125 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
       for (Eigen::Index q = 0; q < e.size(); ++q)
         f.w(q) = std::abs(e(q)) <= 3 * sc ? 1.0 : 3 * sc / std::abs(e(q));
     }
-    f.C = s2 * (H.transpose() * f.w.asDiagonal() * H).ldlt().solve(MatrixXd::Identity(6, 6)).topLeftCorner<3, 3>();
+    const MatrixXd Hw = f.w.asDiagonal() * H;
+    N.compute(H.transpose() * Hw);
+    const MatrixXd C = s2 * N.solve(MatrixXd::Identity(p, p));
+    f.C.setZero();
+    for (int a = 0; a < p; ++a)
+      f.C.col(with_psi || a < 3 ? a : a + 3) = expand(C.col(a));
     return f;
   };
-  std::map<int64_t, FrameFit> fits;
-  const int n_alternations = 10; // measured: 10 and 30 give the same estimates within a tenth of their SE
-  for (int outer = 0; outer <= n_alternations; ++outer) {
-    for (const auto &[t_cam, obs] : frames)
-      if (obs.size() >= 12)
-        fits[t_cam] = fit_frame(obs);
-    if (outer == n_alternations)
-      break;
-    // ε per track: least squares of what the translational flow leaves, given every image's (ω, v).
-    std::vector<double> num(n_tracks, 0.0), den(n_tracks, 0.0);
-    for (const auto &[t_cam, f] : fits) {
-      const auto &obs = frames.at(t_cam);
-      for (size_t q = 0; q < obs.size(); ++q) {
-        const auto &o = obs[q];
-        const Eigen::Vector3d v = f.sol.tail<3>();
-        const Eigen::Vector2d a(-v.x() + o.x.x() * v.z(), -v.y() + o.x.y() * v.z());
-        const Eigen::Vector2d d = o.xdot - rot_flow(o.x.x(), o.x.y()) * f.sol.head<3>() - a * o.inv_z;
-        const Eigen::Vector2d w = f.w.segment<2>(2 * q);
-        num[o.track] += w.dot(a.cwiseProduct(d));
-        den[o.track] += w.dot(a.cwiseAbs2());
+  using FrameMap = std::map<int64_t, std::vector<FlowObs>>;
+  const auto solve = [&](const FrameMap &data, std::map<int64_t, FrameFit> &fits,
+                         std::map<int64_t, FrameFit> &fits_psi) {
+    std::fill(eps.begin(), eps.end(), 0.0);
+    const int n_alternations = 10; // measured: 10 and 30 give the same estimates within a tenth of their SE
+    for (int outer = 0; outer <= n_alternations; ++outer) {
+      const bool last = outer == n_alternations;
+      fits_psi.clear();
+      for (const auto &[t_cam, obs] : data) {
+        if (obs.size() >= 12 && last)
+          fits[t_cam] = fit_frame(obs, false);
+        if (obs.size() >= 20) // ψ needs features spread over the rows
+          fits_psi[t_cam] = fit_frame(obs, true);
+        else if (obs.size() >= 12 && !last)
+          fits_psi[t_cam] = fit_frame(obs, false);
       }
+      if (last)
+        break;
+      // ε per track: least squares of what the translational flow leaves, given every image's (ω, ψ, v). With ψ: a
+      // rolling shutter's row-dependent flow would otherwise go into the depths of tracks at different rows.
+      std::vector<double> num(n_tracks, 0.0), den(n_tracks, 0.0);
+      for (const auto &[t_cam, f] : fits_psi) {
+        const auto &obs = data.at(t_cam);
+        for (size_t q = 0; q < obs.size(); ++q) {
+          const auto &o = obs[q];
+          const Eigen::Vector3d v = f.sol.tail<3>();
+          const Eigen::Vector2d a(-v.x() + o.x.x() * v.z(), -v.y() + o.x.y() * v.z());
+          const Eigen::Vector2d d = o.xdot - flow_rows(o.x, o.rho, o.inv_z) * f.sol;
+          const Eigen::Vector2d w = f.w.segment<2>(2 * q);
+          num[o.track] += w.dot(a.cwiseProduct(d));
+          den[o.track] += w.dot(a.cwiseAbs2());
+        }
+      }
+      for (size_t k = 0; k < n_tracks; ++k)
+        eps[k] = den[k] > 0 ? num[k] / den[k] : 0.0;
     }
-    for (size_t k = 0; k < n_tracks; ++k)
-      eps[k] = den[k] > 0 ? num[k] / den[k] : 0.0;
+  };
+  std::map<int64_t, FrameFit> fits, fits_psi;
+  solve(frames, fits, fits_psi);
+  // The focal column: how (ω, ψ) respond to a relative focal error ε, through the whole fit (the per-track depth
+  // corrections take up part of it; a response of each image's fit alone overstated it by ~25 %). A focal error moves
+  // a measured point to x_m = x + ε·s(x) (s: focal_dir) and its velocity by ε·J_s·ẋ, and the fit evaluates the model
+  // at x_m: to first order the data change by ε·(J_s·F − J_F·s), F the fitted flow at x. The data are perturbed by
+  // that for a small ε and fitted again.
+  const double kappa = 0.01, h = 1e-5;
+  FrameMap perturbed = frames;
+  for (auto &[t_cam, obs] : perturbed) {
+    const FrameFit *fit = fits_psi.count(t_cam) ? &fits_psi.at(t_cam) : fits.count(t_cam) ? &fits.at(t_cam) : nullptr;
+    if (!fit)
+      continue;
+    for (auto &o : obs) {
+      const double iz = o.inv_z + eps[o.track];
+      const auto F = [&](const Eigen::Vector2d &x) -> Eigen::Vector2d { return flow_rows(x, o.rho, iz) * fit->sol; };
+      const Eigen::Vector2d Fx = F(o.x), s = focal_dir(&cam, o.x);
+      const Eigen::Vector2d JsF = (focal_dir(&cam, o.x + h * Fx) - focal_dir(&cam, o.x - h * Fx)) / (2 * h);
+      const Eigen::Vector2d JFs = (F(o.x + h * s) - F(o.x - h * s)) / (2 * h);
+      o.xdot += kappa * (JsF - JFs);
+    }
   }
+  std::map<int64_t, FrameFit> fits_p, fits_psi_p;
+  solve(perturbed, fits_p, fits_psi_p);
+  for (auto &[t_cam, f] : fits)
+    f.focal = fits_p.count(t_cam) ? ((fits_p.at(t_cam).sol - f.sol) / kappa).eval() : Vec9::Zero();
+  for (auto &[t_cam, f] : fits_psi)
+    f.focal = fits_psi_p.count(t_cam) ? ((fits_psi_p.at(t_cam).sol - f.sol) / kappa).eval() : Vec9::Zero();
+  const auto body_se = [&](const Eigen::Matrix3d &C) {
+    return (R_BC * C * R_BC.transpose()).diagonal().cwiseMax(1e-20).cwiseSqrt().eval();
+  };
   for (const auto &[t_cam, ff] : fits) {
-    const Eigen::Matrix3d &C = ff.C;
-    const Eigen::Matrix<double, 6, 1> &sol = ff.sol;
-    const Eigen::Matrix3d Cb = R_BC * C * R_BC.transpose();
     const double t_imu = double(t_cam) + 1e9 * frame_td.at(t_cam);
     FrameRate f;
     f.t = 1e-9 * double(t_cam - t_first);
-    f.e = R_BC * sol.head<3>() - gyro_at(opt.imu, t_imu);
+    f.gyro = gyro_at(opt.imu, t_imu);
+    f.e = R_BC * ff.sol.head<3>() - f.gyro;
     f.alpha = (gyro_at(opt.imu, t_imu + h_ns) - gyro_at(opt.imu, t_imu - h_ns)) / (2e-9 * h_ns);
-    f.se = Cb.diagonal().cwiseMax(1e-20).cwiseSqrt();
+    f.se = body_se(ff.C.topLeftCorner<3, 3>());
+    f.focal_e = R_BC * ff.focal.head<3>();
+    const auto fp = fits_psi.find(t_cam);
+    if (fp != fits_psi.end()) {
+      f.psi = R_BC * fp->second.sol.segment<3>(3);
+      f.psi_se = body_se(fp->second.C.block<3, 3>(3, 3));
+      f.focal_psi = R_BC * fp->second.focal.segment<3>(3);
+    } else { // no ψ row: zero weight
+      f.psi.setZero(), f.focal_psi.setZero();
+      f.psi_se.setConstant(1e30);
+    }
     fr.push_back(f);
   }
   if (fr.size() < 50) {
     why = "only " + std::to_string(fr.size()) + " images with 12+ features of known depth";
     return false;
   }
-  // Gyro bias per 5-s bin and axis: weighted means removed from the mismatch and the regressors (Frisch-Waugh).
+  // Gyro bias per 5-s bin and axis: weighted means removed from the mismatch and the regressors of the ω rows
+  // (Frisch-Waugh). The ψ rows carry no gyro bias: α is a difference.
   const int nb = std::max(1, static_cast<int>(std::lround(rep.duration_s / 5.0)));
   const auto bin = [&](double t) {
     return std::min(nb - 1, static_cast<int>(nb * t / std::max(1e-9, rep.duration_s)));
   };
   const double t_mid = 0.5 * rep.duration_s;
   std::vector<Eigen::Vector3d> sw(nb, Eigen::Vector3d::Zero()), se(nb, Eigen::Vector3d::Zero()),
-      sa(nb, Eigen::Vector3d::Zero()), sat(nb, Eigen::Vector3d::Zero());
+      sa(nb, Eigen::Vector3d::Zero()), sat(nb, Eigen::Vector3d::Zero()), sf(nb, Eigen::Vector3d::Zero()),
+      sg(nb, Eigen::Vector3d::Zero());
   for (const auto &f : fr) {
     const Eigen::Vector3d w = f.se.cwiseInverse().cwiseAbs2();
     const int b = bin(f.t);
     sw[b] += w, se[b] += w.cwiseProduct(f.e), sa[b] += w.cwiseProduct(f.alpha);
     sat[b] += w.cwiseProduct(f.alpha) * (f.t - t_mid);
+    sf[b] += w.cwiseProduct(f.focal_e);
+    sg[b] += w.cwiseProduct(f.gyro);
   }
-  const Eigen::Index n = 3 * static_cast<Eigen::Index>(fr.size());
+  const Eigen::Index n = kRateRowsPerImage * static_cast<Eigen::Index>(fr.size());
   dr.D = MatrixXd::Zero(n, kNumCols);
   dr.r.resize(n);
   dr.cluster.resize(n);
@@ -706,13 +827,23 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
   Eigen::Index i = 0;
   for (const auto &f : fr) {
     const int b = bin(f.t);
-    for (int a = 0; a < 3; ++a, ++i) {
+    for (int a = 0; a < 3; ++a, ++i) { // ω rows
       const double sq = 1.0 / f.se(a);
       dr.r(i) = sq * (f.e(a) - se[b](a) / sw[b](a));
       dr.D(i, kV) = sq * (f.alpha(a) - sa[b](a) / sw[b](a));
       dr.D(i, kVt) = sq * (f.alpha(a) * (f.t - t_mid) - sat[b](a) / sw[b](a));
-      dr.cluster[i] = static_cast<int>(f.t); // one cluster per second: neighbouring images share tracks
-      dr.t_s[i] = f.t;
+      dr.D(i, kFocal) = sq * (f.focal_e(a) - sf[b](a) / sw[b](a));
+      dr.D(i, kGyroScale) = -sq * (f.gyro(a) - sg[b](a) / sw[b](a));
+    }
+    for (int a = 0; a < 3; ++a, ++i) { // ψ rows
+      const double sq = 1.0 / f.psi_se(a);
+      dr.r(i) = sq * f.psi(a);
+      dr.D(i, kVrow) = sq * f.alpha(a);
+      dr.D(i, kFocal) = sq * f.focal_psi(a);
+    }
+    for (Eigen::Index q = i - kRateRowsPerImage; q < i; ++q) {
+      dr.cluster[q] = static_cast<int>(f.t); // one cluster per second: neighbouring images share tracks
+      dr.t_s[q] = f.t;
     }
   }
   dr.n_clusters = static_cast<int>(fr.back().t) + 1;
@@ -974,23 +1105,40 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
     rate_why = "no raw gyro (pass --dataset)";
   }
   rep.time_from_rates = rate_time;
+  // With rates, the candidates a filter's state absorbs from the residual (time offset, readout, focal) are tested on
+  // them; the others stay on the residual.
+  static const std::map<std::string, std::string> on_rates = {
+      {"td_const", "constant time-offset error, from rates: ω_vis − ω_gyro = α·δt − b"},
+      {"td_drift", "drifting time-offset error, from rates: ω_vis − ω_gyro = α·(δt + ḋ·(t − t_mid)) − b"},
+      {"rolling_shutter", "rolling-shutter readout, from rates: ψ_vis = α·t_r (rate change from top row to bottom)"},
+      {"focal", "focal-length error, from rates: (ω_vis, ψ_vis) move by ε·∂(ω, ψ)/∂ε of each image's flow fit"},
+      {"gyro_scale", "gyro scale error, from rates: ω_vis − ω_gyro = −s·ω_gyro − b"}};
   std::vector<size_t> residual_family, rate_family;
   for (size_t c = 0; c < defs.size(); ++c) {
-    const bool time = defs[c].key == "td_const" || defs[c].key == "td_drift";
-    (time && rate_time ? rate_family : residual_family).push_back(c);
-    if (time && rate_time)
-      res[c].description = defs[c].key == "td_const"
-                               ? "constant time-offset error, from rates: ω_vis − ω_gyro = α·δt − b"
-                               : "drifting time-offset error, from rates: ω_vis − ω_gyro = α·(δt + ḋ·(t − t_mid)) − b";
-    else if (time)
+    const bool rate_capable = on_rates.count(defs[c].key) > 0;
+    (rate_capable && rate_time ? rate_family : residual_family).push_back(c);
+    if (rate_capable && rate_time)
+      res[c].description = on_rates.at(defs[c].key);
+    else if (defs[c].key == "td_const" || defs[c].key == "td_drift")
       res[c].note = "on the residual (" + rate_why + "): a lower bound, the poses absorb most of an offset";
+    else if (rate_capable)
+      res[c].note = "on the residual (" + rate_why + "): a lower bound, the poses absorb most of it";
   }
   const auto sel_res = stepwise(d, defs, residual_family, opt, rep, res);
-  const auto sel_rate = stepwise(dr, defs, rate_family, opt, rep, res);
+  std::vector<CandidateDef> rate_defs = defs; // on rates the gyro scale is one number (R_BC is known)
+  for (auto &c : rate_defs)
+    if (c.key == "gyro_scale")
+      c.cols = {kGyroScale}, c.needs_rate = false;
+  const auto sel_rate = stepwise(dr, rate_defs, rate_family, opt, rep, res);
+  static const std::map<std::string, std::string> rate_xlabel = {
+      {"td_const", "angular acceleration alpha, bias removed, / SE [1/s]"},
+      {"td_drift", "fitted alpha * dt(t), bias removed, / SE"},
+      {"rolling_shutter", "angular acceleration alpha / SE of psi_vis [1/s]"},
+      {"focal", "response of (w_vis, psi_vis) to a unit focal error / SE"},
+      {"gyro_scale", "-w_gyro, bias removed, / SE [rad/s]"}};
   for (size_t c : rate_family) {
-    res[c].curve.xlabel = defs[c].key == "td_const" ? "angular acceleration alpha, bias removed, / SE of w_vis [1/s]"
-                                                    : "fitted alpha * dt(t), bias removed, / SE of w_vis";
-    res[c].curve.ylabel = "w_vis - w_gyro, bias removed, / SE (bin mean +- SE)";
+    res[c].curve.xlabel = rate_xlabel.at(defs[c].key);
+    res[c].curve.ylabel = "w_vis - w_gyro (bias removed) and psi_vis, / SE (bin mean +- SE)";
   }
   // Ranking: the selected candidates of both families by the share they explain of their own data, then the rest.
   std::vector<size_t> order(sel_res.begin(), sel_res.end());
@@ -1036,7 +1184,7 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
       long cnt = 0;
       for (Eigen::Index k2 = 0; k2 < nt; ++k2)
         cnt += (mask[k2] = bin_of[k2] == b);
-      if (cnt < (rate_time ? 15 : 40))
+      if (cnt < (rate_time ? 5 * kRateRowsPerImage : 40))
         continue;
       const Fit f = fit_cols(dt, {kV}, k, &mask);
       TimeBin tb;
@@ -1044,7 +1192,7 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
       tb.td_ms = 1e3 * f.beta(0);
       tb.td_se_ms = 1e3 * std::sqrt(std::max(0.0, f.cov(0, 0)));
       tb.td_filter_ms = td_cnt[b] ? 1e3 * td_sum[b] / td_cnt[b] : 0.0;
-      tb.observations = rate_time ? cnt / 3 : cnt / 2;
+      tb.observations = rate_time ? cnt / kRateRowsPerImage : cnt / 2;
       rep.td_bins.push_back(tb);
     }
   }

@@ -60,7 +60,7 @@ std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt) {
   if (!(opt.duration_s > 0.0))
     throw UsageError("duration must be positive");
   if (opt.gt_file.empty())
-    return std::make_unique<LissajousTrajectory>(opt.duration_s);
+    return std::make_unique<LissajousTrajectory>(opt.duration_s, LissajousTrajectory::kDefaultBeginNs, opt.agility);
   const std::vector<StateSample> gt = read_trajectory(opt.gt_file);
   if (gt.empty())
     throw DataError(opt.gt_file, "no poses");

@@ -17,6 +17,7 @@ namespace sim {
 struct SimOptions {
   std::string out_dir;
   std::string gt_file;  ///< ground truth to follow; empty: the built-in Lissajous flight
+  double agility = 0.0; ///< built-in flight only: faster roll/pitch/yaw oscillations (LissajousTrajectory)
   double start_s = 0.0; ///< from the first ground-truth pose
   double duration_s = 20.0;
   double knot_dt_s = 0.1;     ///< B-spline knot spacing of the trajectory fit

@@ -145,10 +145,16 @@ TrajectorySample SplineTrajectory::sample(int64_t t_ns) const {
   return out;
 }
 
-LissajousTrajectory::LissajousTrajectory(double duration_s, int64_t t_begin_ns)
-    : t_begin_ns_(t_begin_ns), duration_s_(duration_s) {
+LissajousTrajectory::LissajousTrajectory(double duration_s, int64_t t_begin_ns, double agility)
+    : t_begin_ns_(t_begin_ns), duration_s_(duration_s), agility_(agility) {
   if (!(duration_s > 0.0))
     throw UsageError("builtin trajectory: duration must be positive");
+  if (!(agility >= 0.0 && agility <= 3.0))
+    throw UsageError("builtin trajectory: agility must lie in [0, 3]");
+}
+
+std::string LissajousTrajectory::describe() const {
+  return agility_ > 0.0 ? "builtin:lissajous agility " + std::to_string(agility_) : "builtin:lissajous";
 }
 
 TrajectorySample LissajousTrajectory::sample(int64_t t_ns) const {
@@ -164,9 +170,15 @@ TrajectorySample LissajousTrajectory::sample(int64_t t_ns) const {
   }
   // Orientation R_WB = Rz(yaw) Ry(pitch) Rx(roll) R_base; R_base turns the EuRoC body (x up, z = camera axis)
   // so the camera looks along world x before yaw.
-  const double yaw = 0.6 * t + 0.8 * std::sin(0.4 * t), dyaw = 0.6 + 0.32 * std::cos(0.4 * t);
-  const double pitch = 0.15 * std::sin(1.1 * t), dpitch = 0.165 * std::cos(1.1 * t);
-  const double roll = 0.2 * std::sin(0.9 * t + 0.3), droll = 0.18 * std::cos(0.9 * t + 0.3);
+  double yaw = 0.6 * t + 0.8 * std::sin(0.4 * t), dyaw = 0.6 + 0.32 * std::cos(0.4 * t);
+  double pitch = 0.15 * std::sin(1.1 * t), dpitch = 0.165 * std::cos(1.1 * t);
+  double roll = 0.2 * std::sin(0.9 * t + 0.3), droll = 0.18 * std::cos(0.9 * t + 0.3);
+  if (agility_ > 0.0) { // amplitude a·A at frequency w: angular acceleration up to a·A·w²
+    const double a = agility_;
+    yaw += a * 0.12 * std::sin(3.7 * t + 1.0), dyaw += a * 0.12 * 3.7 * std::cos(3.7 * t + 1.0);
+    pitch += a * 0.10 * std::sin(3.3 * t), dpitch += a * 0.10 * 3.3 * std::cos(3.3 * t);
+    roll += a * 0.10 * std::sin(2.9 * t + 0.5), droll += a * 0.10 * 2.9 * std::cos(2.9 * t + 0.5);
+  }
   const Eigen::Matrix3d Rz = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Matrix3d Ry = Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()).toRotationMatrix();
   const Eigen::Matrix3d Rx = Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()).toRotationMatrix();

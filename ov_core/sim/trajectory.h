@@ -57,18 +57,23 @@ private:
 };
 
 /// Built-in flight through a 6 x 6 x 3 m room centred on (0, 0, 1.5): a Lissajous curve in position,
-/// yaw sweeping with smooth roll/pitch wobble; camera (EuRoC body z) looks mostly horizontally.
+/// yaw sweeping with smooth roll/pitch wobble; camera (EuRoC body z) looks mostly horizontally. Its angular
+/// accelerations are gentle (≈ 0.15 rad/s²); `agility` > 0 adds faster roll/pitch/yaw oscillations with angular
+/// accelerations of ≈ agility × (0.8–1.6) rad/s², as in EuRoC's medium sequences (what a rolling shutter needs to
+/// show).
 class LissajousTrajectory : public Trajectory {
 public:
-  explicit LissajousTrajectory(double duration_s = 60.0, int64_t t_begin_ns = 1600000000000000000LL);
+  static constexpr int64_t kDefaultBeginNs = 1600000000000000000LL;
+  explicit LissajousTrajectory(double duration_s = 60.0, int64_t t_begin_ns = kDefaultBeginNs, double agility = 0.0);
   int64_t t_begin_ns() const override { return t_begin_ns_; }
   int64_t t_end_ns() const override { return t_begin_ns_ + s_to_ns(duration_s_); }
   TrajectorySample sample(int64_t t_ns) const override;
-  std::string describe() const override { return "builtin:lissajous"; }
+  std::string describe() const override;
 
 private:
   int64_t t_begin_ns_;
   double duration_s_;
+  double agility_;
 };
 
 /// Ground-truth sample of the trajectory (no biases) at t_ns.
