@@ -583,14 +583,14 @@ Eigen::Vector3d gyro_at(const std::vector<ImuData> &imu, double t_ns) {
 /// The design of the candidates tested on rates. Per image, the measured image velocities of its features (their
 /// depths corrected per track) are fitted with the flow model ẋ = B(x)·(ω + ρ·ψ) + A(x)·v/z, ρ the row fraction − ½:
 /// ω is the camera's angular rate seen at the image's middle row, ψ its change from the top row to the bottom one.
-/// Six rows per image, whitened per axis by the fit's standard errors:
+/// Nine rows per image (kRateRowsPerImage), whitened per axis by the fit's standard errors:
 ///  - ω_vis − ω_gyro at the filter's image time t_cam + t̂_d. A time-offset error δt = t_d − t̂_d shows as α·δt, α the
 ///    angular acceleration; the gyro bias b is removed per 5-s bin.
 ///  - ψ_vis: a rolling shutter exposes row ρ at (ρ + ½)·t_r after row 0, so the rate changes down the image by
 ///    ψ = α·t_r. Nothing in a filter's state can produce it.
-/// A relative focal error ε scales the images' rotational flow but not the gyro's: its column is the first-order
-/// response of (ω, ψ) to ε, propagated through each image's fit. Measured image velocities (not predicted ones) keep
-/// the filter's state out of it.
+///  - ω_vis − ω̄_gyro, the gyro smoothed as the images' rate is: a relative focal error ε scales the images' rotational
+///    flow but not the gyro's; its column is the response of ω_vis to ε through the whole fit.
+/// Measured image velocities (not predicted ones) keep the filter's state out of it.
 bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const DiagnoseReport &rep, int64_t t_first,
                        Design &dr, std::string &why) {
   struct FlowObs {
