@@ -261,6 +261,8 @@ int cmd_benchmark(const Args &args) {
       ("init", po::value(&init), "static|groundtruth (overrides the config; groundtruth with --generate)")        //
       ("max-images", po::value(&req.max_images), "stop each mode after this many images")                         //
       ("json", po::value(&json), "also write the numbers as JSON")                                                //
+      ("prefetch", po::bool_switch(&req.prefetch),
+       "decode the next images on a second thread (as `ovton run` does); `load` is then the wait for one") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bars");
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
@@ -297,7 +299,9 @@ int cmd_benchmark(const Args &args) {
             << data.cam.height << ", " << data.imu.size() << " IMU readings; init "
             << (req.opt.init_mode == ov_msckf_ton::InitMode::Static ? "static" : "groundtruth") << "; config "
             << (config.empty() ? "built-in defaults" : config) << "\nmachine: " << std::thread::hardware_concurrency()
-            << " cores, load average " << load_start << "; one thread per mode, modes run one after another\n"
+            << " cores, load average " << load_start << "; "
+            << (req.prefetch ? "filter thread + image-decoding thread" : "one thread")
+            << " per mode, modes run one after another\n"
             << std::flush;
 
   // The JSON is rewritten after every mode, so an interrupted or failing benchmark keeps the modes already done;

@@ -13,6 +13,7 @@
 #include <iomanip>
 #include <iostream>
 #include <limits>
+#include <thread>
 
 namespace po = boost::program_options;
 
@@ -22,7 +23,7 @@ int cmd_run(const Args &args) {
   po::options_description desc("ovton run: replay a dataset folder through the MSCKF and write its trajectory");
   std::string config, dataset, mode, format = "csv", init, nees_log;
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
-  bool quiet = false;
+  bool quiet = false, no_prefetch = false;
   RunRequest req;
   desc.add_options()("help,h", "this help")                                                               //
       ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")              //
@@ -35,10 +36,13 @@ int cmd_run(const Args &args) {
       ("td-init-ms", po::value(&td_init_ms), "initial / fixed t_d [ms] (overrides the config)")           //
       ("nees-log", po::value(&nees_log), "with --init groundtruth: write per-frame NEES (t_ns,ori,pos) here")(
           "max-images", po::value(&req.max_images), "stop after this many images") //
+      ("no-prefetch", po::bool_switch(&no_prefetch),
+       "decode images on the filter's thread (default: the next ones on a second thread, same results)") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bar, no option listing");
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
+  req.prefetch = !no_prefetch && std::thread::hardware_concurrency() >= 2;
   if (format != "csv" && format != "tum")
     throw ov_core::UsageError("--format must be csv or tum");
   req.tum = format == "tum";

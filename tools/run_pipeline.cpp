@@ -1,4 +1,5 @@
 #include "tools/run_pipeline.h"
+#include "ov_core/io/image_prefetcher.h"
 #include "ov_core/io/trajectory_io.h"
 #include "ov_core/types/errors.h"
 #include "tools/progress.h"
@@ -42,6 +43,11 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
     vio.set_residual_log(rlog.get());
   }
 
+  std::unique_ptr<ov_core::ImagePrefetcher> prefetcher;
+  if (req.prefetch && !data.images.empty() && !data.images.front().features) {
+    prefetcher = std::make_unique<ov_core::ImagePrefetcher>(data.images);
+    vio.set_image_source([&prefetcher](const ov_core::ImageEntry &e) { return prefetcher->get(e); });
+  }
   ProgressBar bar(req.label.empty() ? "run " + ov_msckf_ton::to_string(opt.td_mode) : req.label, !req.progress);
   const auto t0 = std::chrono::steady_clock::now();
   size_t last_i = 0;

@@ -18,6 +18,9 @@ struct RunRequest {
   long max_images = 0;      ///< 0 = all
   bool progress = true;     ///< progress bar on stderr
   std::string label;        ///< progress bar label
+  /// Decode the next images on a second thread (ov_core::ImagePrefetcher) while the filter works. Same results;
+  /// `image_load` then measures the wait for a decoded image.
+  bool prefetch = false;
   /// Called after each image with (images done, images in the dataset); the benchmark samples memory here.
   std::function<void(size_t, size_t)> on_progress;
 };

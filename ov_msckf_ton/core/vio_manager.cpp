@@ -134,7 +134,7 @@ void VioManager::on_image(const ov_core::ImageEntry &e) {
     return;
   }
   const auto t0 = Clock::now();
-  cv::Mat gray = cv::imread(e.path, cv::IMREAD_GRAYSCALE);
+  cv::Mat gray = image_source_ ? image_source_(e) : cv::imread(e.path, cv::IMREAD_GRAYSCALE);
   if (gray.empty())
     throw ov_core::DataError(e.path, "unreadable image (listed for stamp " + std::to_string(e.t_cam_ns) + ")");
   times_.image_load += ms_since(t0);

@@ -67,9 +67,13 @@ public:
   void set_groundtruth(std::vector<ov_core::StateSample> gt) { gt_ = std::move(gt); }
   void set_state_callback(StateCallback cb) { on_state_ = std::move(cb); }
   void set_residual_log(ResidualLogWriter *log) { log_ = log; }
+  /// Where on_image gets its decoded image (e.g. an ov_core::ImagePrefetcher); default cv::imread of the entry's path.
+  /// An empty image is reported as unreadable, naming the file.
+  using ImageSource = std::function<cv::Mat(const ov_core::ImageEntry &)>;
+  void set_image_source(ImageSource src) { image_source_ = std::move(src); }
 
   void on_imu(const ov_core::ImuData &m) override;
-  /// Loads the image named in the entry (grayscale), then processes it.
+  /// Loads the image named in the entry (grayscale, from the image source), then processes it.
   void on_image(const ov_core::ImageEntry &e) override;
   double td_for_image_s(int64_t t_cam_ns) const override;
 
@@ -119,6 +123,7 @@ private:
   std::vector<ov_core::StateSample> gt_;
   StateCallback on_state_;
   ResidualLogWriter *log_ = nullptr;
+  ImageSource image_source_;
 
   bool initialized_ = false;
   std::string init_msg_;

@@ -1,0 +1,48 @@
+#pragma once
+// Decodes a dataset's images on a second thread, in replay order, a few ahead of the consumer: PNG decoding is about a
+// third of a frame's cost (docs/benchmarks.md), and on a 2-core machine it can overlap the filter's work.
+#include "ov_core/types/sensor_data.h"
+
+#include <condition_variable>
+#include <cstddef>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <thread>
+#include <vector>
+
+namespace ov_core {
+
+class ImagePrefetcher {
+public:
+  /// Starts decoding images[0], images[1], ... (grayscale) with at most `ahead` decoded images waiting. Feature-level
+  /// entries (features set) are not decoded. `images` must outlive the prefetcher.
+  explicit ImagePrefetcher(const std::vector<ImageEntry> &images, size_t ahead = 2);
+  ~ImagePrefetcher();
+  ImagePrefetcher(const ImagePrefetcher &) = delete;
+  ImagePrefetcher &operator=(const ImagePrefetcher &) = delete;
+
+  /// The decoded image of images[index] (empty if the file is unreadable: the caller reports it, as without the
+  /// prefetcher). Indices must not decrease between calls; skipped ones are dropped. An index the thread has already
+  /// dropped, or one outside the list, is decoded here instead.
+  cv::Mat get(size_t index);
+  /// The same for an entry of the list (the replay hands out the list's own entries); any other entry is decoded here.
+  cv::Mat get(const ImageEntry &e);
+
+private:
+  void work();
+
+  const std::vector<ImageEntry> &images_;
+  const size_t ahead_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::map<size_t, cv::Mat> ready_;                       ///< decoded, not yet taken (indices ≥ wanted_)
+  size_t wanted_ = 0;                                     ///< lowest index the consumer may still ask for
+  size_t produced_ = 0;                                   ///< next index the thread decodes
+  size_t in_flight_ = std::numeric_limits<size_t>::max(); ///< index being decoded now
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+} // namespace ov_core
