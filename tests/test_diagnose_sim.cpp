@@ -234,7 +234,7 @@ TEST(DiagnoseFilterLog, ConstantOffsetRankedFirstAndSized) {
 
 // A readout time and a focal error the filter's state absorbs from its residual (there they read 5.90 ± 0.43 ms for
 // 25 ms and 0.086 ± 0.008 % for 1 %): named and sized from the rates. Seeds 1-4 (docs/diagnose.md): readout 23.7,
-// 23.8, 22.8, 23.6 ms; focal 0.91, 0.84, 1.02, 0.99 %.
+// 23.8, 22.8, 23.6 ms; focal 0.96, 0.88, 1.05, 1.04 %.
 TEST(DiagnoseFilterLog, RollingShutterRankedFirstAndSized) {
   Plant p;
   p.readout_s = 0.025;
