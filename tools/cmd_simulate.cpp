@@ -66,7 +66,7 @@ int cmd_simulate(const Args &args) {
       "Convention: t_imu = t_cam + td; image k shows the scene at IMU time t_k and is stamped t_k - td(k)");
   ov_core::sim::SimOptions o;
   std::string out, gt, td_model = "constant", cam_yaml, imu_yaml;
-  double td0_ms = 10.0, td_bias = 0.1, td_noise = 0.1, readout_ms = 0.0, focal_error_pct = 0.0;
+  double td0_ms = 10.0, td_bias = 0.1, td_noise = 0.1, readout_ms = 0.0, focal_error_pct = 0.0, gyro_scale_pct = 0.0;
   int bench_frames = 100;
   desc.add_options()("help,h", "this help")                                                               //
       ("out,o", po::value(&out), "output folder (mav0/ and sim.yaml are written inside)")                 //
@@ -84,7 +84,9 @@ int cmd_simulate(const Args &args) {
       ("readout-ms", po::value(&readout_ms)->default_value(0.0),
        "rolling shutter: row v is exposed at the image's instant + v/height * readout; stamp = row 0 [ms]") //
       ("focal-error-pct", po::value(&focal_error_pct)->default_value(0.0),
-       "data made with focal lengths (1 + P/100) x those written to cam0/sensor.yaml [%]")                  //
+       "data made with focal lengths (1 + P/100) x those written to cam0/sensor.yaml [%]") //
+      ("gyro-scale-pct", po::value(&gyro_scale_pct)->default_value(0.0),
+       "the gyro reads (1 + P/100) x the true rate; imu0/sensor.yaml does not say so [%]")                  //
       ("imu-from", po::value(&o.imu_from), "semi-real: take imu0/data.csv from this EuRoC folder")          //
       ("features-only", "write mav0/cam0/features.csv (timestamp_ns,feature_id,u,v) instead of images")     //
       ("no-images", "write no images and no features (IMU, ground truth, stamps)")                          //
@@ -123,6 +125,7 @@ int cmd_simulate(const Args &args) {
   o.td.noise_s_per_sqrt_s = td_noise * 1e-3;
   o.readout_s = readout_ms * 1e-3;
   o.focal_error = focal_error_pct * 1e-2;
+  o.gyro_scale = gyro_scale_pct * 1e-2;
   if (!cam_yaml.empty()) {
     o.cam = ov_core::load_euroc_camera_yaml(cam_yaml);
     o.cam_source = cam_yaml;

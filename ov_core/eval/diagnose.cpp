@@ -353,7 +353,7 @@ std::vector<EffectEstimate> estimates_of(const std::string &key, const std::vect
     out.push_back({"δcv", "px", b(1), s(1)});
   } else if (key == "radial_k1") {
     out.push_back({"δk1", "", b(0), s(0)});
-  } else if (key == "gyro_scale" && cols.size() == 1) { // R_CB known: the column is −B·R_CB·Θ
+  } else if (key == "gyro_scale" && cols.size() == 1) { // R_CB known: the column is −ω̄_gyro or −B·R_CB·Θ
     out.push_back({"gyro scale error s", "%", 100 * b(0), 100 * s(0)});
   } else if (key == "gyro_scale") {
     // M = −s·R_CB: |M|_F = √3·|s| and det M = −s³, so s = −sign(det M)·|M|_F/√3 (delta-method σ).
@@ -654,7 +654,7 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
     Eigen::Vector3d e, alpha, se; ///< ω_vis − ω_gyro (body frame), α, SE of ω_vis
     Eigen::Vector3d psi, psi_se;  ///< ψ_vis (body frame) and its SE
     Eigen::Vector3d focal_e;      ///< response of ω_vis to a unit relative focal error
-    Eigen::Vector3d e_s;          ///< ω_vis − ω̄_gyro, ω̄_gyro the gyro through the images' estimator
+    Eigen::Vector3d gyro_s, e_s;  ///< ω̄_gyro, the gyro through the images' estimator, and ω_vis − ω̄_gyro
   };
   std::vector<FrameRate> fr;
   const double h_ns = 50e6; // ±50 ms for the angular acceleration: the gyro noise of a difference shrinks with it
@@ -829,7 +829,8 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
     FrameRate f;
     f.t = 1e-9 * double(t_cam - t_first);
     f.e = R_BC * ff.sol.head<3>() - gyro_at(opt.imu, t_imu);
-    f.e_s = R_BC * (ff.sol.head<3>() - gyro_through_images(t_cam, ff));
+    f.gyro_s = R_BC * gyro_through_images(t_cam, ff);
+    f.e_s = R_BC * ff.sol.head<3>() - f.gyro_s;
     f.alpha = (gyro_at(opt.imu, t_imu + h_ns) - gyro_at(opt.imu, t_imu - h_ns)) / (2e-9 * h_ns);
     f.se = body_se(ff.C.topLeftCorner<3, 3>());
     f.focal_e = R_BC * ff.focal.head<3>();
@@ -856,7 +857,7 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
   const double t_mid = 0.5 * rep.duration_s;
   std::vector<Eigen::Vector3d> sw(nb, Eigen::Vector3d::Zero()), se(nb, Eigen::Vector3d::Zero()),
       sa(nb, Eigen::Vector3d::Zero()), sat(nb, Eigen::Vector3d::Zero()), sf(nb, Eigen::Vector3d::Zero()),
-      ses(nb, Eigen::Vector3d::Zero());
+      ses(nb, Eigen::Vector3d::Zero()), sgs(nb, Eigen::Vector3d::Zero());
   for (const auto &f : fr) {
     const Eigen::Vector3d w = f.se.cwiseInverse().cwiseAbs2();
     const int b = bin(f.t);
@@ -864,6 +865,7 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
     sat[b] += w.cwiseProduct(f.alpha) * (f.t - t_mid);
     sf[b] += w.cwiseProduct(f.focal_e);
     ses[b] += w.cwiseProduct(f.e_s);
+    sgs[b] += w.cwiseProduct(f.gyro_s);
   }
   const Eigen::Index n = kRateRowsPerImage * static_cast<Eigen::Index>(fr.size());
   dr.D = MatrixXd::Zero(n, kNumCols);
@@ -891,6 +893,7 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
       const double sq = 1.0 / f.se(a);
       dr.r(i) = sq * (f.e_s(a) - ses[b](a) / sw[b](a));
       dr.D(i, kFocal) = sq * (f.focal_e(a) - sf[b](a) / sw[b](a));
+      dr.D(i, kGyroScale) = -sq * (f.gyro_s(a) - sgs[b](a) / sw[b](a));
     }
     for (Eigen::Index q = i - kRateRowsPerImage; q < i; ++q) {
       dr.cluster[q] = static_cast<int>(f.t); // one cluster per second: neighbouring images share tracks
@@ -1165,6 +1168,7 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
       {"td_drift", "drifting time-offset error, from rates: ω_vis − ω_gyro = α·(δt + ḋ·(t − t_mid)) − b"},
       {"rolling_shutter", "rolling-shutter readout, from rates: ψ_vis = α·t_r (rate change from top row to bottom)"},
       {"focal", "focal-length error, from rates: ω_vis − ω̄_gyro = ε·∂ω_vis/∂ε (the whole rate fit's response) − b"},
+      {"gyro_scale", "gyro scale error, from rates: ω_vis − ω̄_gyro = −s·ω̄_gyro − b"},
   };
   std::vector<size_t> residual_family, rate_family;
   for (size_t c = 0; c < defs.size(); ++c) {
@@ -1177,20 +1181,23 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
     else if (rate_capable)
       res[c].note = "on the residual (" + rate_why + "): a lower bound, the poses absorb most of it";
   }
-  std::vector<CandidateDef> res_defs = defs; // with the camera, the gyro scale is one number (R_CB is known)
-  for (auto &c : res_defs)
-    if (c.key == "gyro_scale" && opt.have_camera)
-      c.cols = {kGyroScale}, c.description = "gyro scale error: r = −s·B(x,y)·R_CB·∫ω dt over the track";
-  for (size_t c = 0; c < defs.size(); ++c)
-    if (res_defs[c].key == "gyro_scale" && opt.have_camera)
-      res[c].description = res_defs[c].description;
-  const auto sel_res = stepwise(d, res_defs, residual_family, opt, rep, res);
-  const auto sel_rate = stepwise(dr, defs, rate_family, opt, rep, res);
+  // With the camera, R_CB is known and the gyro scale is one number: on rates −ω̄_gyro, on the residual −B·R_CB·Θ.
+  std::vector<CandidateDef> used = defs;
+  for (size_t c = 0; c < used.size(); ++c)
+    if (used[c].key == "gyro_scale" && opt.have_camera) {
+      used[c].cols = {kGyroScale};
+      used[c].needs_rate = !rate_time;
+      if (!rate_time)
+        res[c].description = "gyro scale error: r = −s·B(x,y)·R_CB·∫ω dt over the track";
+    }
+  const auto sel_res = stepwise(d, used, residual_family, opt, rep, res);
+  const auto sel_rate = stepwise(dr, used, rate_family, opt, rep, res);
   static const std::map<std::string, std::string> rate_xlabel = {
       {"td_const", "angular acceleration alpha, bias removed, / SE [1/s]"},
       {"td_drift", "fitted alpha * dt(t), bias removed, / SE"},
       {"rolling_shutter", "angular acceleration alpha / SE of psi_vis [1/s]"},
-      {"focal", "response of w_vis to a unit focal error, bias removed, / SE"}};
+      {"focal", "response of w_vis to a unit focal error, bias removed, / SE"},
+      {"gyro_scale", "-w_gyro through the images' estimator, bias removed, / SE [rad/s]"}};
   for (size_t c : rate_family) {
     res[c].curve.xlabel = rate_xlabel.at(defs[c].key);
     res[c].curve.ylabel = "w_vis - w_gyro (bias removed) and psi_vis, / SE (bin mean +- SE)";

@@ -47,7 +47,7 @@ ImuSynthResult synthesize_imu(const Trajectory &traj, const ImuSynthOptions &opt
       wg(i) = rng.normal();
     for (int i = 0; i < 3; ++i)
       wa(i) = rng.normal();
-    m.wm += bg;
+    m.wm = (1.0 + opt.gyro_scale) * m.wm + bg;
     m.am += ba;
     if (opt.add_noise) {
       m.wm += sig_g * ng;

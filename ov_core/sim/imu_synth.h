@@ -15,6 +15,7 @@ struct ImuSynthOptions {
   Eigen::Vector3d ba0 = Eigen::Vector3d::Zero();                ///< initial accel bias [m/s^2]
   bool add_noise = true;                                        ///< white noise
   bool add_bias_walk = true;                                    ///< bias random walk
+  double gyro_scale = 0.0; ///< planted scale error: the gyro reads (1 + gyro_scale)·ω (+ bias + noise)
   uint64_t seed = 0;
 };
 

@@ -131,6 +131,7 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::Key << "accelerometer_random_walk" << YAML::Value << opt.imu.accel_random_walk;
   e << YAML::Key << "noise" << YAML::Value << opt.imu_noise;
   e << YAML::Key << "bias_walk" << YAML::Value << opt.imu_bias_walk;
+  e << YAML::Key << "gyro_scale_error" << YAML::Value << opt.gyro_scale; // planted: the gyro reads (1 + s)·ω
   e << YAML::Key << "gravity_W" << YAML::Value << YAML::Flow << std::vector<double>{0.0, 0.0, -9.81};
   e << YAML::EndMap;
   e << YAML::Key << "camera" << YAML::Value << YAML::BeginMap;
@@ -187,6 +188,10 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     throw UsageError("rolling-shutter readout must lie in [0, one frame interval = " + std::to_string(frame_s) + " s]");
   if (!(std::abs(opt.focal_error) < 0.5))
     throw UsageError("focal error must lie in (-0.5, 0.5) (relative)");
+  if (!(std::abs(opt.gyro_scale) < 0.5))
+    throw UsageError("gyro scale error must lie in (-0.5, 0.5) (relative)");
+  if (opt.gyro_scale != 0.0 && !opt.imu_from.empty())
+    throw UsageError("a gyro scale error is planted in the synthetic IMU, not in a copied one (--imu-from)");
   const auto wall0 = std::chrono::steady_clock::now();
   SimReport rep;
   const std::unique_ptr<Trajectory> traj = make_trajectory(opt);
@@ -208,6 +213,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   io.calib = opt.imu;
   io.add_noise = opt.imu_noise;
   io.add_bias_walk = opt.imu_bias_walk;
+  io.gyro_scale = opt.gyro_scale;
   io.seed = derive_seed(opt.seed, kImu);
   ImuSynthResult imu = synthesize_imu(*traj, io);
   if (!opt.imu_from.empty()) {

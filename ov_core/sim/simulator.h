@@ -36,6 +36,8 @@ struct SimOptions {
   /// Focal-length error: the data are made with focal lengths (1 + focal_error)·(fu, fv) of `cam`, while
   /// cam0/sensor.yaml keeps `cam`'s. A filter reading the yaml then has f too small by this factor.
   double focal_error = 0.0;
+  /// Gyro scale error: imu0/data.csv reads (1 + gyro_scale)·ω; imu0/sensor.yaml does not say so.
+  double gyro_scale = 0.0;
   SceneOptions scene; ///< its seed is derived from `seed`
   RenderOptions render;
   FeatureSimOptions features; ///< its seed is derived from `seed`

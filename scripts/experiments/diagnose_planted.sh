@@ -4,10 +4,11 @@
 # effect, `ovton run --td-mode off` (t_d held at the true mean offset) with a residual log, `ovton diagnose --dataset`.
 #   readout  25 ms rolling shutter, --agility 1 (a readout shows in the rates only through angular acceleration)
 #   focal    data made with focal lengths 1 % larger than cam0/sensor.yaml says
+#   gyro_scale  the gyro reads 1 % more than the true rate, --agility 1 (the rate must vary within the bias's bins)
 #   clean    nothing planted (the plain flight)
 #   clean_agile nothing planted, --agility 1
 # Prints one line per case and seed (the top three candidates) and writes OUT/planted.txt.
-# Usage: scripts/experiments/diagnose_planted.sh [OUT] [SEEDS...]   (default seeds 1 2 3 4; ~25 s per case and seed)
+# Usage: scripts/experiments/diagnose_planted.sh [OUT] [SEEDS...]   (default seeds 1 2 3 4; ~15 s per case and seed)
 #   OVTON_BIN overrides the binary.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -33,6 +34,7 @@ one() { # name seed td_init_ms sim-args...
 for s in "${SEEDS[@]}"; do
   one readout "$s" 22.5 --readout-ms 25 --agility 1 # the filter holds the mid-row offset: 10 + 25/2 ms
   one focal "$s" 10 --focal-error-pct 1
+  one gyro_scale "$s" 10 --gyro-scale-pct 1 --agility 1
   one clean "$s" 10
   one clean_agile "$s" 10 --agility 1
 done
