@@ -889,7 +889,8 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
       dr.r(i) = sq * f.psi(a);
       dr.D(i, kVrow) = sq * f.alpha(a);
     }
-    for (int a = 0; a < 3; ++a, ++i) { // ω rows against the smoothed gyro, for the scale candidates
+    for (int a = 0; a < 3;
+         ++a, ++i) { // ω rows against the gyro through the images' estimator, for the scale candidates
       const double sq = 1.0 / f.se(a);
       dr.r(i) = sq * (f.e_s(a) - ses[b](a) / sw[b](a));
       dr.D(i, kFocal) = sq * (f.focal_e(a) - sf[b](a) / sw[b](a));
