@@ -24,8 +24,8 @@ public:
   ImagePrefetcher &operator=(const ImagePrefetcher &) = delete;
 
   /// The decoded image of images[index] (empty if the file is unreadable: the caller reports it, as without the
-  /// prefetcher). Indices must not decrease between calls; skipped ones are dropped. An index the thread has already
-  /// dropped, or one outside the list, is decoded here instead.
+  /// prefetcher). Indices normally increase between calls; skipped ones are dropped, and an index asked again or
+  /// already dropped is decoded here instead. An index outside the list gives an empty image.
   cv::Mat get(size_t index);
   /// The same for an entry of the list (the replay hands out the list's own entries); any other entry is decoded here.
   cv::Mat get(const ImageEntry &e);
@@ -42,7 +42,7 @@ private:
   size_t produced_ = 0;                                   ///< next index the thread decodes
   size_t in_flight_ = std::numeric_limits<size_t>::max(); ///< index being decoded now
   bool stop_ = false;
-  std::thread thread_;
+  std::thread thread_; ///< last: started once everything above is constructed
 };
 
 } // namespace ov_core
