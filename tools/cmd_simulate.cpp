@@ -112,7 +112,7 @@ int cmd_simulate(const Args &args) {
     throw ov_core::UsageError("--features-only and --no-images are exclusive");
   if (!o.imu_from.empty() && gt.empty())
     throw ov_core::UsageError("--imu-from needs --gt with the ground truth of the same sequence");
-  if (vm["agility"].as<double>() != 0.0 && !gt.empty())
+  if (o.agility != 0.0 && !gt.empty())
     throw ov_core::UsageError("--agility applies to the built-in flight, not to --gt");
   o.gt_file = gt;
   o.features_only = vm.count("features-only") > 0;

@@ -558,14 +558,23 @@ std::vector<size_t> stepwise(const Design &d, const std::vector<CandidateDef> &d
 /// estimator), three axes each.
 constexpr int kRateRowsPerImage = 9;
 
-/// The image shift a relative focal error ε makes in undistorted normalised coordinates, per unit ε: the focal scales
-/// the distorted point and the filter undistorts, so the shift is J_d⁻¹·x_d (x itself without a camera model).
-Eigen::Vector2d focal_dir(const CameraModel *cam, const Eigen::Vector2d &x) {
+/// The shifts of an undistorted normalised point x per unit relative focal error ε and per unit δk1. Both act on the
+/// distorted point and the filter undistorts, so each is the distorted change mapped through the inverse of the
+/// distortion's Jacobian: J_d⁻¹·x_d and J_d⁻¹·|x|²·x (x and |x|²·x without a camera model).
+struct ErrorDirs {
+  Eigen::Vector2d focal, k1;
+};
+ErrorDirs error_dirs(const CameraModel *cam, const Eigen::Vector2d &x) {
+  const Eigen::Vector2d k1 = x.squaredNorm() * x;
   if (!cam)
-    return x;
+    return {x, k1};
   Eigen::Matrix2d Jd;
   const Eigen::Vector2d xd = cam->distort_normalized(x, &Jd);
-  return Jd.partialPivLu().solve(xd);
+  const Eigen::PartialPivLU<Eigen::Matrix2d> lu(Jd);
+  return {lu.solve(xd), lu.solve(k1)};
+}
+Eigen::Vector2d focal_dir(const CameraModel *cam, const Eigen::Vector2d &x) {
+  return error_dirs(cam, x).focal;
 }
 
 /// Gyro reading at t (linear interpolation; clamped at the ends).
@@ -613,24 +622,23 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
       const ResidualLogRow *r = tr[j];
       if (!(std::isfinite(r->depth_m) && r->depth_m > 0))
         continue;
-      // Local slope of a quadratic through up to five measured positions around j (least squares).
+      // Local slope of a quadratic through up to five measured positions around j (least squares): linear in the
+      // positions, ẋ = Σ w_q·x_q, and the weights are kept to put the gyro through the same slope.
       const size_t a = j >= 2 ? j - 2 : 0, b = std::min(m - 1, j + 2);
+      const auto h = [&](size_t q) {
+        const double tau = 1e-9 * double(tr[q]->t_cam_ns - r->t_cam_ns);
+        return Eigen::Vector3d(1.0, tau, tau * tau);
+      };
       Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
-      Eigen::Matrix<double, 3, 2> B = Eigen::Matrix<double, 3, 2>::Zero();
-      for (size_t q = a; q <= b; ++q) {
-        const double tau = 1e-9 * double(tr[q]->t_cam_ns - r->t_cam_ns);
-        const Eigen::Vector3d h(1.0, tau, tau * tau);
-        A += h * h.transpose();
-        B += h * Eigen::RowVector2d(tr[q]->x_norm, tr[q]->y_norm);
-      }
-      const Eigen::Matrix<double, 3, 2> c = A.ldlt().solve(B);
-      FlowObs o{Eigen::Vector2d(r->x_norm, r->y_norm), c.row(1).transpose(), r->v_px / rep.image_height - 0.5,
-                1.0 / r->depth_m, n_tracks};
+      for (size_t q = a; q <= b; ++q)
+        A += h(q) * h(q).transpose();
       const Eigen::LDLT<Eigen::Matrix3d> Al(A);
+      FlowObs o{Eigen::Vector2d(r->x_norm, r->y_norm), Eigen::Vector2d::Zero(), r->v_px / rep.image_height - 0.5,
+                1.0 / r->depth_m, n_tracks};
       for (size_t q = a; q <= b; ++q) {
-        const double tau = 1e-9 * double(tr[q]->t_cam_ns - r->t_cam_ns);
         o.win_t_imu[o.n_win] = double(tr[q]->t_cam_ns) + 1e9 * tr[q]->td_s;
-        o.win_w[o.n_win++] = Al.solve(Eigen::Vector3d(1.0, tau, tau * tau))(1);
+        o.win_w[o.n_win] = Al.solve(h(q))(1);
+        o.xdot += o.win_w[o.n_win++] * Eigen::Vector2d(tr[q]->x_norm, tr[q]->y_norm);
       }
       o.t_imu = double(r->t_cam_ns) + 1e9 * r->td_s;
       frames[r->t_cam_ns].push_back(o);
@@ -670,23 +678,30 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
     Eigen::Matrix<double, 9, 9> C;
     VectorXd w;
   };
-  // with_psi false: ψ fixed at 0, so ω is the rate at the features' mean row (what the time candidates compare with
-  // the gyro; fitting ψ as well costs ω precision where the features do not span the rows evenly).
-  const auto fit_frame = [&](const std::vector<FlowObs> &obs, bool with_psi) {
+  // One image's flow design with the current depth corrections: (ω, ψ, v), or (ω, v) without ψ.
+  const auto frame_design = [&](const std::vector<FlowObs> &obs, bool with_psi) {
     const Eigen::Index no = static_cast<Eigen::Index>(obs.size());
-    const int p = with_psi ? 9 : 6;
-    MatrixXd H(2 * no, p);
-    VectorXd y(2 * no);
-    FrameFit f;
-    f.w = VectorXd::Ones(2 * no);
+    MatrixXd H(2 * no, with_psi ? 9 : 6);
     for (Eigen::Index q = 0; q < no; ++q) {
       const Eigen::Matrix<double, 2, 9> Hq = flow_rows(obs[q].x, obs[q].rho, obs[q].inv_z + eps[obs[q].track]);
       if (with_psi)
         H.middleRows<2>(2 * q) = Hq;
       else
         H.middleRows<2>(2 * q) << Hq.leftCols<3>(), Hq.rightCols<3>();
-      y.segment<2>(2 * q) = obs[q].xdot;
     }
+    return H;
+  };
+  // with_psi false: ψ fixed at 0, so ω is the rate at the features' mean row (what the time candidates compare with
+  // the gyro; fitting ψ as well costs ω precision where the features do not span the rows evenly).
+  const auto fit_frame = [&](const std::vector<FlowObs> &obs, bool with_psi) {
+    const Eigen::Index no = static_cast<Eigen::Index>(obs.size());
+    const int p = with_psi ? 9 : 6;
+    const MatrixXd H = frame_design(obs, with_psi);
+    VectorXd y(2 * no);
+    FrameFit f;
+    f.w = VectorXd::Ones(2 * no);
+    for (Eigen::Index q = 0; q < no; ++q)
+      y.segment<2>(2 * q) = obs[q].xdot;
     // The solution and its covariance in the 9 parameters (ψ rows and columns zero without ψ).
     const auto expand = [&](const VectorXd &v) {
       Vec9 out = Vec9::Zero();
@@ -808,12 +823,10 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
   const auto gyro_through_images = [&](int64_t t_cam, const FrameFit &ff) -> Eigen::Vector3d {
     const auto &obs = frames.at(t_cam);
     const Eigen::Index no = static_cast<Eigen::Index>(obs.size());
-    MatrixXd H(2 * no, 6);
+    const MatrixXd H = frame_design(obs, false);
     VectorXd y(2 * no);
     for (Eigen::Index q = 0; q < no; ++q) {
       const FlowObs &o = obs[q];
-      const Eigen::Matrix<double, 2, 9> Hq = flow_rows(o.x, o.rho, o.inv_z + eps[o.track]);
-      H.middleRows<2>(2 * q) << Hq.leftCols<3>(), Hq.rightCols<3>();
       Eigen::Vector2d xdot = Eigen::Vector2d::Zero();
       for (int k = 0; k < o.n_win; ++k) {
         const Eigen::Vector3d b = R_CjCq(o.t_imu, o.win_t_imu[k]).transpose() * o.x.homogeneous();
@@ -889,8 +902,8 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
       dr.r(i) = sq * f.psi(a);
       dr.D(i, kVrow) = sq * f.alpha(a);
     }
-    for (int a = 0; a < 3;
-         ++a, ++i) { // ω rows against the gyro through the images' estimator, for the scale candidates
+    // ω rows against the gyro through the images' estimator, for the scale candidates.
+    for (int a = 0; a < 3; ++a, ++i) {
       const double sq = 1.0 / f.se(a);
       dr.r(i) = sq * (f.e_s(a) - ses[b](a) / sw[b](a));
       dr.D(i, kFocal) = sq * (f.focal_e(a) - sf[b](a) / sw[b](a));
@@ -1070,17 +1083,7 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
       const double t = ts[j];
       const Eigen::Vector2d V = vel[j];
       const double row_frac = (r->v_px - r->res_v_px) / rep.image_height - 0.5;
-      const double r2 = xh[j].squaredNorm();
-      // Focal and k1 errors act on the distorted point; the filter undistorts, so their effect on the residual (in
-      // undistorted coordinates) is the distorted change mapped through the inverse of the distortion's Jacobian.
-      Eigen::Vector2d scale_dir = xh[j], k1_dir = r2 * xh[j];
-      if (cam) {
-        Eigen::Matrix2d Jd;
-        const Eigen::Vector2d xd = cam->distort_normalized(xh[j], &Jd);
-        const Eigen::PartialPivLU<Eigen::Matrix2d> lu(Jd);
-        scale_dir = lu.solve(xd);
-        k1_dir = lu.solve(r2 * xh[j]);
-      }
+      const ErrorDirs dirs = error_dirs(cam.get(), xh[j]);
       const Eigen::Vector3d w(r->w_x, r->w_y, r->w_z);
       if (rates) { // trapezoid integral of the body rate since the track's first row
         theta += 0.5 * (w + w_prev) * 1e-9 * double(r->t_cam_ns - t_prev);
@@ -1101,10 +1104,10 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
         d.D(i, kV) = V(a);
         d.D(i, kVt) = V(a) * (t - d.t_mid);
         d.D(i, kVrow) = V(a) * row_frac;
-        d.D(i, kFocal) = fa * scale_dir(a);
+        d.D(i, kFocal) = fa * dirs.focal(a);
         d.D(i, kPpU) = a == 0 ? 1.0 : 0.0;
         d.D(i, kPpV) = a == 1 ? 1.0 : 0.0;
-        d.D(i, kRadial) = fa * k1_dir(a);
+        d.D(i, kRadial) = fa * dirs.k1(a);
         if (rates)
           for (int c = 0; c < 3; ++c)
             for (int q = 0; q < 3; ++q)
