@@ -1,10 +1,10 @@
 #pragma once
 // Helpers shared by the simulator tests (test_sim_*.cpp).
 #include "ov_core/cam/camera_model.h"
-#include "ov_core/sim/feature_sim.h"
-#include "ov_core/sim/renderer.h"
-#include "ov_core/sim/scene.h"
-#include "ov_core/sim/simulator.h"
+#include "ov_sim/feature_sim.h"
+#include "ov_sim/renderer.h"
+#include "ov_sim/scene.h"
+#include "ov_sim/simulator.h"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -47,14 +47,14 @@ inline Eigen::Matrix3d look_along_x() {
 }
 
 /// An empty 6 x 6 x 3 m room (no boxes) to plant markers in, and noise-free rendering options.
-inline ov_core::sim::Scene marker_room() {
-  ov_core::sim::SceneOptions so;
+inline ov_sim::Scene marker_room() {
+  ov_sim::SceneOptions so;
   so.num_boxes = 0;
   so.seed = 5;
-  return ov_core::sim::Scene(ov_core::sim::AlignedBox{Eigen::Vector3d(-3, -3, 0), Eigen::Vector3d(3, 3, 3)}, {}, so);
+  return ov_sim::Scene(ov_sim::AlignedBox{Eigen::Vector3d(-3, -3, 0), Eigen::Vector3d(3, 3, 3)}, {}, so);
 }
-inline ov_core::sim::RenderOptions noise_free_rendering() {
-  ov_core::sim::RenderOptions ro;
+inline ov_sim::RenderOptions noise_free_rendering() {
+  ov_sim::RenderOptions ro;
   ro.noise_sigma = 0.0;
   return ro;
 }
@@ -62,17 +62,17 @@ inline ov_core::sim::RenderOptions noise_free_rendering() {
 /// The simulator's trajectory, scene and camera for `o`, with a noise-free feature simulator on them (members in
 /// construction order: the simulator keeps references to the camera and the scene).
 struct NoiseFreeFeatureSim {
-  explicit NoiseFreeFeatureSim(const ov_core::sim::SimOptions &o)
-      : traj(ov_core::sim::make_trajectory(o)), scene(ov_core::sim::make_scene(*traj, o)), cam(o.cam),
+  explicit NoiseFreeFeatureSim(const ov_sim::SimOptions &o)
+      : traj(ov_sim::make_trajectory(o)), scene(ov_sim::make_scene(*traj, o)), cam(o.cam),
         features(cam, scene, noise_free()) {}
-  std::unique_ptr<ov_core::sim::Trajectory> traj;
-  ov_core::sim::Scene scene;
+  std::unique_ptr<ov_sim::Trajectory> traj;
+  ov_sim::Scene scene;
   ov_core::CameraModel cam;
-  ov_core::sim::FeatureSimulator features;
+  ov_sim::FeatureSimulator features;
 
 private:
-  static ov_core::sim::FeatureSimOptions noise_free() {
-    ov_core::sim::FeatureSimOptions fo;
+  static ov_sim::FeatureSimOptions noise_free() {
+    ov_sim::FeatureSimOptions fo;
     fo.pixel_noise = 0.0;
     return fo;
   }

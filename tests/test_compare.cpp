@@ -1,11 +1,11 @@
 // `ovton compare`: the report (tables, plots) over real runs on a small simulated dataset, the parallel runner, mode
 // list parsing, and the command itself end to end when the ovton binary is built beside this test.
-#include "ov_core/eval/report.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/replay.h"
-#include "ov_core/sim/simulator.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/report.h"
 #include "ov_msckf_ton/core/vio_manager.h"
+#include "ov_sim/simulator.h"
 #include "test_util.h"
 
 #include <opencv2/imgcodecs.hpp>
@@ -22,6 +22,7 @@
 
 namespace fs = std::filesystem;
 using namespace ov_core;
+using namespace ov_eval;
 
 namespace {
 
@@ -65,16 +66,16 @@ class CompareTest : public ::testing::Test {
 protected:
   static void SetUpTestSuite() {
     dir_ = std::make_unique<ovtest::TempDir>();
-    sim::SimOptions o;
+    ov_sim::SimOptions o;
     o.out_dir = (*dir_) / "sim";
     o.duration_s = 8.0;
     o.seed = 7;
     o.features_only = true;
-    o.td.kind = sim::TdModelKind::Drift;
+    o.td.kind = ov_sim::TdModelKind::Drift;
     o.td.td0_s = 0.010;
     o.td.bias_s_per_s = 1e-4;
     o.td.noise_s_per_sqrt_s = 1e-4;
-    sim::write_simulation(o);
+    ov_sim::write_simulation(o);
     data_ = std::make_unique<Dataset>(load_dataset(o.out_dir));
   }
   static void TearDownTestSuite() {

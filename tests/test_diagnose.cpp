@@ -1,9 +1,9 @@
-// `ovton diagnose` (ov_core/eval/diagnose.h): planted effects in synthetic residual logs are found and sized, a clean
+// `ovton diagnose` (ov_eval/diagnose.h): planted effects in synthetic residual logs are found and sized, a clean
 // log flags nothing, bad logs fail with file:line. Logs of simulated data and of the filter: test_diagnose_sim.cpp.
 #include "diagnose_test_util.h"
-#include "ov_core/eval/diagnose.h"
 #include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/diagnose.h"
 #include "ov_msckf_ton/update/residual_log.h"
 #include "test_util.h"
 
@@ -13,6 +13,7 @@
 #include <random>
 
 using namespace ov_core;
+using namespace ov_eval;
 using ovtest::estimate;
 using ovtest::top;
 

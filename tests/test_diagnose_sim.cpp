@@ -8,12 +8,12 @@
 //  acceleration (ψ = α·t_r), and the plain flight's ≈ 0.15 rad/s² leaves t_r at ±5 ms (measured: 15.2 ± 4.8 ms for
 //  25 through the filter, 14.0 ± 5.3 ms with the true poses).
 #include "diagnose_test_util.h"
-#include "ov_core/eval/diagnose.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/replay.h"
-#include "ov_core/sim/simulator.h"
+#include "ov_eval/diagnose.h"
 #include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_msckf_ton/update/residual_log.h"
+#include "ov_sim/simulator.h"
 #include "test_util.h"
 
 #include <chrono>
@@ -22,6 +22,7 @@
 #include <map>
 
 using namespace ov_core;
+using namespace ov_eval;
 using ovtest::expect_nothing_flagged;
 using ovtest::expect_top;
 using ovtest::top;
@@ -34,17 +35,17 @@ struct Plant {
   double readout_s = 0.0;              ///< rolling shutter
   double focal_error = 0.0;            ///< relative
   double duration_s = 20.0;
-  double agility = 0.0;    ///< the built-in flight's extra angular oscillations (sim::LissajousTrajectory)
+  double agility = 0.0;    ///< the built-in flight's extra angular oscillations (ov_sim::LissajousTrajectory)
   double gyro_scale = 0.0; ///< relative: the gyro reads (1 + s)·ω
 };
 
-sim::SimOptions sim_options(const std::string &dir, const Plant &p) {
-  sim::SimOptions o;
+ov_sim::SimOptions sim_options(const std::string &dir, const Plant &p) {
+  ov_sim::SimOptions o;
   o.out_dir = dir;
   o.duration_s = p.duration_s;
   o.seed = 7;
   o.features_only = true;
-  o.td.kind = p.td_rate != 0.0 ? sim::TdModelKind::Drift : sim::TdModelKind::Constant;
+  o.td.kind = p.td_rate != 0.0 ? ov_sim::TdModelKind::Drift : ov_sim::TdModelKind::Constant;
   o.td.td0_s = p.td0_s;
   o.td.bias_s_per_s = p.td_rate;
   o.td.noise_s_per_sqrt_s = 0.0;
@@ -67,8 +68,8 @@ DiagnoseOptions diagnose_options(const Dataset &data) {
 /// Residual log with the TRUE camera poses at t_cam + td_model (td_model NaN: each image's true offset). Every track is
 /// cut into windows of at most 20 frames as the filter's, its point triangulated (Gauss-Newton on the normalised
 /// reprojection error) with the camera of sensor.yaml, and its residuals written as the filter writes them.
-void write_true_pose_log(const sim::SimOptions &o, const Dataset &data, double td_model_s, const std::string &file) {
-  const auto traj = sim::make_trajectory(o);
+void write_true_pose_log(const ov_sim::SimOptions &o, const Dataset &data, double td_model_s, const std::string &file) {
+  const auto traj = ov_sim::make_trajectory(o);
   const CameraModel cam(data.cam);
   struct Obs {
     size_t frame;
@@ -83,7 +84,7 @@ void write_true_pose_log(const sim::SimOptions &o, const Dataset &data, double t
     const int64_t t_cam = data.images[k].t_cam_ns;
     td[k] = std::isnan(td_model_s) ? data.td_truth_at(t_cam) : td_model_s;
     const auto s = traj->sample(t_cam + s_to_ns(td[k]));
-    sim::camera_pose(s, data.cam.T_BC, R_WC[k], p_WC[k]);
+    ov_sim::camera_pose(s, data.cam.T_BC, R_WC[k], p_WC[k]);
     w_B[k] = s.w_B;
     for (const auto &f : *data.images[k].features)
       tracks[f.id].push_back({k, f.uv, cam.undistort(f.uv)});
@@ -147,8 +148,8 @@ void write_true_pose_log(const sim::SimOptions &o, const Dataset &data, double t
 DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_init_s) {
   const auto t0 = std::chrono::steady_clock::now();
   ovtest::TempDir dir;
-  const sim::SimOptions o = sim_options(dir / "sim", p);
-  sim::write_simulation(o);
+  const ov_sim::SimOptions o = sim_options(dir / "sim", p);
+  ov_sim::write_simulation(o);
   const Dataset data = load_dataset(o.out_dir);
   ov_msckf_ton::VioOptions opt;
   opt.td_mode = ov_msckf_ton::parse_td_mode(mode);
@@ -172,8 +173,8 @@ DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_in
 
 DiagnoseReport true_pose_case(const Plant &p, double td_model_s) {
   ovtest::TempDir dir;
-  const sim::SimOptions o = sim_options(dir / "sim", p);
-  sim::write_simulation(o);
+  const ov_sim::SimOptions o = sim_options(dir / "sim", p);
+  ov_sim::write_simulation(o);
   const Dataset data = load_dataset(o.out_dir);
   write_true_pose_log(o, data, td_model_s, dir / "res.csv");
   const DiagnoseReport rep = diagnose(load_residual_log(dir / "res.csv"), diagnose_options(data));

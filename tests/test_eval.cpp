@@ -1,6 +1,6 @@
 // Trajectory metrics: association, alignment, APE/ARE/RPE, TPE (paper eq. 16), CIT (eq. 15).
-#include "ov_core/eval/metrics.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/metrics.h"
 
 #include <gtest/gtest.h>
 
@@ -9,6 +9,7 @@
 #include <sstream>
 
 using namespace ov_core;
+using namespace ov_eval;
 
 namespace {
 
@@ -400,8 +401,8 @@ TEST(EvalAlign, StillTrajectoryTakesYawFromOrientations) {
     gt.push_back(g);
     est.push_back(e);
   }
-  ov_core::EvalOptions opt;
-  const auto r = ov_core::evaluate(est, gt, {}, opt);
+  ov_eval::EvalOptions opt;
+  const auto r = ov_eval::evaluate(est, gt, {}, opt);
   EXPECT_LT(r.ape_rmse_m, 1e-9);
   EXPECT_LT(r.are_rmse_deg, 1e-6);
 }

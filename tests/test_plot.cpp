@@ -1,6 +1,6 @@
 // OpenCV-only PNG charts: nice ticks, the pixel mapping, equal aspect, NaN breaks, errors, determinism.
-#include "ov_core/eval/plot.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/plot.h"
 
 #include <gtest/gtest.h>
 
@@ -11,6 +11,7 @@
 #include <limits>
 
 using namespace ov_core;
+using namespace ov_eval;
 
 namespace {
 

@@ -3,8 +3,8 @@
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/image_prefetcher.h"
 #include "ov_core/io/replay.h"
-#include "ov_core/sim/simulator.h"
 #include "ov_msckf_ton/core/vio_manager.h"
+#include "ov_sim/simulator.h"
 #include "test_util.h"
 
 #include <opencv2/imgcodecs.hpp>
@@ -67,11 +67,11 @@ TEST(ImagePrefetcher, StopsCleanlyWhenDroppedEarly) {
 // A short rendered flight through the whole filter, decoding on the filter's thread and through the prefetcher.
 TEST(ImagePrefetcher, FilterGivesTheSameTrajectory) {
   ovtest::TempDir dir;
-  sim::SimOptions o;
+  ov_sim::SimOptions o;
   o.out_dir = dir / "sim";
   o.duration_s = 3.0;
   o.seed = 3;
-  sim::write_simulation(o);
+  ov_sim::write_simulation(o);
   const Dataset data = load_dataset(o.out_dir);
   ov_msckf_ton::VioOptions opt;
   opt.td_mode = ov_msckf_ton::TdMode::Sr;

@@ -1,15 +1,15 @@
 // IMU consistency: integrating the noise-free synthetic IMU from the true initial state must reproduce the
 // trajectory (1 cm, 0.1 deg after 10 s). Catches any sign, frame or gravity mistake in the synthesis.
 #include "ov_core/io/trajectory_io.h"
-#include "ov_core/sim/euroc_calib.h"
-#include "ov_core/sim/imu_synth.h"
-#include "ov_core/sim/trajectory.h"
+#include "ov_sim/euroc_calib.h"
+#include "ov_sim/imu_synth.h"
+#include "ov_sim/trajectory.h"
 #include "test_util.h"
 
 #include <cmath>
 
 using namespace ov_core;
-using namespace ov_core::sim;
+using namespace ov_sim;
 
 namespace {
 

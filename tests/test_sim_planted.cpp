@@ -2,12 +2,12 @@
 // focal-length error (data made with other intrinsics than cam0/sensor.yaml says). The observations and images must
 // carry exactly the planted effect, so that `diagnose` tests can hold it to a known size.
 #include "ov_core/io/dataset.h"
-#include "ov_core/sim/euroc_calib.h"
-#include "ov_core/sim/random.h"
-#include "ov_core/sim/renderer.h"
-#include "ov_core/sim/scene.h"
-#include "ov_core/sim/simulator.h"
 #include "ov_core/types/errors.h"
+#include "ov_sim/euroc_calib.h"
+#include "ov_sim/random.h"
+#include "ov_sim/renderer.h"
+#include "ov_sim/scene.h"
+#include "ov_sim/simulator.h"
 #include "sim_test_util.h"
 #include "test_util.h"
 
@@ -18,7 +18,7 @@
 #include <map>
 
 using namespace ov_core;
-using namespace ov_core::sim;
+using namespace ov_sim;
 using ovtest::median;
 
 namespace {

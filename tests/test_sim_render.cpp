@@ -1,9 +1,9 @@
 // Renderer: geometry (a planted marker is drawn where the camera model projects it) and trackability
 // (pyramidal KLT keeps enough long tracks on a rendered EuRoC stretch).
 #include "ov_core/io/trajectory_io.h"
-#include "ov_core/sim/euroc_calib.h"
-#include "ov_core/sim/renderer.h"
-#include "ov_core/sim/simulator.h"
+#include "ov_sim/euroc_calib.h"
+#include "ov_sim/renderer.h"
+#include "ov_sim/simulator.h"
 #include "sim_test_util.h"
 #include "test_util.h"
 
@@ -13,7 +13,7 @@
 #include <opencv2/video/tracking.hpp>
 
 using namespace ov_core;
-using namespace ov_core::sim;
+using namespace ov_sim;
 
 using ovtest::dark_centroid;
 using ovtest::median;

@@ -2,11 +2,11 @@
 // with the EuRoC reader, feature-level mode behaves like a tracker, `perturb` restamps a real folder.
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/trajectory_io.h"
-#include "ov_core/sim/euroc_calib.h"
-#include "ov_core/sim/perturb.h"
-#include "ov_core/sim/random.h"
-#include "ov_core/sim/simulator.h"
 #include "ov_core/types/errors.h"
+#include "ov_sim/euroc_calib.h"
+#include "ov_sim/perturb.h"
+#include "ov_sim/random.h"
+#include "ov_sim/simulator.h"
 #include "sim_test_util.h"
 #include "test_util.h"
 
@@ -17,7 +17,7 @@
 #include <sstream>
 
 using namespace ov_core;
-using namespace ov_core::sim;
+using namespace ov_sim;
 namespace fs = std::filesystem;
 
 namespace {

@@ -3,8 +3,8 @@
 // t_d mean between images.
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/replay.h"
-#include "ov_core/sim/simulator.h"
 #include "ov_msckf_ton/core/vio_manager.h"
+#include "ov_sim/simulator.h"
 #include "test_util.h"
 
 #include <cmath>
@@ -48,23 +48,23 @@ ModeRun run_mode(const ov_core::Dataset &data, TdMode mode, const VioOptions &ba
   return r;
 }
 
-std::unique_ptr<ov_core::Dataset> simulate(const ovtest::TempDir &dir, ov_core::sim::TdModelOptions td,
-                                           double duration_s, double pixel_noise = 1.0) {
-  ov_core::sim::SimOptions o;
+std::unique_ptr<ov_core::Dataset> simulate(const ovtest::TempDir &dir, ov_sim::TdModelOptions td, double duration_s,
+                                           double pixel_noise = 1.0) {
+  ov_sim::SimOptions o;
   o.out_dir = dir / "sim";
   o.duration_s = duration_s;
   o.seed = 11;
   o.features_only = true;
   o.td = td;
   o.features.pixel_noise = pixel_noise;
-  ov_core::sim::write_simulation(o);
+  ov_sim::write_simulation(o);
   return std::make_unique<ov_core::Dataset>(ov_core::load_dataset(o.out_dir));
 }
 
 /// The 8 s, constant +10 ms simulation the FVON tests share.
 std::unique_ptr<ov_core::Dataset> simulate_constant_10ms(const ovtest::TempDir &dir) {
-  ov_core::sim::TdModelOptions td;
-  td.kind = ov_core::sim::TdModelKind::Constant;
+  ov_sim::TdModelOptions td;
+  td.kind = ov_sim::TdModelKind::Constant;
   td.td0_s = 0.010;
   return simulate(dir, td, 8.0);
 }
@@ -174,8 +174,8 @@ template <typename Ref> PredictionErrors prediction_errors(const ModeRun &r, Ref
 
 TEST(TonFilter, TpnOnNoiseFreeDrift) {
   ovtest::TempDir dir;
-  ov_core::sim::TdModelOptions td;
-  td.kind = ov_core::sim::TdModelKind::Drift;
+  ov_sim::TdModelOptions td;
+  td.kind = ov_sim::TdModelKind::Drift;
   td.td0_s = 0.010;
   td.bias_s_per_s = 1e-4;
   td.noise_s_per_sqrt_s = 0.0;

@@ -2,8 +2,8 @@
 // for one or more time-offset modes replayed one after another in this process (see docs/benchmarks.md).
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/text_format.h"
-#include "ov_core/sim/simulator.h"
 #include "ov_core/types/errors.h"
+#include "ov_sim/simulator.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/mem_usage.h"
@@ -84,12 +84,12 @@ void generate(const std::string &dir, double seconds, bool quiet) {
     std::cerr << "benchmark: reusing the dataset in " << dir << " (delete it to render a new one)\n";
     return;
   }
-  ov_core::sim::SimOptions o;
+  ov_sim::SimOptions o;
   o.out_dir = dir;
   o.duration_s = seconds;
   std::string last_stage;
   size_t last_pct = 101;
-  const auto rep = ov_core::sim::write_simulation(o, [&](const std::string &stage, size_t done, size_t total) {
+  const auto rep = ov_sim::write_simulation(o, [&](const std::string &stage, size_t done, size_t total) {
     if (quiet || total == 0)
       return;
     const size_t pct = done * 100 / total;

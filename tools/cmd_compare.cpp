@@ -1,7 +1,7 @@
 // `ovton compare`: run one dataset under several time-offset modes and write the paper's tables and figures.
-#include "ov_core/eval/metrics.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/metrics.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/compare_report.h"
@@ -67,7 +67,7 @@ int cmd_compare(const Args &args) {
     throw ov_core::UsageError("--jobs must be at least 1");
   if (align != "posyaw" && align != "se3" && align != "sim3")
     throw ov_core::UsageError("--align must be posyaw, se3 or sim3");
-  req.report.eval.align = ov_core::parse_align_mode(align);
+  req.report.eval.align = ov_eval::parse_align_mode(align);
 
   req.base = config.empty() ? ov_msckf_ton::VioOptions{} : ov_msckf_ton::load_vio_options(config);
   if (!init.empty()) {
@@ -90,7 +90,7 @@ int cmd_compare(const Args &args) {
   install_interrupt_handler();
   const CompareResult res = run_compare(data, req);
 
-  std::cout << ov_core::results_markdown_table(res.rows) << "\n";
+  std::cout << ov_eval::results_markdown_table(res.rows) << "\n";
   std::cout << "results: " << res.files.md << ", " << res.files.csv << "\n";
   if (res.interrupted) {
     std::cerr << "compare: interrupted; the report covers the runs that finished\n";

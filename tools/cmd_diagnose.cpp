@@ -1,7 +1,7 @@
-// `ovton diagnose`: names the effect the filter's model lacks from its residual log (ov_core/eval/diagnose.h).
-#include "ov_core/eval/diagnose.h"
+// `ovton diagnose`: names the effect the filter's model lacks from its residual log (ov_eval/diagnose.h).
 #include "ov_core/io/dataset.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/diagnose.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 
@@ -13,7 +13,7 @@ namespace po = boost::program_options;
 
 int ovton::cmd_diagnose(const ovton::Args &args) {
   std::string log_file, dataset_dir, out_dir;
-  ov_core::DiagnoseOptions opt;
+  ov_eval::DiagnoseOptions opt;
   po::options_description desc(
       "usage: ovton diagnose --log FILE [--dataset DIR] [--out DIR]\n\n"
       "Tests candidate effects on the log that `ovton run --residual-log FILE` wrote. With --dataset, the\n"
@@ -60,12 +60,12 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
     std::filesystem::path p(log_file);
     out_dir = (p.parent_path() / (p.stem().string() + "_diagnose")).string();
   }
-  const ov_core::ResidualLog log = ov_core::load_residual_log(log_file);
-  const ov_core::DiagnoseReport rep = ov_core::diagnose(log, opt);
+  const ov_eval::ResidualLog log = ov_eval::load_residual_log(log_file);
+  const ov_eval::DiagnoseReport rep = ov_eval::diagnose(log, opt);
   std::cout << "log " << log_file << ": " << rep.rows_used << " observations in " << rep.tracks_used << " tracks over "
             << rep.duration_s << " s, residual RMS " << rep.residual_rms_px << " px\n\n"
-            << ov_core::format_ranking(rep) << "\n";
-  for (const auto &f : ov_core::write_diagnose_report(rep, out_dir))
+            << ov_eval::format_ranking(rep) << "\n";
+  for (const auto &f : ov_eval::write_diagnose_report(rep, out_dir))
     std::cout << "wrote " << f << "\n";
   return 0;
 }

@@ -1,8 +1,8 @@
 // `ovton eval`: APE/ARE/RPE/TPE/CIT of a trajectory against ground truth (paper §V-A).
-#include "ov_core/eval/metrics.h"
 #include "ov_core/io/text_format.h"
 #include "ov_core/io/trajectory_io.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/metrics.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 
@@ -90,8 +90,8 @@ int ovton::cmd_eval(const ovton::Args &args) {
   if (!(max_gap_s > 0.0))
     throw ov_core::UsageError("--max-gap-s must be positive");
 
-  ov_core::EvalOptions opt;
-  opt.align = ov_core::parse_align_mode(align_str);
+  ov_eval::EvalOptions opt;
+  opt.align = ov_eval::parse_align_mode(align_str);
   opt.rpe_segments_m = parse_segments(seg_str);
   opt.max_gap_s = max_gap_s;
   opt.cit.eps1_s = eps1_ms * 1e-3;
@@ -106,17 +106,17 @@ int ovton::cmd_eval(const ovton::Args &args) {
   std::vector<ov_core::TdSample> td_truth;
   if (!td_file.empty())
     td_truth = ov_core::read_td_truth(td_file);
-  const ov_core::EvalResult r = ov_core::evaluate(est, gt, td_truth, opt);
+  const ov_eval::EvalResult r = ov_eval::evaluate(est, gt, td_truth, opt);
 
   const double yaw_deg = std::atan2(r.alignment.R(1, 0), r.alignment.R(0, 0)) * 180.0 / M_PI;
   std::ostream &os = std::cout;
   os << "estimate     " << est_file << "  (" << r.n_est << " poses)\n"
      << "ground truth " << gt_file << "  (" << gt.size() << " poses)\n"
      << "matched      " << r.n_matched << " of " << r.n_est << " estimates\n"
-     << "alignment    " << ov_core::to_string(r.align_mode) << "  (t = [" << ov_core::format_fixed(r.alignment.t.x(), 3)
+     << "alignment    " << ov_eval::to_string(r.align_mode) << "  (t = [" << ov_core::format_fixed(r.alignment.t.x(), 3)
      << ", " << ov_core::format_fixed(r.alignment.t.y(), 3) << ", " << ov_core::format_fixed(r.alignment.t.z(), 3)
      << "] m, yaw " << ov_core::format_fixed(yaw_deg, 2) << " deg";
-  if (r.align_mode == ov_core::AlignMode::Sim3)
+  if (r.align_mode == ov_eval::AlignMode::Sim3)
     os << ", scale " << ov_core::format_fixed(r.alignment.s, 4) << ": estimate "
        << ov_core::format_fixed(100.0 * (1.0 / r.alignment.s - 1.0), 2) << " % too large";
   os << ")\n\n";
@@ -142,7 +142,7 @@ int ovton::cmd_eval(const ovton::Args &args) {
   if (!json_file.empty()) {
     std::ofstream out = open_out(json_file);
     out << "{\n  \"est\": " << ov_core::json_string(est_file) << ",\n  \"gt\": " << ov_core::json_string(gt_file)
-        << ",\n  \"align\": " << ov_core::json_string(ov_core::to_string(r.align_mode))
+        << ",\n  \"align\": " << ov_core::json_string(ov_eval::to_string(r.align_mode))
         << ",\n  \"align_scale\": " << ov_core::json_number(r.alignment.s) << ",\n  \"n_est\": " << r.n_est
         << ",\n  \"n_matched\": " << r.n_matched << ",\n  \"ape_rmse_m\": " << ov_core::json_number(r.ape_rmse_m)
         << ",\n  \"ape_mean_m\": " << ov_core::json_number(r.ape_mean_m)
@@ -164,7 +164,7 @@ int ovton::cmd_eval(const ovton::Args &args) {
       out << ",rpe_" << ov_core::json_number(rr.segment_m) << "m_trans_rmse_m,rpe_"
           << ov_core::json_number(rr.segment_m) << "m_rot_rmse_deg";
     out << "\n"
-        << ov_core::to_string(r.align_mode) << "," << r.n_est << "," << r.n_matched << ","
+        << ov_eval::to_string(r.align_mode) << "," << r.n_est << "," << r.n_matched << ","
         << ov_core::csv_number(r.ape_rmse_m) << "," << ov_core::csv_number(r.ape_mean_m) << ","
         << ov_core::csv_number(r.ape_max_m) << "," << ov_core::csv_number(r.are_rmse_deg) << ","
         << (r.has_tpe ? ov_core::csv_number(r.tpe_rmse_mm) : "") << "," << (r.has_cit ? std::to_string(r.cit) : "");

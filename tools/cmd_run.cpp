@@ -1,7 +1,7 @@
 // `ovton run`: replay a dataset folder through the estimator and write the trajectory.
-#include "ov_core/eval/metrics.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/metrics.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/progress.h"
@@ -99,7 +99,7 @@ int cmd_run(const Args &args) {
               << r.nees.count << " frames; 3 is ideal)\n";
   if (data.has_groundtruth() && r.traj.size() > 2) {
     try {
-      const auto e = ov_core::evaluate(r.traj, data.groundtruth, data.td_truth, ov_core::EvalOptions{});
+      const auto e = ov_eval::evaluate(r.traj, data.groundtruth, data.td_truth, ov_eval::EvalOptions{});
       std::cout << "APE " << e.ape_rmse_m << " m, ARE " << e.are_rmse_deg << " deg (posyaw, " << e.n_matched
                 << " poses)";
       if (e.has_tpe)

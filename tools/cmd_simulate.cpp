@@ -1,7 +1,7 @@
 // `ovton simulate`: synthetic EuRoC-format folder with a known camera-IMU time offset (see docs/simulate.md).
 #include "ov_core/io/dataset.h"
-#include "ov_core/sim/simulator.h"
 #include "ov_core/types/errors.h"
+#include "ov_sim/simulator.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 
@@ -64,7 +64,7 @@ int cmd_simulate(const Args &args) {
   po::options_description desc(
       "ovton simulate: write a synthetic EuRoC-format folder (images or features, IMU, ground truth, true offset)\n"
       "Convention: t_imu = t_cam + td; image k shows the scene at IMU time t_k and is stamped t_k - td(k)");
-  ov_core::sim::SimOptions o;
+  ov_sim::SimOptions o;
   std::string out, gt, td_model = "constant", cam_yaml, imu_yaml;
   double td0_ms = 10.0, td_bias = 0.1, td_noise = 0.1, readout_ms = 0.0, focal_error_pct = 0.0, gyro_scale_pct = 0.0;
   int bench_frames = 100;
@@ -119,7 +119,7 @@ int cmd_simulate(const Args &args) {
   o.overwrite = vm.count("force") > 0;
   o.no_images = vm.count("no-images") > 0;
   o.imu_noise = o.imu_bias_walk = vm.count("no-imu-noise") == 0;
-  o.td.kind = ov_core::sim::parse_td_model(td_model);
+  o.td.kind = ov_sim::parse_td_model(td_model);
   o.td.td0_s = td0_ms * 1e-3;
   o.td.bias_s_per_s = td_bias * 1e-3;
   o.td.noise_s_per_sqrt_s = td_noise * 1e-3;
@@ -138,7 +138,7 @@ int cmd_simulate(const Args &args) {
   ProgressPrinter progress(vm.count("quiet") > 0);
   if (!bench) {
     o.out_dir = out;
-    const auto rep = ov_core::sim::write_simulation(o, std::ref(progress));
+    const auto rep = ov_sim::write_simulation(o, std::ref(progress));
     std::cout << "wrote " << out << ": " << rep.n_images << " frames, " << rep.n_imu << " IMU readings"
               << (o.features_only ? ", " + std::to_string(rep.n_observations) + " feature observations" : "")
               << " along " << rep.trajectory << " in " << rep.total_seconds << " s\n";
@@ -151,7 +151,7 @@ int cmd_simulate(const Args &args) {
   if (tmp)
     o.overwrite = true;
   o.duration_s = o.first_image_s + (bench_frames - 0.5) / o.cam.rate_hz;
-  const auto rep = ov_core::sim::write_simulation(o, std::ref(progress));
+  const auto rep = ov_sim::write_simulation(o, std::ref(progress));
   const auto sizes = sizes_by_part(fs::path(o.out_dir) / "mav0");
   const double minutes = o.duration_s / 60.0;
   uintmax_t total = 0;

@@ -17,7 +17,7 @@ namespace ovton {
 namespace {
 
 /// One line for the log: the numbers a user watching a long comparison wants before the table is written.
-std::string done_line(const ov_core::RunRecord &rec, const ov_core::ReportRow &row, size_t done, size_t total) {
+std::string done_line(const ov_eval::RunRecord &rec, const ov_eval::ReportRow &row, size_t done, size_t total) {
   char buf[512];
   int n =
       std::snprintf(buf, sizeof(buf), "compare [%zu/%zu] %s: %s", done, total, rec.name.c_str(), rec.status.c_str());
@@ -40,7 +40,7 @@ std::string done_line(const ov_core::RunRecord &rec, const ov_core::ReportRow &r
 
 std::vector<ov_msckf_ton::TdMode> parse_compare_modes(const std::string &list) {
   std::vector<ov_msckf_ton::TdMode> modes;
-  for (const auto &name : ov_core::parse_name_list(list, ov_msckf_ton::all_td_mode_names(), "mode"))
+  for (const auto &name : ov_eval::parse_name_list(list, ov_msckf_ton::all_td_mode_names(), "mode"))
     modes.push_back(ov_msckf_ton::parse_td_mode(name));
   return modes;
 }
@@ -59,14 +59,14 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
   if (ec)
     throw ov_core::DataError(req.out_dir, "cannot create the output folder: " + ec.message());
 
-  ov_core::ReportInfo info = req.info;
+  ov_eval::ReportInfo info = req.info;
 
   std::vector<std::string> to_run;
-  std::map<std::string, ov_core::RunRecord> skipped;
+  std::map<std::string, ov_eval::RunRecord> skipped;
   for (TdMode m : req.modes) {
     const std::string name = ov_msckf_ton::to_string(m);
     if (m == TdMode::Oracle && !data.has_td_truth()) {
-      ov_core::RunRecord rec;
+      ov_eval::RunRecord rec;
       rec.name = name;
       rec.status = "skipped: no td_truth/data.csv";
       info.notes.push_back("oracle skipped: " + data.root +
@@ -89,7 +89,7 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
     rr.max_images = req.max_images;
     rr.progress = false; // parallel bars would overwrite each other; the log has one line per finished mode
     RunResult r = run_dataset(data, rr);
-    ov_core::RunRecord rec;
+    ov_eval::RunRecord rec;
     rec.name = name;
     const bool no_estimate = r.traj.empty();
     rec.traj = std::move(r.traj);
@@ -103,13 +103,13 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
       rec.status = "no estimate (initialisation: " + r.init_message + ")";
     return rec;
   };
-  const auto on_done = [&](const ov_core::RunRecord &rec, size_t done, size_t total) {
+  const auto on_done = [&](const ov_eval::RunRecord &rec, size_t done, size_t total) {
     if (!req.log)
       return;
-    const auto rows = ov_core::evaluate_runs({rec}, data, req.report);
+    const auto rows = ov_eval::evaluate_runs({rec}, data, req.report);
     *req.log << done_line(rec, rows.front(), done, total) << "\n" << std::flush;
   };
-  std::vector<ov_core::RunRecord> ran = ov_core::run_parallel(to_run, req.jobs, run_one, on_done, interrupted);
+  std::vector<ov_eval::RunRecord> ran = ov_eval::run_parallel(to_run, req.jobs, run_one, on_done, interrupted);
 
   CompareResult res;
   size_t k = 0;
@@ -122,8 +122,8 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
     res.failed += r.status.rfind("failed", 0) == 0;
     res.interrupted = res.interrupted || r.status == "interrupted" || r.status.rfind("not run", 0) == 0;
   }
-  res.rows = ov_core::evaluate_runs(res.runs, data, req.report);
-  res.files = ov_core::write_report(req.out_dir, res.runs, res.rows, data, info, req.report);
+  res.rows = ov_eval::evaluate_runs(res.runs, data, req.report);
+  res.files = ov_eval::write_report(req.out_dir, res.runs, res.rows, data, info, req.report);
   return res;
 }
 

@@ -1,8 +1,8 @@
 #pragma once
 // `ovton compare` as a function: one estimator run per time-offset mode on a dataset loaded once, then the report
-// (ov_core/eval/report.h). Kept apart from the flag parsing so that a `protocol` command can call it per dataset.
-#include "ov_core/eval/report.h"
+// (ov_eval/report.h). Kept apart from the flag parsing so that a `protocol` command can call it per dataset.
 #include "ov_core/io/dataset.h"
+#include "ov_eval/report.h"
 #include "ov_msckf_ton/core/vio_options.h"
 
 #include <iosfwd>
@@ -17,15 +17,15 @@ struct CompareRequest {
   std::string out_dir;           ///< traj_<mode>.csv, results.md, results.csv, td.png, ape.png, top.png
   int jobs = 2;                  ///< runs at a time, each on its own thread with its own VioManager
   long max_images = 0;           ///< 0 = all
-  ov_core::ReportOptions report;
-  ov_core::ReportInfo info;    ///< command line and config for results.md; jobs is filled in from above
+  ov_eval::ReportOptions report;
+  ov_eval::ReportInfo info;    ///< command line and config for results.md; jobs is filled in from above
   std::ostream *log = nullptr; ///< one line per finished mode; nullptr = silent
 };
 
 struct CompareResult {
-  std::vector<ov_core::RunRecord> runs; ///< in the order of the requested modes, skipped ones included
-  std::vector<ov_core::ReportRow> rows;
-  ov_core::ReportFiles files;
+  std::vector<ov_eval::RunRecord> runs; ///< in the order of the requested modes, skipped ones included
+  std::vector<ov_eval::ReportRow> rows;
+  ov_eval::ReportFiles files;
   int failed = 0;           ///< runs whose status is "failed: ..."
   bool interrupted = false; ///< SIGINT stopped the comparison; the report covers what was done
 };

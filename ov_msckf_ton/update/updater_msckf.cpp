@@ -146,8 +146,7 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
   // clone onto that clone's first estimate (as OpenVINS does), so that the lever arms p_f − p_clone stay
   // consistent with the first-estimate poses.
   const CloneState &anchor = *out.obs[m - 1].clone;
-  const Eigen::Vector3d p_f_lin =
-      anchor.R_lin() * (anchor.R.transpose() * (p_f - anchor.p)) + anchor.p_lin();
+  const Eigen::Vector3d p_f_lin = anchor.R_lin() * (anchor.R.transpose() * (p_f - anchor.p)) + anchor.p_lin();
   CloneMeasurementJacobians J;
   Eigen::Vector2d zhat, z_lin;
   Eigen::Vector3d p_C;

@@ -1,4 +1,4 @@
-#include "ov_core/eval/plot.h"
+#include "ov_eval/plot.h"
 #include "ov_core/types/errors.h"
 
 #include <opencv2/imgcodecs.hpp>
@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <fstream>
 
-namespace ov_core {
+namespace ov_eval {
 namespace {
 
 const cv::Scalar kWhite(255, 255, 255), kInk(30, 30, 30), kGrid(228, 228, 228), kBorder(150, 150, 150);
@@ -111,14 +111,14 @@ int thickness(double width) {
 
 void check_range(const std::optional<AxisRange> &r, const char *axis) {
   if (r && !(std::isfinite(r->lo) && std::isfinite(r->hi) && r->lo < r->hi))
-    throw UsageError(std::string("plot: the fixed ") + axis + " range must be finite with lo < hi");
+    throw ov_core::UsageError(std::string("plot: the fixed ") + axis + " range must be finite with lo < hi");
 }
 
 } // namespace
 
 std::vector<double> nice_ticks(double lo, double hi, int max_ticks) {
   if (!(std::isfinite(lo) && std::isfinite(hi) && lo < hi) || max_ticks < 2)
-    throw UsageError("nice_ticks: need finite lo < hi and max_ticks >= 2");
+    throw ov_core::UsageError("nice_ticks: need finite lo < hi and max_ticks >= 2");
   // The smallest nice step that leaves at most max_ticks ticks, preferring at least two; steps from a decade below
   // span / (max_ticks - 1) up, since a span whose ends sit on multiples fits one more tick than the rough count says.
   const double mag = std::pow(10.0, std::floor(std::log10((hi - lo) / (max_ticks - 1))));
@@ -147,7 +147,7 @@ cv::Scalar palette_color(size_t i) {
 
 Plot::Plot(PlotOptions options) : options_(std::move(options)) {
   if (options_.width < 200 || options_.height < 150)
-    throw UsageError("plot: image must be at least 200 x 150 px");
+    throw ov_core::UsageError("plot: image must be at least 200 x 150 px");
   check_range(options_.x_range, "x");
   check_range(options_.y_range, "y");
 }
@@ -158,8 +158,8 @@ cv::Scalar Plot::next_auto_color() {
 
 Plot &Plot::add(Series series) {
   if (series.x.size() != series.y.size())
-    throw UsageError("plot: series '" + series.name + "' has " + std::to_string(series.x.size()) + " x but " +
-                     std::to_string(series.y.size()) + " y values");
+    throw ov_core::UsageError("plot: series '" + series.name + "' has " + std::to_string(series.x.size()) + " x but " +
+                              std::to_string(series.y.size()) + " y values");
   if (!series.color)
     series.color = next_auto_color();
   series_.push_back(std::move(series));
@@ -373,14 +373,14 @@ cv::Mat Plot::render() const {
 void Plot::save_png(const std::string &file) const {
   std::vector<uchar> bytes;
   if (!cv::imencode(".png", render(), bytes))
-    throw DataError(file, "cannot encode the chart as PNG");
+    throw ov_core::DataError(file, "cannot encode the chart as PNG");
   std::ofstream out(file, std::ios::binary);
   if (!out)
-    throw DataError(file, "cannot open for writing");
+    throw ov_core::DataError(file, "cannot open for writing");
   out.write(reinterpret_cast<const char *>(bytes.data()), std::streamsize(bytes.size()));
   out.close();
   if (!out)
-    throw DataError(file, "write failed");
+    throw ov_core::DataError(file, "write failed");
 }
 
-} // namespace ov_core
+} // namespace ov_eval

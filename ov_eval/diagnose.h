@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ov_eval {
 
 /// One row of the residual log (ov_msckf_ton/update/residual_log.h writes it; read here by header name).
 struct ResidualLogRow {
@@ -51,12 +51,12 @@ struct DiagnoseOptions {
   /// (focal and k1 effects are mapped through it exactly) and the camera-body rotation, with which the camera's
   /// rotation along a track is integrated from the logged body rates for the point projection (docs/diagnose.md);
   /// without it the distortion is ignored and the camera is taken as not rotating along a track.
-  CameraCalib camera;
+  ov_core::CameraCalib camera;
   bool have_camera = false;
   /// The dataset's raw IMU readings (IMU clock). With them and the camera, the time candidates are tested on the
   /// camera's angular rate seen in the images against the gyro's (docs/diagnose.md), not on the residual, where a
   /// filter's poses absorb a time offset.
-  std::vector<ImuData> imu;
+  std::vector<ov_core::ImuData> imu;
   double min_sigma = 5.0;      ///< significance a candidate needs (Gaussian-equivalent σ)
   double min_explained = 0.02; ///< share of the residual loss it must remove
   double huber_k = 3.0;        ///< Huber threshold in robust σ of the residual components
@@ -127,4 +127,4 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &report, con
 /// The ranking as a fixed-width text table (what the CLI prints).
 std::string format_ranking(const DiagnoseReport &report);
 
-} // namespace ov_core
+} // namespace ov_eval

@@ -1,15 +1,14 @@
-#include "ov_core/sim/feature_sim.h"
+#include "ov_sim/feature_sim.h"
 #include "ov_core/types/errors.h"
 #include <algorithm>
 #include <cmath>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
-FeatureSimulator::FeatureSimulator(const CameraModel &cam, const Scene &scene, const FeatureSimOptions &opt)
+FeatureSimulator::FeatureSimulator(const ov_core::CameraModel &cam, const Scene &scene, const FeatureSimOptions &opt)
     : cam_(cam), scene_(scene), opt_(opt), rng_(opt.seed) {
   if (opt.max_tracks <= 0 || opt.grid_cols <= 0 || opt.grid_rows <= 0 || !(opt.mean_track_length >= 1.0))
-    throw UsageError("feature simulation: max_tracks, grid and mean_track_length must be positive");
+    throw ov_core::UsageError("feature simulation: max_tracks, grid and mean_track_length must be positive");
   const auto &surfs = scene.surfaces();
   for (size_t s = 0; s < surfs.size(); ++s) {
     if (surfs[s].mips[0].cols <= 2) // box bottoms rest on the floor
@@ -125,5 +124,4 @@ std::vector<FeatureObservation> FeatureSimulator::step(const FramePose &pose, in
   return out;
 }
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

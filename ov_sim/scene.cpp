@@ -1,14 +1,13 @@
-#include "ov_core/sim/scene.h"
-#include "ov_core/sim/random.h"
+#include "ov_sim/scene.h"
 #include "ov_core/types/errors.h"
+#include "ov_sim/random.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 namespace {
 
@@ -59,7 +58,7 @@ cv::Mat make_texture(int w, int h, const SceneOptions &opt, Rng &rng) {
 
 Scene Scene::around_path(const std::vector<Eigen::Vector3d> &path, const SceneOptions &opt) {
   if (path.empty())
-    throw UsageError("scene: empty path");
+    throw ov_core::UsageError("scene: empty path");
   Eigen::Vector3d lo = path.front(), hi = path.front();
   for (const auto &p : path) {
     lo = lo.cwiseMin(p);
@@ -111,7 +110,7 @@ Scene Scene::around_path(const std::vector<Eigen::Vector3d> &path, const SceneOp
 Scene::Scene(const AlignedBox &room, const std::vector<AlignedBox> &boxes, const SceneOptions &opt)
     : room_(room), boxes_(boxes), opt_(opt) {
   if (!(opt.texel_m > 0) || !(opt.feature_min_m > 0) || !(opt.feature_max_m >= opt.feature_min_m))
-    throw UsageError("scene: texel and feature sizes must be positive and ordered");
+    throw ov_core::UsageError("scene: texel and feature sizes must be positive and ordered");
   for (int b = -1; b < static_cast<int>(boxes_.size()); ++b) {
     const AlignedBox &box = b < 0 ? room_ : boxes_[b];
     for (int a = 0; a < 3; ++a)
@@ -218,5 +217,4 @@ Eigen::Vector3d Scene::plant_marker(int surface, double u, double v, double radi
   return surface_point(surface, u, v);
 }
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

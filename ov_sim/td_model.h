@@ -6,12 +6,11 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 enum class TdModelKind { Constant, Drift };
 
-TdModelKind parse_td_model(const std::string &name); ///< "constant" | "drift"; throws UsageError
+TdModelKind parse_td_model(const std::string &name); ///< "constant" | "drift"; throws ov_core::UsageError
 std::string to_string(TdModelKind k);
 
 struct TdModelOptions {
@@ -35,5 +34,4 @@ struct TimedImage {
 /// Throws UsageError if the resulting camera stamps would not be strictly increasing.
 std::vector<TimedImage> apply_td_model(const std::vector<int64_t> &t_imu_ns, const TdModelOptions &opt);
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

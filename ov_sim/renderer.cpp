@@ -1,12 +1,11 @@
-#include "ov_core/sim/renderer.h"
+#include "ov_sim/renderer.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 namespace {
 
@@ -49,7 +48,7 @@ inline float bilinear(const Level &L, float x, float y) {
 
 } // namespace
 
-Renderer::Renderer(const CameraModel &cam, const Scene &scene, const RenderOptions &opt)
+Renderer::Renderer(const ov_core::CameraModel &cam, const Scene &scene, const RenderOptions &opt)
     : cam_(cam), scene_(scene), opt_(opt) {
   const int w = cam.width(), h = cam.height();
   rays_.resize(static_cast<size_t>(w) * h);
@@ -242,5 +241,4 @@ void Renderer::render_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p
   }
 }
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

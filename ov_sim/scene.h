@@ -6,8 +6,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 struct SceneOptions {
   double margin_xy_m = 2.0;    ///< room walls this far beyond the path's bounding box
@@ -75,5 +74,4 @@ private:
   SceneOptions opt_;
 };
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

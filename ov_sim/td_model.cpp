@@ -1,17 +1,16 @@
-#include "ov_core/sim/td_model.h"
-#include "ov_core/sim/random.h"
+#include "ov_sim/td_model.h"
 #include "ov_core/types/errors.h"
+#include "ov_sim/random.h"
 #include <cmath>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 TdModelKind parse_td_model(const std::string &name) {
   if (name == "constant")
     return TdModelKind::Constant;
   if (name == "drift")
     return TdModelKind::Drift;
-  throw UsageError("unknown time-offset model '" + name + "' (expected constant or drift)");
+  throw ov_core::UsageError("unknown time-offset model '" + name + "' (expected constant or drift)");
 }
 
 std::string to_string(TdModelKind k) {
@@ -25,23 +24,22 @@ std::vector<TimedImage> apply_td_model(const std::vector<int64_t> &t_imu_ns, con
   double td = opt.td0_s;
   for (size_t k = 0; k < t_imu_ns.size(); ++k) {
     if (k > 0) {
-      const double dt = ns_to_s(t_imu_ns[k] - t_imu_ns[k - 1]);
+      const double dt = ov_core::ns_to_s(t_imu_ns[k] - t_imu_ns[k - 1]);
       if (!(dt > 0.0))
-        throw UsageError("time-offset model: image times must be strictly increasing");
+        throw ov_core::UsageError("time-offset model: image times must be strictly increasing");
       if (opt.kind == TdModelKind::Drift)
         td += opt.bias_s_per_s * dt + opt.noise_s_per_sqrt_s * std::sqrt(dt) * rng.normal();
     }
     TimedImage im;
     im.t_imu_ns = t_imu_ns[k];
-    im.td_ns = s_to_ns(td);
+    im.td_ns = ov_core::s_to_ns(td);
     im.t_cam_ns = im.t_imu_ns - im.td_ns;
     if (!out.empty() && im.t_cam_ns <= out.back().t_cam_ns)
-      throw UsageError("time-offset model: camera stamps would not increase at image " + std::to_string(k) +
-                       " (offset noise too large for the frame interval)");
+      throw ov_core::UsageError("time-offset model: camera stamps would not increase at image " + std::to_string(k) +
+                                " (offset noise too large for the frame interval)");
     out.push_back(im);
   }
   return out;
 }
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

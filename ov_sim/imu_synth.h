@@ -1,15 +1,14 @@
 #pragma once
 // IMU synthesis from a trajectory: w_m = w_B + b_g + n_g,  a_m = R_WB^T (a_W - g_W) + b_a + n_a.
 #include "ov_core/cam/camera_calib.h"
-#include "ov_core/sim/trajectory.h"
 #include "ov_core/types/sensor_data.h"
+#include "ov_sim/trajectory.h"
 #include <vector>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 struct ImuSynthOptions {
-  ImuCalib calib;                                               ///< rate and continuous-time noise densities
+  ov_core::ImuCalib calib;                                      ///< rate and continuous-time noise densities
   Eigen::Vector3d gravity_W = Eigen::Vector3d(0.0, 0.0, -9.81); ///< world z up
   Eigen::Vector3d bg0 = Eigen::Vector3d::Zero();                ///< initial gyro bias [rad/s]
   Eigen::Vector3d ba0 = Eigen::Vector3d::Zero();                ///< initial accel bias [m/s^2]
@@ -20,8 +19,8 @@ struct ImuSynthOptions {
 };
 
 struct ImuSynthResult {
-  std::vector<ImuData> imu;
-  std::vector<StateSample> truth; ///< true state (pose, velocity, biases) at every IMU stamp
+  std::vector<ov_core::ImuData> imu;
+  std::vector<ov_core::StateSample> truth; ///< true state (pose, velocity, biases) at every IMU stamp
 };
 
 /// Samples the IMU at calib.rate_hz on [traj.t_begin_ns(), traj.t_end_ns()], stamps on an exact ns grid.
@@ -29,7 +28,6 @@ struct ImuSynthResult {
 ImuSynthResult synthesize_imu(const Trajectory &traj, const ImuSynthOptions &opt);
 
 /// Ideal (noise-free, bias-free) measurement at one instant.
-ImuData ideal_imu(const TrajectorySample &s, int64_t t_ns, const Eigen::Vector3d &gravity_W);
+ov_core::ImuData ideal_imu(const TrajectorySample &s, int64_t t_ns, const Eigen::Vector3d &gravity_W);
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

@@ -1,14 +1,13 @@
 #pragma once
 // Per-pixel ray caster: distorted pixel -> precomputed camera ray -> first scene face -> mip-mapped texture.
 #include "ov_core/cam/camera_model.h"
-#include "ov_core/sim/frame_pose.h"
-#include "ov_core/sim/scene.h"
+#include "ov_sim/frame_pose.h"
+#include "ov_sim/scene.h"
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 #include <vector>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 struct RenderOptions {
   double noise_sigma = 1.5; ///< grey-level sensor noise (approximately Gaussian, from a per-pixel hash)
@@ -19,7 +18,7 @@ struct RenderOptions {
 class Renderer {
 public:
   /// The scene must outlive the renderer (markers planted later are picked up at the next render).
-  Renderer(const CameraModel &cam, const Scene &scene, const RenderOptions &opt = {});
+  Renderer(const ov_core::CameraModel &cam, const Scene &scene, const RenderOptions &opt = {});
 
   /// Renders the view of a camera at pose (R_WC, p_WC) into an 8-bit image of the camera's size.
   /// noise_seed selects the sensor-noise pattern (use e.g. the frame index): same inputs, same pixels.
@@ -36,11 +35,10 @@ private:
     float xn, yn;   ///< undistorted normalised coordinates (x/z, y/z), for box culling
     float log2_pix; ///< log2 of the pixel's angular size [rad]
   };
-  const CameraModel &cam_;
+  const ov_core::CameraModel &cam_;
   const Scene &scene_;
   RenderOptions opt_;
   std::vector<Ray> rays_;
 };
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

@@ -1,7 +1,7 @@
-#include "ov_core/eval/report.h"
-#include "ov_core/eval/plot.h"
+#include "ov_eval/report.h"
 #include "ov_core/io/text_format.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/plot.h"
 
 #include <algorithm>
 #include <atomic>
@@ -18,7 +18,7 @@
 
 namespace fs = std::filesystem;
 
-namespace ov_core {
+namespace ov_eval {
 
 namespace {
 
@@ -30,16 +30,16 @@ void write_file_atomically(const std::string &file, const std::string &text) {
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out)
-      throw DataError(file, "cannot open for writing");
+      throw ov_core::DataError(file, "cannot open for writing");
     out << text;
     out.flush();
     if (!out)
-      throw DataError(file, "write failed");
+      throw ov_core::DataError(file, "write failed");
   }
   std::error_code ec;
   fs::rename(tmp, file, ec);
   if (ec)
-    throw DataError(file, "cannot move " + tmp + " into place: " + ec.message());
+    throw ov_core::DataError(file, "cannot move " + tmp + " into place: " + ec.message());
 }
 
 std::string csv_field(const std::string &s) {
@@ -66,7 +66,7 @@ std::string md_cell(const std::string &s) {
 }
 
 /// Plots share one time origin (the first image) so that the three figures line up.
-int64_t time_origin_ns(const std::vector<RunRecord> &runs, const Dataset &data) {
+int64_t time_origin_ns(const std::vector<RunRecord> &runs, const ov_core::Dataset &data) {
   if (!data.images.empty())
     return data.images.front().t_cam_ns;
   for (const auto &r : runs)
@@ -106,7 +106,7 @@ ReportRow::ReportRow()
     : ape_rmse_m(kNaN), are_deg(kNaN), tpe_rmse_mm(kNaN), final_td_ms(kNaN), td_sigma_ms(kNaN), runtime_s(kNaN),
       realtime_factor(kNaN), ms_per_frame(kNaN) {}
 
-std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const Dataset &data,
+std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const ov_core::Dataset &data,
                                      const ReportOptions &opt) {
   std::vector<ReportRow> rows;
   rows.reserve(runs.size());
@@ -141,7 +141,7 @@ std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const D
           row.tpe_rmse_mm = row.eval.tpe_rmse_mm;
         row.has_cit = row.eval.has_cit;
         row.cit = row.eval.cit;
-      } catch (const UsageError &e) {
+      } catch (const ov_core::UsageError &e) {
         // A run too short or off the truth's span is a result to report, not a reason to lose the others.
         row.eval_note = e.what();
       }
@@ -156,10 +156,11 @@ void write_results_csv(const std::string &file, const std::vector<ReportRow> &ro
   os << "mode,status,ape_rmse_m,are_deg,tpe_rmse_mm,cit_frames,final_td_ms,td_sigma_ms,runtime_s,realtime_factor,"
         "ms_per_frame\n";
   for (const auto &r : rows)
-    os << csv_field(r.name) << ',' << csv_field(r.status) << ',' << csv_number(r.ape_rmse_m) << ','
-       << csv_number(r.are_deg) << ',' << csv_number(r.tpe_rmse_mm) << ',' << (r.has_cit ? std::to_string(r.cit) : "")
-       << ',' << csv_number(r.final_td_ms) << ',' << csv_number(r.td_sigma_ms) << ',' << csv_number(r.runtime_s) << ','
-       << csv_number(r.realtime_factor) << ',' << csv_number(r.ms_per_frame) << '\n';
+    os << csv_field(r.name) << ',' << csv_field(r.status) << ',' << ov_core::csv_number(r.ape_rmse_m) << ','
+       << ov_core::csv_number(r.are_deg) << ',' << ov_core::csv_number(r.tpe_rmse_mm) << ','
+       << (r.has_cit ? std::to_string(r.cit) : "") << ',' << ov_core::csv_number(r.final_td_ms) << ','
+       << ov_core::csv_number(r.td_sigma_ms) << ',' << ov_core::csv_number(r.runtime_s) << ','
+       << ov_core::csv_number(r.realtime_factor) << ',' << ov_core::csv_number(r.ms_per_frame) << '\n';
   write_file_atomically(file, os.str());
 }
 
@@ -170,16 +171,16 @@ std::string results_markdown_table(const std::vector<ReportRow> &rows) {
   os << "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   for (const auto &r : rows) {
     const std::string cit = !r.has_cit ? "n/a" : r.cit < 0 ? "never" : std::to_string(r.cit);
-    os << "| " << md_cell(r.name) << " | " << md_cell(r.status) << " | " << format_fixed(r.ape_rmse_m, 4) << " | "
-       << format_fixed(r.are_deg, 3) << " | " << format_fixed(r.tpe_rmse_mm, 3) << " | " << cit << " | "
-       << format_fixed(r.final_td_ms, 3) << " | " << format_fixed(r.td_sigma_ms, 4) << " | "
-       << format_fixed(r.runtime_s, 2) << " | " << format_fixed(r.realtime_factor, 2) << " | "
-       << format_fixed(r.ms_per_frame, 2) << " |\n";
+    os << "| " << md_cell(r.name) << " | " << md_cell(r.status) << " | " << ov_core::format_fixed(r.ape_rmse_m, 4)
+       << " | " << ov_core::format_fixed(r.are_deg, 3) << " | " << ov_core::format_fixed(r.tpe_rmse_mm, 3) << " | "
+       << cit << " | " << ov_core::format_fixed(r.final_td_ms, 3) << " | " << ov_core::format_fixed(r.td_sigma_ms, 4)
+       << " | " << ov_core::format_fixed(r.runtime_s, 2) << " | " << ov_core::format_fixed(r.realtime_factor, 2)
+       << " | " << ov_core::format_fixed(r.ms_per_frame, 2) << " |\n";
   }
   return os.str();
 }
 
-void write_results_md(const std::string &file, const std::vector<ReportRow> &rows, const Dataset &data,
+void write_results_md(const std::string &file, const std::vector<ReportRow> &rows, const ov_core::Dataset &data,
                       const ReportInfo &info, const ReportFiles &files, const ReportOptions &opt) {
   std::ostringstream os;
   os << "# Time-offset modes compared on " << data.root << "\n\n";
@@ -187,10 +188,12 @@ void write_results_md(const std::string &file, const std::vector<ReportRow> &row
      << info.command_line << "\n```\n\n";
   os << "Written " << utc_now() << ".\n\n";
 
-  os << "## Dataset\n\n";
+  os << "## ov_core::Dataset\n\n";
   os << "- folder: `" << data.root << "` (" << data.kind << "), " << data.images.size() << " images";
   if (data.images.size() > 1)
-    os << " over " << format_fixed(ns_to_s(data.images.back().t_cam_ns - data.images.front().t_cam_ns), 1) << " s";
+    os << " over "
+       << ov_core::format_fixed(ov_core::ns_to_s(data.images.back().t_cam_ns - data.images.front().t_cam_ns), 1)
+       << " s";
   os << ", " << data.imu.size() << " IMU readings\n";
   if (data.has_groundtruth())
     os << "- ground truth: " << data.groundtruth.size() << " samples"
@@ -201,13 +204,14 @@ void write_results_md(const std::string &file, const std::vector<ReportRow> &row
     double lo = data.td_truth.front().td_s, hi = lo;
     for (const auto &s : data.td_truth)
       lo = std::min(lo, s.td_s), hi = std::max(hi, s.td_s);
-    os << "- time-offset truth: " << data.td_truth.size() << " samples, from " << format_fixed(lo * 1e3, 3) << " to "
-       << format_fixed(hi * 1e3, 3) << " ms (first " << format_fixed(data.td_truth.front().td_s * 1e3, 3) << ", last "
-       << format_fixed(data.td_truth.back().td_s * 1e3, 3) << ")\n";
+    os << "- time-offset truth: " << data.td_truth.size() << " samples, from " << ov_core::format_fixed(lo * 1e3, 3)
+       << " to " << ov_core::format_fixed(hi * 1e3, 3) << " ms (first "
+       << ov_core::format_fixed(data.td_truth.front().td_s * 1e3, 3) << ", last "
+       << ov_core::format_fixed(data.td_truth.back().td_s * 1e3, 3) << ")\n";
   } else
     os << "- time-offset truth: none (no TPE, no CIT against the truth, no `oracle`)\n";
   if (data.td_prior_s != 0.0)
-    os << "- calibration t_d prior: " << format_fixed(data.td_prior_s * 1e3, 3) << " ms\n";
+    os << "- calibration t_d prior: " << ov_core::format_fixed(data.td_prior_s * 1e3, 3) << " ms\n";
   os << "- estimator config: " << (info.config.empty() ? "built-in defaults" : "`" + info.config + "`") << "\n\n";
 
   os << "## Results\n\n" << results_markdown_table(rows) << "\n";
@@ -215,7 +219,8 @@ void write_results_md(const std::string &file, const std::vector<ReportRow> &row
   os << "APE and ARE are RMSEs after " << to_string(opt.eval.align)
      << " alignment of the whole estimate to the ground truth. TPE is the RMSE of (t_d estimate - t_d truth) x |v "
         "estimate| (paper eq. 16). CIT is the first frame with |t_d - t_d truth| <= "
-     << format_fixed(cit.eps1_s * 1e3, 2) << " ms and |t_d(k) - t_d(k-1)| <= " << format_fixed(cit.eps2_s * 1e3, 2)
+     << ov_core::format_fixed(cit.eps1_s * 1e3, 2)
+     << " ms and |t_d(k) - t_d(k-1)| <= " << ov_core::format_fixed(cit.eps2_s * 1e3, 2)
      << " ms (paper eq. 15), \"never\" if that does not happen. final t_d and its sigma are the filter's values at the "
         "last frame. Runtime is the wall-clock time of the replay with "
      << info.jobs << (info.jobs == 1 ? " run" : " runs")
@@ -259,13 +264,13 @@ PlotOptions report_plot(const std::string &title, const char *xlabel, const char
 
 void check_rows(const char *what, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows) {
   if (rows.size() != runs.size())
-    throw UsageError(std::string(what) + ": " + std::to_string(rows.size()) + " rows for " +
-                     std::to_string(runs.size()) + " runs");
+    throw ov_core::UsageError(std::string(what) + ": " + std::to_string(rows.size()) + " rows for " +
+                              std::to_string(runs.size()) + " runs");
 }
 
 } // namespace
 
-bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const Dataset &data,
+bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const ov_core::Dataset &data,
              const ReportOptions &opt) {
   const int64_t t0 = time_origin_ns(runs, data);
   Plot plot(report_plot("time offset t_d (t_imu = t_cam + t_d)", "time since the first image [s]", "t_d [ms]", opt));
@@ -276,7 +281,7 @@ bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const 
     s.color = run_color(i);
     for (const auto &e : runs[i].traj)
       if (e.has_td) {
-        s.x.push_back(ns_to_s(e.t_ns - t0));
+        s.x.push_back(ov_core::ns_to_s(e.t_ns - t0));
         s.y.push_back(e.td_s * 1e3);
       }
     if (s.x.empty())
@@ -290,7 +295,7 @@ bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const 
     // Truth is keyed by camera stamp; drawn at the IMU-clock instant it refers to, like the estimates.
     Series s = truth_series("truth");
     for (const auto &t : data.td_truth) {
-      s.x.push_back(ns_to_s(t.t_cam_ns - t0) + t.td_s);
+      s.x.push_back(ov_core::ns_to_s(t.t_cam_ns - t0) + t.td_s);
       s.y.push_back(t.td_s * 1e3);
     }
     plot.add(std::move(s));
@@ -300,7 +305,7 @@ bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const 
 }
 
 bool plot_ape(const std::string &file, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows,
-              const Dataset &data, const ReportOptions &opt) {
+              const ov_core::Dataset &data, const ReportOptions &opt) {
   check_rows("plot_ape", runs, rows);
   const int64_t t0 = time_origin_ns(runs, data);
   Plot plot(report_plot(std::string("position error after ") + to_string(opt.eval.align) + " alignment",
@@ -318,7 +323,7 @@ bool plot_ape(const std::string &file, const std::vector<RunRecord> &runs, const
     s.name = runs[i].name;
     s.color = run_color(i);
     for (size_t k = 0; k < err.size(); ++k) {
-      s.x.push_back(ns_to_s(a.est[k].t_ns - t0));
+      s.x.push_back(ov_core::ns_to_s(a.est[k].t_ns - t0));
       s.y.push_back(err[k]);
     }
     any = true;
@@ -331,7 +336,7 @@ bool plot_ape(const std::string &file, const std::vector<RunRecord> &runs, const
 }
 
 bool plot_top(const std::string &file, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows,
-              const Dataset &data, const ReportOptions &opt) {
+              const ov_core::Dataset &data, const ReportOptions &opt) {
   check_rows("plot_top", runs, rows);
   PlotOptions po = report_plot(std::string("top view (estimates after ") + to_string(opt.eval.align) + " alignment)",
                                "x [m]", "y [m]", opt);
@@ -371,12 +376,12 @@ bool plot_top(const std::string &file, const std::vector<RunRecord> &runs, const
 }
 
 ReportFiles write_report(const std::string &out_dir, const std::vector<RunRecord> &runs,
-                         const std::vector<ReportRow> &rows, const Dataset &data, const ReportInfo &info,
+                         const std::vector<ReportRow> &rows, const ov_core::Dataset &data, const ReportInfo &info,
                          const ReportOptions &opt) {
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec)
-    throw DataError(out_dir, "cannot create the output folder: " + ec.message());
+    throw ov_core::DataError(out_dir, "cannot create the output folder: " + ec.message());
   const fs::path dir(out_dir);
   ReportFiles f;
   f.csv = (dir / "results.csv").string();
@@ -405,15 +410,15 @@ std::vector<std::string> parse_name_list(const std::string &list, const std::vec
     const size_t b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
     const std::string name = b == std::string::npos ? "" : item.substr(b, e - b + 1);
     if (name.empty())
-      throw UsageError("empty " + what + " name in the list '" + list + "'");
+      throw ov_core::UsageError("empty " + what + " name in the list '" + list + "'");
     if (std::find(valid.begin(), valid.end(), name) == valid.end())
-      throw UsageError("unknown " + what + " '" + name + "' (expected one of: " + valid_text + ")");
+      throw ov_core::UsageError("unknown " + what + " '" + name + "' (expected one of: " + valid_text + ")");
     if (std::find(out.begin(), out.end(), name) != out.end())
-      throw UsageError(what + " '" + name + "' is listed twice in '" + list + "'");
+      throw ov_core::UsageError(what + " '" + name + "' is listed twice in '" + list + "'");
     out.push_back(name);
   }
   if (out.empty())
-    throw UsageError("no " + what + " given (expected a comma-separated list of: " + valid_text + ")");
+    throw ov_core::UsageError("no " + what + " given (expected a comma-separated list of: " + valid_text + ")");
   return out;
 }
 
@@ -479,4 +484,4 @@ std::vector<RunRecord> run_parallel(const std::vector<std::string> &names, int j
   return records;
 }
 
-} // namespace ov_core
+} // namespace ov_eval

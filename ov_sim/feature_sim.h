@@ -3,14 +3,13 @@
 // model, organised into tracks that start and end the way a KLT front end's do. For filter tests that must
 // not depend on the tracker.
 #include "ov_core/cam/camera_model.h"
-#include "ov_core/sim/frame_pose.h"
-#include "ov_core/sim/random.h"
-#include "ov_core/sim/scene.h"
+#include "ov_sim/frame_pose.h"
+#include "ov_sim/random.h"
+#include "ov_sim/scene.h"
 #include <cstdint>
 #include <vector>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 struct FeatureSimOptions {
   int max_tracks = 200;             ///< live tracks, as a tracker configured for 200 points
@@ -31,7 +30,7 @@ struct FeatureObservation {
 
 class FeatureSimulator {
 public:
-  FeatureSimulator(const CameraModel &cam, const Scene &scene, const FeatureSimOptions &opt);
+  FeatureSimulator(const ov_core::CameraModel &cam, const Scene &scene, const FeatureSimOptions &opt);
 
   /// Observations of one frame: the camera at (R_WC, p_WC) at its true instant, stamped t_cam_ns.
   std::vector<FeatureObservation> step(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, int64_t t_cam_ns);
@@ -45,7 +44,7 @@ public:
 
 private:
   bool visible(size_t lm, const FramePose &pose, Eigen::Vector2d &uv) const;
-  const CameraModel &cam_;
+  const ov_core::CameraModel &cam_;
   const Scene &scene_;
   FeatureSimOptions opt_;
   Rng rng_;
@@ -54,5 +53,4 @@ private:
   std::vector<size_t> track_landmark_; ///< feature id -> landmark
 };
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

@@ -5,15 +5,13 @@
 #include "ov_core/cam/camera_calib.h"
 #include <string>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
-CameraCalib euroc_cam0_calib();
-ImuCalib euroc_imu0_calib();
+ov_core::CameraCalib euroc_cam0_calib();
+ov_core::ImuCalib euroc_imu0_calib();
 
 /// EuRoC-format sensor.yaml text (the layout of the original files, `%YAML:1.0` header included).
-std::string euroc_camera_yaml(const CameraCalib &c, const std::string &comment);
-std::string euroc_imu_yaml(const ImuCalib &c, const std::string &comment);
+std::string euroc_camera_yaml(const ov_core::CameraCalib &c, const std::string &comment);
+std::string euroc_imu_yaml(const ov_core::ImuCalib &c, const std::string &comment);
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

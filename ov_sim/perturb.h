@@ -1,10 +1,9 @@
 #pragma once
 // The paper's EuRoC protocol on a real folder: image stamps rewritten with a time-offset model, images linked.
-#include "ov_core/sim/td_model.h"
+#include "ov_sim/td_model.h"
 #include <string>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 struct PerturbOptions {
   std::string in_dir;  ///< EuRoC folder (holding mav0/ or mav0/ itself)
@@ -24,5 +23,4 @@ struct PerturbReport {
 /// mav0/td_truth/data.csv and OUT/perturb.yaml.
 PerturbReport perturb_dataset(const PerturbOptions &opt);
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

@@ -1,9 +1,9 @@
-#include "ov_core/sim/simulator.h"
+#include "ov_sim/simulator.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/trajectory_io.h"
-#include "ov_core/sim/euroc_calib.h"
-#include "ov_core/sim/random.h"
 #include "ov_core/types/errors.h"
+#include "ov_sim/euroc_calib.h"
+#include "ov_sim/random.h"
 
 #include <algorithm>
 #include <chrono>
@@ -16,8 +16,7 @@
 
 namespace fs = std::filesystem;
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 namespace {
 
@@ -28,7 +27,7 @@ std::ofstream open_out(const fs::path &p) {
   fs::create_directories(p.parent_path());
   std::ofstream f(p, std::ios::binary);
   if (!f)
-    throw DataError(p.string(), "cannot open for writing");
+    throw ov_core::DataError(p.string(), "cannot open for writing");
   return f;
 }
 
@@ -36,16 +35,17 @@ void write_text(const fs::path &p, const std::string &text) {
   auto f = open_out(p);
   f << text;
   if (!f)
-    throw DataError(p.string(), "write failed");
+    throw ov_core::DataError(p.string(), "write failed");
 }
 
 std::vector<int64_t> image_times(const Trajectory &traj, const SimOptions &opt) {
   const double rate = opt.cam.rate_hz > 0 ? opt.cam.rate_hz : 20.0;
-  const int64_t first = traj.t_begin_ns() + s_to_ns(opt.first_image_s);
+  const int64_t first = traj.t_begin_ns() + ov_core::s_to_ns(opt.first_image_s);
   std::vector<int64_t> t;
   for (int64_t k = 0;; ++k) {
     const int64_t tk = first + std::llround(k * 1e9 / rate);
-    if (tk + s_to_ns(opt.readout_s) > traj.t_end_ns()) // a rolling shutter's last row, too, lies on the trajectory
+    if (tk + ov_core::s_to_ns(opt.readout_s) >
+        traj.t_end_ns()) // a rolling shutter's last row, too, lies on the trajectory
       break;
     t.push_back(tk);
   }
@@ -58,18 +58,19 @@ SimOptions::SimOptions() : cam(euroc_cam0_calib()), imu(euroc_imu0_calib()) {}
 
 std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt) {
   if (!(opt.duration_s > 0.0))
-    throw UsageError("duration must be positive");
+    throw ov_core::UsageError("duration must be positive");
   if (opt.gt_file.empty())
     return std::make_unique<LissajousTrajectory>(opt.duration_s, LissajousTrajectory::kDefaultBeginNs, opt.agility);
-  const std::vector<StateSample> gt = read_trajectory(opt.gt_file);
+  const std::vector<ov_core::StateSample> gt = ov_core::read_trajectory(opt.gt_file);
   if (gt.empty())
-    throw DataError(opt.gt_file, "no poses");
-  const int64_t t0 = gt.front().t_ns + s_to_ns(opt.start_s);
-  return std::make_unique<SplineTrajectory>(gt, t0, t0 + s_to_ns(opt.duration_s), opt.knot_dt_s, "fit:" + opt.gt_file);
+    throw ov_core::DataError(opt.gt_file, "no poses");
+  const int64_t t0 = gt.front().t_ns + ov_core::s_to_ns(opt.start_s);
+  return std::make_unique<SplineTrajectory>(gt, t0, t0 + ov_core::s_to_ns(opt.duration_s), opt.knot_dt_s,
+                                            "fit:" + opt.gt_file);
 }
 
-CameraCalib true_camera(const SimOptions &opt) {
-  CameraCalib c = opt.cam;
+ov_core::CameraCalib true_camera(const SimOptions &opt) {
+  ov_core::CameraCalib c = opt.cam;
   c.intrinsics.head<2>() *= 1.0 + opt.focal_error;
   return c;
 }
@@ -144,7 +145,7 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::Key << "rolling_shutter_convention" << YAML::Value
     << "row v exposed at the image's IMU-clock instant + v/height * readout; the stamp belongs to row 0";
   e << YAML::Key << "focal_error" << YAML::Value << opt.focal_error;
-  const CameraCalib tc = true_camera(opt);
+  const ov_core::CameraCalib tc = true_camera(opt);
   e << YAML::Key << "true_intrinsics" << YAML::Value << YAML::Flow
     << std::vector<double>{tc.intrinsics(0), tc.intrinsics(1), tc.intrinsics(2), tc.intrinsics(3)};
   e << YAML::EndMap;
@@ -182,16 +183,17 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
 
 SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   if (opt.out_dir.empty())
-    throw UsageError("no output folder");
+    throw ov_core::UsageError("no output folder");
   const double frame_s = 1.0 / (opt.cam.rate_hz > 0 ? opt.cam.rate_hz : 20.0);
   if (!(opt.readout_s >= 0.0 && opt.readout_s <= frame_s))
-    throw UsageError("rolling-shutter readout must lie in [0, one frame interval = " + std::to_string(frame_s) + " s]");
+    throw ov_core::UsageError(
+        "rolling-shutter readout must lie in [0, one frame interval = " + std::to_string(frame_s) + " s]");
   if (!(std::abs(opt.focal_error) < 0.5))
-    throw UsageError("focal error must lie in (-0.5, 0.5) (relative)");
+    throw ov_core::UsageError("focal error must lie in (-0.5, 0.5) (relative)");
   if (!(std::abs(opt.gyro_scale) < 0.5))
-    throw UsageError("gyro scale error must lie in (-0.5, 0.5) (relative)");
+    throw ov_core::UsageError("gyro scale error must lie in (-0.5, 0.5) (relative)");
   if (opt.gyro_scale != 0.0 && !opt.imu_from.empty())
-    throw UsageError("a gyro scale error is planted in the synthetic IMU, not in a copied one (--imu-from)");
+    throw ov_core::UsageError("a gyro scale error is planted in the synthetic IMU, not in a copied one (--imu-from)");
   const auto wall0 = std::chrono::steady_clock::now();
   SimReport rep;
   const std::unique_ptr<Trajectory> traj = make_trajectory(opt);
@@ -199,7 +201,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   const fs::path mav0 = fs::path(opt.out_dir) / "mav0";
   if (fs::exists(mav0)) {
     if (!opt.overwrite)
-      throw UsageError("" + mav0.string() + " already exists (use --force to replace it)");
+      throw ov_core::UsageError("" + mav0.string() + " already exists (use --force to replace it)");
     fs::remove_all(mav0);
   }
   fs::create_directories(mav0);
@@ -217,17 +219,17 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   io.seed = derive_seed(opt.seed, kImu);
   ImuSynthResult imu = synthesize_imu(*traj, io);
   if (!opt.imu_from.empty()) {
-    LoadOptions lo;
+    ov_core::LoadOptions lo;
     lo.check_images_exist = false;
-    const Dataset real = load_dataset(opt.imu_from, lo);
-    std::vector<ImuData> cut;
+    const ov_core::Dataset real = ov_core::load_dataset(opt.imu_from, lo);
+    std::vector<ov_core::ImuData> cut;
     for (const auto &m : real.imu)
       if (m.t_imu_ns >= traj->t_begin_ns() && m.t_imu_ns <= traj->t_end_ns())
         cut.push_back(m);
     if (cut.empty() || cut.front().t_imu_ns > traj->t_begin_ns() + 50000000 ||
         cut.back().t_imu_ns < traj->t_end_ns() - 50000000)
-      throw UsageError("the IMU log of " + opt.imu_from +
-                       " does not cover the simulated time span (use the ground truth of the same sequence)");
+      throw ov_core::UsageError("the IMU log of " + opt.imu_from +
+                                " does not cover the simulated time span (use the ground truth of the same sequence)");
     imu.imu = cut;
     // Ground-truth biases of a real IMU are only known where the ground truth carries them (17-column csv).
     for (auto &s : imu.truth)
@@ -235,8 +237,8 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     if (real.has_groundtruth() && real.groundtruth.front().has_velocity) {
       const auto &g = real.groundtruth;
       for (auto &s : imu.truth) {
-        auto it =
-            std::lower_bound(g.begin(), g.end(), s.t_ns, [](const StateSample &a, int64_t t) { return a.t_ns < t; });
+        auto it = std::lower_bound(g.begin(), g.end(), s.t_ns,
+                                   [](const ov_core::StateSample &a, int64_t t) { return a.t_ns < t; });
         if (it == g.end())
           --it;
         s.bg = it->bg;
@@ -256,21 +258,21 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
       f << buf;
     }
     if (!f)
-      throw DataError((mav0 / "imu0" / "data.csv").string(), "write failed");
+      throw ov_core::DataError((mav0 / "imu0" / "data.csv").string(), "write failed");
   }
   fs::create_directories(mav0 / "state_groundtruth_estimate0");
-  write_euroc_groundtruth((mav0 / "state_groundtruth_estimate0" / "data.csv").string(), imu.truth);
+  ov_core::write_euroc_groundtruth((mav0 / "state_groundtruth_estimate0" / "data.csv").string(), imu.truth);
 
   // Image instants (IMU clock) and their camera-clock stamps.
   TdModelOptions tdo = opt.td;
   tdo.seed = derive_seed(opt.seed, kTd);
   const std::vector<TimedImage> frames = apply_td_model(image_times(*traj, opt), tdo);
   {
-    std::vector<TdSample> td;
+    std::vector<ov_core::TdSample> td;
     for (const auto &f : frames)
-      td.push_back(TdSample{f.t_cam_ns, f.td_s()});
+      td.push_back(ov_core::TdSample{f.t_cam_ns, f.td_s()});
     fs::create_directories(mav0 / "td_truth");
-    write_td_truth((mav0 / "td_truth" / "data.csv").string(), td);
+    ov_core::write_td_truth((mav0 / "td_truth" / "data.csv").string(), td);
   }
   rep.n_images = frames.size();
 
@@ -280,7 +282,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   list << "#timestamp [ns],filename\n";
   const bool render = !opt.no_images && !opt.features_only;
   std::unique_ptr<Scene> scene;
-  std::unique_ptr<CameraModel> cam;
+  std::unique_ptr<ov_core::CameraModel> cam;
   std::unique_ptr<Renderer> renderer;
   std::unique_ptr<FeatureSimulator> feats;
   std::ofstream feat_out;
@@ -288,7 +290,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     if (progress)
       progress("building scene", 0, frames.size());
     scene = std::make_unique<Scene>(make_scene(*traj, opt));
-    cam = std::make_unique<CameraModel>(true_camera(opt)); // sensor.yaml above keeps opt.cam
+    cam = std::make_unique<ov_core::CameraModel>(true_camera(opt)); // sensor.yaml above keeps opt.cam
   }
   if (render)
     renderer = std::make_unique<Renderer>(*cam, *scene, opt.render);
@@ -311,7 +313,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
       rep.render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
       const fs::path file = mav0 / "cam0" / "data" / name;
       if (!cv::imwrite(file.string(), img, png_params))
-        throw DataError(file.string(), "cannot write image");
+        throw ov_core::DataError(file.string(), "cannot write image");
     }
     if (feats) {
       char buf[128];
@@ -329,10 +331,9 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
       progress(render ? "rendering" : "writing", k + 1, frames.size());
   }
   if (!list)
-    throw DataError((mav0 / "cam0" / "data.csv").string(), "write failed");
+    throw ov_core::DataError((mav0 / "cam0" / "data.csv").string(), "write failed");
   rep.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return rep;
 }
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

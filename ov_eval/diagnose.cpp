@@ -1,10 +1,10 @@
-#include "ov_core/eval/diagnose.h"
+#include "ov_eval/diagnose.h"
 #include "ov_core/cam/camera_model.h"
-#include "ov_core/eval/plot.h"
 #include "ov_core/io/csv.h"
 #include "ov_core/io/text_format.h"
 #include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/plot.h"
 
 #include <Eigen/Dense>
 
@@ -21,7 +21,7 @@
 #include <numeric>
 #include <sstream>
 
-namespace ov_core {
+namespace ov_eval {
 
 // ---------------------------------------------------------------------------------------------------------------
 // Reading the log
@@ -31,7 +31,7 @@ namespace {
 
 /// Like TextTableReader::to_double but lets "nan" through: the writer logs NaN where a quantity does not exist, and
 /// the caller decides per column and status whether that is allowed.
-double parse_number(const TextTableReader &rd, const std::string &field, const std::string &what) {
+double parse_number(const ov_core::TextTableReader &rd, const std::string &field, const std::string &what) {
   if (field.empty())
     rd.fail("empty " + what);
   char *end = nullptr;
@@ -44,7 +44,7 @@ double parse_number(const TextTableReader &rd, const std::string &field, const s
   return v;
 }
 
-double finite_number(const TextTableReader &rd, const std::string &field, const std::string &what) {
+double finite_number(const ov_core::TextTableReader &rd, const std::string &field, const std::string &what) {
   const double v = parse_number(rd, field, what);
   if (std::isnan(v))
     rd.fail("NaN " + what);
@@ -54,7 +54,7 @@ double finite_number(const TextTableReader &rd, const std::string &field, const 
 } // namespace
 
 ResidualLog load_residual_log(const std::string &file) {
-  TextTableReader rd(file, ',');
+  ov_core::TextTableReader rd(file, ',');
   ResidualLog log;
   log.file = file;
   std::vector<std::string> f;
@@ -67,7 +67,8 @@ ResidualLog load_residual_log(const std::string &file) {
       break;
     }
   if (header.empty())
-    throw DataError(file, 1, "no header line: expected the residual log's column names (ovton run --residual-log)");
+    throw ov_core::DataError(file, 1,
+                             "no header line: expected the residual log's column names (ovton run --residual-log)");
   const long header_line = have_row ? std::max(1L, rd.line() - 1) : 1L;
   std::map<std::string, size_t> col;
   {
@@ -88,8 +89,8 @@ ResidualLog load_residual_log(const std::string &file) {
   for (const char *name : required) {
     const auto it = col.find(name);
     if (it == col.end())
-      throw DataError(file, header_line,
-                      std::string("header has no column '") + name + "': not a residual log of this version");
+      throw ov_core::DataError(file, header_line,
+                               std::string("header has no column '") + name + "': not a residual log of this version");
     max_col = std::max(max_col, it->second);
   }
   const auto idx = [&](const char *name) { return col.at(name); };
@@ -564,7 +565,7 @@ constexpr int kRateRowsPerImage = 9;
 struct ErrorDirs {
   Eigen::Vector2d focal, k1;
 };
-ErrorDirs error_dirs(const CameraModel *cam, const Eigen::Vector2d &x) {
+ErrorDirs error_dirs(const ov_core::CameraModel *cam, const Eigen::Vector2d &x) {
   const Eigen::Vector2d k1 = x.squaredNorm() * x;
   if (!cam)
     return {x, k1};
@@ -573,14 +574,14 @@ ErrorDirs error_dirs(const CameraModel *cam, const Eigen::Vector2d &x) {
   const Eigen::PartialPivLU<Eigen::Matrix2d> lu(Jd);
   return {lu.solve(xd), lu.solve(k1)};
 }
-Eigen::Vector2d focal_dir(const CameraModel *cam, const Eigen::Vector2d &x) {
+Eigen::Vector2d focal_dir(const ov_core::CameraModel *cam, const Eigen::Vector2d &x) {
   return error_dirs(cam, x).focal;
 }
 
 /// Gyro reading at t (linear interpolation; clamped at the ends).
-Eigen::Vector3d gyro_at(const std::vector<ImuData> &imu, double t_ns) {
-  const auto it =
-      std::lower_bound(imu.begin(), imu.end(), t_ns, [](const ImuData &m, double t) { return double(m.t_imu_ns) < t; });
+Eigen::Vector3d gyro_at(const std::vector<ov_core::ImuData> &imu, double t_ns) {
+  const auto it = std::lower_bound(imu.begin(), imu.end(), t_ns,
+                                   [](const ov_core::ImuData &m, double t) { return double(m.t_imu_ns) < t; });
   if (it == imu.begin())
     return imu.front().wm;
   if (it == imu.end())
@@ -647,7 +648,7 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
     ++n_tracks;
   }
   const Eigen::Matrix3d R_BC = opt.camera.T_BC.block<3, 3>(0, 0);
-  const CameraModel cam(opt.camera);
+  const ov_core::CameraModel cam(opt.camera);
   using Vec9 = Eigen::Matrix<double, 9, 1>;
   // The flow model's rows for one feature: ẋ = H·(ω, ψ, v).
   const auto flow_rows = [](const Eigen::Vector2d &x, double rho, double iz) {
@@ -817,7 +818,7 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
     const double dt = span / steps;
     Eigen::Matrix3d R = Eigen::Matrix3d::Identity(); // R_{B0 B1}
     for (int k = 0; k < steps; ++k)
-      R = R * so3_exp(gyro_at(opt.imu, t0 + 1e9 * (k + 0.5) * dt) * dt);
+      R = R * ov_core::so3_exp(gyro_at(opt.imu, t0 + 1e9 * (k + 0.5) * dt) * dt);
     return rot_cache.emplace(std::make_pair(t0, t1), R_BC.transpose() * R * R_BC).first->second;
   };
   const auto gyro_through_images = [&](int64_t t_cam, const FrameFit &ff) -> Eigen::Vector3d {
@@ -930,7 +931,7 @@ bool build_rate_design(TrackMap &tracks, const DiagnoseOptions &opt, const Diagn
 
 DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   if (!(opt.min_sigma > 0) || !(opt.min_explained >= 0) || !(opt.huber_k > 0) || opt.time_bins < 1 || opt.plot_bins < 2)
-    throw UsageError("diagnose: thresholds must be positive and bins at least 1 (time) / 2 (plots)");
+    throw ov_core::UsageError("diagnose: thresholds must be positive and bins at least 1 (time) / 2 (plots)");
   DiagnoseReport rep;
   rep.log_file = log.file;
   rep.options = opt;
@@ -971,8 +972,9 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   for (auto &kv : tracks)
     n_obs += static_cast<long>(kv.second.size());
   if (n_obs < 50)
-    throw DataError(log.file, "only " + std::to_string(n_obs) +
-                                  " usable observations (accepted or gated, in tracks of 3+): too few to diagnose");
+    throw ov_core::DataError(log.file,
+                             "only " + std::to_string(n_obs) +
+                                 " usable observations (accepted or gated, in tracks of 3+): too few to diagnose");
   rep.rows_used = n_obs;
   rep.tracks_used = static_cast<long>(tracks.size());
 
@@ -1004,7 +1006,7 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
       break;
     }
     if (!(rep.fu > 0) || !(rep.fv > 0))
-      throw DataError(log.file, "cannot fit the focal length from (u_px, x_norm): pass --dataset");
+      throw ov_core::DataError(log.file, "cannot fit the focal length from (u_px, x_norm): pass --dataset");
   }
   double vmax = 0;
   for (auto *r : rows)
@@ -1012,9 +1014,9 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   rep.image_height = opt.image_height > 0                       ? opt.image_height
                      : opt.have_camera && opt.camera.height > 0 ? opt.camera.height
                                                                 : static_cast<int>(std::ceil(vmax + 0.5));
-  std::unique_ptr<CameraModel> cam;
+  std::unique_ptr<ov_core::CameraModel> cam;
   if (opt.have_camera)
-    cam = std::make_unique<CameraModel>(opt.camera);
+    cam = std::make_unique<ov_core::CameraModel>(opt.camera);
 
   // Design matrix.
   Design d;
@@ -1072,7 +1074,7 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
       for (size_t j = 1; j < m; ++j) {
         const Eigen::Vector3d w0(tr[j - 1]->w_x, tr[j - 1]->w_y, tr[j - 1]->w_z),
             w1(tr[j]->w_x, tr[j]->w_y, tr[j]->w_z);
-        R_B0B = R_B0B * so3_exp(0.5 * (w0 + w1) * 1e-9 * double(tr[j]->t_cam_ns - tr[j - 1]->t_cam_ns));
+        R_B0B = R_B0B * ov_core::so3_exp(0.5 * (w0 + w1) * 1e-9 * double(tr[j]->t_cam_ns - tr[j - 1]->t_cam_ns));
         R_C0C[j] = R_BC.transpose() * R_B0B * R_BC;
       }
     }
@@ -1276,7 +1278,7 @@ std::string estimates_text(const CandidateResult &c) {
   for (const auto &e : c.estimates) {
     if (!s.empty())
       s += "; ";
-    s += e.name + " " + format_fixed(e.value, 3) + " ± " + format_fixed(e.stderr_, 3) +
+    s += e.name + " " + ov_core::format_fixed(e.value, 3) + " ± " + ov_core::format_fixed(e.stderr_, 3) +
          (e.unit.empty() ? "" : " " + e.unit);
   }
   return s.empty() ? "-" : s;
@@ -1285,11 +1287,11 @@ std::string estimates_text(const CandidateResult &c) {
 void write_file(const std::string &file, const std::string &text) {
   std::ofstream out(file);
   if (!out)
-    throw DataError(file, "cannot open for writing");
+    throw ov_core::DataError(file, "cannot open for writing");
   out << text;
   out.close();
   if (!out)
-    throw DataError(file, "write failed");
+    throw ov_core::DataError(file, "write failed");
 }
 
 /// The plots' font is ASCII: the few Greek letters and symbols of the model texts spelled out.
@@ -1355,7 +1357,7 @@ void plot_td_bins(const DiagnoseReport &rep, const std::string &file) {
   for (const auto &c : rep.candidates)
     if (c.key == "td_drift" && c.estimates.size() >= 3)
       p.add_line(c.estimates[0].value, c.estimates[2].value - c.estimates[0].value * 0.5 * rep.duration_s,
-                 "td_drift fit: " + format_fixed(c.estimates[0].value, 3) + " ms/s");
+                 "td_drift fit: " + ov_core::format_fixed(c.estimates[0].value, 3) + " ms/s");
   p.add_hline(0.0);
   p.save_png(file);
 }
@@ -1368,9 +1370,9 @@ std::string format_ranking(const DiagnoseReport &rep) {
   for (const auto &c : rep.candidates) {
     os << std::left << std::setw(6) << c.rank << std::setw(18) << c.key << std::setw(15)
        << (c.explained ? "EXPLAINED" : "not explained") << std::right << std::setw(8)
-       << format_fixed(100 * c.explained_alone, 2) << std::setw(10) << format_fixed(100 * c.explained_added, 2)
-       << std::setw(8) << format_fixed(c.sigma, 1) << "  " << estimates_text(c)
-       << (c.note.empty() ? "" : "  [" + c.note + "]") << "\n";
+       << ov_core::format_fixed(100 * c.explained_alone, 2) << std::setw(10)
+       << ov_core::format_fixed(100 * c.explained_added, 2) << std::setw(8) << ov_core::format_fixed(c.sigma, 1) << "  "
+       << estimates_text(c) << (c.note.empty() ? "" : "  [" + c.note + "]") << "\n";
   }
   return os.str();
 }
@@ -1379,7 +1381,7 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (!std::filesystem::is_directory(out_dir))
-    throw DataError(out_dir, "cannot create the output folder");
+    throw ov_core::DataError(out_dir, "cannot create the output folder");
   std::vector<std::string> files;
   // Plots first, so the report can link them.
   std::vector<std::pair<std::string, std::string>> plots; // key, file name
@@ -1390,16 +1392,16 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
     if (c.curve.x.size() < 2)
       continue;
     const std::string name = "diagnose_" + std::to_string(c.rank) + "_" + c.key + ".png";
-    plot_curve(c, join_path(out_dir, name));
+    plot_curve(c, ov_core::join_path(out_dir, name));
     plots.push_back({c.key, name});
-    files.push_back(join_path(out_dir, name));
+    files.push_back(ov_core::join_path(out_dir, name));
     ++plotted;
   }
   if (rep.td_bins.size() >= 2) {
     const std::string name = "diagnose_td_per_time_bin.png";
-    plot_td_bins(rep, join_path(out_dir, name));
+    plot_td_bins(rep, ov_core::join_path(out_dir, name));
     plots.push_back({"td_bins", name});
-    files.push_back(join_path(out_dir, name));
+    files.push_back(ov_core::join_path(out_dir, name));
   }
 
   const auto &o = rep.options;
@@ -1409,19 +1411,21 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
      << "- rows read " << rep.rows_read << "; used " << rep.rows_used << " observations in " << rep.tracks_used
      << " tracks (accepted + chi-square gated); " << rep.rows_triangulation_failed << " triangulation-failure rows and "
      << rep.rows_without_velocity << " rows without image velocity left out\n"
-     << "- span " << format_fixed(rep.duration_s, 1) << " s; residual RMS " << format_fixed(rep.residual_rms_px, 3)
-     << " px, robust sigma " << format_fixed(rep.robust_sigma_px, 3) << " px\n"
+     << "- span " << ov_core::format_fixed(rep.duration_s, 1) << " s; residual RMS "
+     << ov_core::format_fixed(rep.residual_rms_px, 3) << " px, robust sigma "
+     << ov_core::format_fixed(rep.robust_sigma_px, 3) << " px\n"
      << "- intrinsics " << (rep.intrinsics_fitted ? "fitted from the log" : "from the dataset") << ": fu "
-     << format_fixed(rep.fu, 1) << ", fv " << format_fixed(rep.fv, 1) << ", cu " << format_fixed(rep.cu, 1) << ", cv "
-     << format_fixed(rep.cv, 1) << " px; image height " << rep.image_height << " px; image velocity "
+     << ov_core::format_fixed(rep.fu, 1) << ", fv " << ov_core::format_fixed(rep.fv, 1) << ", cu "
+     << ov_core::format_fixed(rep.cu, 1) << ", cv " << ov_core::format_fixed(rep.cv, 1) << " px; image height "
+     << rep.image_height << " px; image velocity "
      << (o.use_logged_velocity ? "from the log's column" : "from the track's predicted positions") << "\n"
      << "- time candidates: "
      << (rep.time_from_rates ? "the images' angular rate against the raw gyro's at the filter's image time"
                              : "on the residual (no raw gyro: pass --dataset); a lower bound")
      << "\n"
      << "- verdict rule: EXPLAINED when selected by forward stepwise regression: significance >= "
-     << format_fixed(o.min_sigma, 1)
-     << " sigma (Wald, track-clustered) and >= " << format_fixed(100 * o.min_explained, 1)
+     << ov_core::format_fixed(o.min_sigma, 1)
+     << " sigma (Wald, track-clustered) and >= " << ov_core::format_fixed(100 * o.min_explained, 1)
      << " % of the Huber loss of its data (the residual; for time candidates from rates, the rate mismatch) removed "
         "beyond the candidates selected before it\n\n";
   const auto first = std::find_if(rep.candidates.begin(), rep.candidates.end(), [](auto &c) { return c.explained; });
@@ -1429,14 +1433,15 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
     md << "**No candidate explains the residuals** (nothing passes both thresholds).\n\n";
   else
     md << "**Top effect: " << first->key << "** — " << first->description << "; " << estimates_text(*first)
-       << "; removes " << format_fixed(100 * first->explained_added, 1) << " % of the "
+       << "; removes " << ov_core::format_fixed(100 * first->explained_added, 1) << " % of the "
        << (rep.time_from_rates && first->key.rfind("td_", 0) == 0 ? "rate mismatch's" : "residual's") << " loss.\n\n";
   md << "| rank | candidate | verdict | explained alone [%] | added [%] | sigma | estimate (± 1 SE) | note |\n"
      << "|---:|---|---|---:|---:|---:|---|---|\n";
   for (const auto &c : rep.candidates)
     md << "| " << c.rank << " | " << c.key << " | " << (c.explained ? "**explained**" : "not explained") << " | "
-       << format_fixed(100 * c.explained_alone, 2) << " | " << format_fixed(100 * c.explained_added, 2) << " | "
-       << format_fixed(c.sigma, 1) << " | " << estimates_text(c) << " | " << c.note << " |\n";
+       << ov_core::format_fixed(100 * c.explained_alone, 2) << " | "
+       << ov_core::format_fixed(100 * c.explained_added, 2) << " | " << ov_core::format_fixed(c.sigma, 1) << " | "
+       << estimates_text(c) << " | " << c.note << " |\n";
   md << "\nModels:\n\n";
   for (const auto &c : rep.candidates)
     md << "- `" << c.key << "`: " << c.description << "\n";
@@ -1445,9 +1450,9 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
        << "| t [s] | δt [ms] | SE [ms] | filter t̂_d [ms] | t̂_d + δt [ms] | observations |\n"
        << "|---:|---:|---:|---:|---:|---:|\n";
     for (const auto &b : rep.td_bins)
-      md << "| " << format_fixed(b.t_s, 1) << " | " << format_fixed(b.td_ms, 3) << " | " << format_fixed(b.td_se_ms, 3)
-         << " | " << format_fixed(b.td_filter_ms, 3) << " | " << format_fixed(b.td_filter_ms + b.td_ms, 3) << " | "
-         << b.observations << " |\n";
+      md << "| " << ov_core::format_fixed(b.t_s, 1) << " | " << ov_core::format_fixed(b.td_ms, 3) << " | "
+         << ov_core::format_fixed(b.td_se_ms, 3) << " | " << ov_core::format_fixed(b.td_filter_ms, 3) << " | "
+         << ov_core::format_fixed(b.td_filter_ms + b.td_ms, 3) << " | " << b.observations << " |\n";
   }
   if (!plots.empty()) {
     md << "\nPlots:\n\n";
@@ -1457,49 +1462,55 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
   md << "\nCaveat: residuals are logged after the filter has absorbed part of any effect into its state (poses, "
         "biases, t̂_d); what the tracks' points absorb is projected out, what the poses absorb is not. Residual-based "
         "sizes are therefore lower bounds (docs/diagnose.md, \"What the residuals cannot show\").\n";
-  const std::string md_file = join_path(out_dir, "diagnose.md");
+  const std::string md_file = ov_core::join_path(out_dir, "diagnose.md");
   write_file(md_file, md.str());
   files.insert(files.begin(), md_file);
 
   std::ostringstream js;
-  js << "{\n  \"log\": " << json_string(rep.log_file) << ",\n  \"rows_read\": " << rep.rows_read
+  js << "{\n  \"log\": " << ov_core::json_string(rep.log_file) << ",\n  \"rows_read\": " << rep.rows_read
      << ",\n  \"rows_used\": " << rep.rows_used << ",\n  \"tracks_used\": " << rep.tracks_used
      << ",\n  \"rows_triangulation_failed\": " << rep.rows_triangulation_failed
      << ",\n  \"rows_without_velocity\": " << rep.rows_without_velocity
-     << ",\n  \"duration_s\": " << json_number(rep.duration_s)
-     << ",\n  \"residual_rms_px\": " << json_number(rep.residual_rms_px)
-     << ",\n  \"robust_sigma_px\": " << json_number(rep.robust_sigma_px)
-     << ",\n  \"intrinsics\": {\"fu\": " << json_number(rep.fu) << ", \"fv\": " << json_number(rep.fv)
-     << ", \"cu\": " << json_number(rep.cu) << ", \"cv\": " << json_number(rep.cv)
+     << ",\n  \"duration_s\": " << ov_core::json_number(rep.duration_s)
+     << ",\n  \"residual_rms_px\": " << ov_core::json_number(rep.residual_rms_px)
+     << ",\n  \"robust_sigma_px\": " << ov_core::json_number(rep.robust_sigma_px)
+     << ",\n  \"intrinsics\": {\"fu\": " << ov_core::json_number(rep.fu) << ", \"fv\": " << ov_core::json_number(rep.fv)
+     << ", \"cu\": " << ov_core::json_number(rep.cu) << ", \"cv\": " << ov_core::json_number(rep.cv)
      << ", \"fitted\": " << (rep.intrinsics_fitted ? "true" : "false") << "},\n  \"image_height\": " << rep.image_height
-     << ",\n  \"min_sigma\": " << json_number(o.min_sigma) << ",\n  \"min_explained\": " << json_number(o.min_explained)
-     << ",\n  \"top\": " << (first == rep.candidates.end() ? "null" : json_string(first->key))
+     << ",\n  \"min_sigma\": " << ov_core::json_number(o.min_sigma)
+     << ",\n  \"min_explained\": " << ov_core::json_number(o.min_explained)
+     << ",\n  \"top\": " << (first == rep.candidates.end() ? "null" : ov_core::json_string(first->key))
      << ",\n  \"candidates\": [";
   for (size_t c = 0; c < rep.candidates.size(); ++c) {
     const auto &cr = rep.candidates[c];
-    js << (c ? "," : "") << "\n    {\"rank\": " << cr.rank << ", \"key\": " << json_string(cr.key)
-       << ", \"model\": " << json_string(cr.description) << ", \"explained\": " << (cr.explained ? "true" : "false")
-       << ", \"explained_alone\": " << json_number(cr.explained_alone)
-       << ", \"explained_added\": " << json_number(cr.explained_added) << ", \"sigma\": " << json_number(cr.sigma)
-       << ", \"note\": " << json_string(cr.note) << ", \"estimates\": [";
+    js << (c ? "," : "") << "\n    {\"rank\": " << cr.rank << ", \"key\": " << ov_core::json_string(cr.key)
+       << ", \"model\": " << ov_core::json_string(cr.description)
+       << ", \"explained\": " << (cr.explained ? "true" : "false")
+       << ", \"explained_alone\": " << ov_core::json_number(cr.explained_alone)
+       << ", \"explained_added\": " << ov_core::json_number(cr.explained_added)
+       << ", \"sigma\": " << ov_core::json_number(cr.sigma) << ", \"note\": " << ov_core::json_string(cr.note)
+       << ", \"estimates\": [";
     for (size_t e = 0; e < cr.estimates.size(); ++e)
-      js << (e ? ", " : "") << "{\"name\": " << json_string(cr.estimates[e].name)
-         << ", \"unit\": " << json_string(cr.estimates[e].unit) << ", \"value\": " << json_number(cr.estimates[e].value)
-         << ", \"stderr\": " << json_number(cr.estimates[e].stderr_) << "}";
+      js << (e ? ", " : "") << "{\"name\": " << ov_core::json_string(cr.estimates[e].name)
+         << ", \"unit\": " << ov_core::json_string(cr.estimates[e].unit)
+         << ", \"value\": " << ov_core::json_number(cr.estimates[e].value)
+         << ", \"stderr\": " << ov_core::json_number(cr.estimates[e].stderr_) << "}";
     js << "]}";
   }
   js << "\n  ],\n  \"td_bins\": [";
   for (size_t b = 0; b < rep.td_bins.size(); ++b) {
     const auto &tb = rep.td_bins[b];
-    js << (b ? "," : "") << "\n    {\"t_s\": " << json_number(tb.t_s) << ", \"td_error_ms\": " << json_number(tb.td_ms)
-       << ", \"td_error_se_ms\": " << json_number(tb.td_se_ms) << ", \"td_filter_ms\": " << json_number(tb.td_filter_ms)
-       << ", \"observations\": " << tb.observations << "}";
+    js << (b ? "," : "") << "\n    {\"t_s\": " << ov_core::json_number(tb.t_s)
+       << ", \"td_error_ms\": " << ov_core::json_number(tb.td_ms)
+       << ", \"td_error_se_ms\": " << ov_core::json_number(tb.td_se_ms)
+       << ", \"td_filter_ms\": " << ov_core::json_number(tb.td_filter_ms) << ", \"observations\": " << tb.observations
+       << "}";
   }
   js << "\n  ]\n}\n";
-  const std::string js_file = join_path(out_dir, "diagnose.json");
+  const std::string js_file = ov_core::join_path(out_dir, "diagnose.json");
   write_file(js_file, js.str());
   files.insert(files.begin() + 1, js_file);
   return files;
 }
 
-} // namespace ov_core
+} // namespace ov_eval

@@ -5,8 +5,7 @@
 #include <cstdint>
 #include <random>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 /// Independent streams from one user seed (IMU noise, offset model, scene, ...), so adding draws to one
 /// stream never changes another.
@@ -47,5 +46,4 @@ private:
   bool has_spare_ = false;
 };
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim

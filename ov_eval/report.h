@@ -3,26 +3,26 @@
 // paper §V-A metrics as Markdown + CSV and the three figures (t_d over time, APE over time, top view).
 // Nothing here knows the estimator: a run arrives as a trajectory plus timings, named by the caller, so the same
 // code serves any set of configurations.
-#include "ov_core/eval/metrics.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/types/sensor_data.h"
+#include "ov_eval/metrics.h"
 
 #include <functional>
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ov_eval {
 
 /// The outcome of one run under one named configuration (a time-offset mode in `compare`).
 struct RunRecord {
   std::string name;
   /// "ok"; otherwise why there is no (full) result: "failed: ...", "skipped: ...", "interrupted", "not run ...".
   std::string status = "ok";
-  std::vector<StateSample> traj; ///< estimates, IMU clock, strictly increasing in time
-  std::string traj_file;         ///< where the trajectory was written ("" = nowhere)
-  double wall_s = 0.0;           ///< wall-clock time of the replay
-  double data_span_s = 0.0;      ///< sensor time the replay covered
-  long frames = 0;               ///< images processed
+  std::vector<ov_core::StateSample> traj; ///< estimates, IMU clock, strictly increasing in time
+  std::string traj_file;                  ///< where the trajectory was written ("" = nowhere)
+  double wall_s = 0.0;                    ///< wall-clock time of the replay
+  double data_span_s = 0.0;               ///< sensor time the replay covered
+  long frames = 0;                        ///< images processed
   bool ok() const { return status == "ok"; }
 };
 
@@ -59,7 +59,7 @@ struct ReportFiles {
 
 /// Evaluates each run against the dataset's ground truth and time-offset truth. Never throws for a bad run:
 /// a run that cannot be evaluated gets evaluated = false and the reason in eval_note.
-std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const Dataset &data,
+std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const ov_core::Dataset &data,
                                      const ReportOptions &opt = {});
 
 /// results.csv: header `mode,status,ape_rmse_m,are_deg,tpe_rmse_mm,cit_frames,final_td_ms,td_sigma_ms,runtime_s,
@@ -71,25 +71,25 @@ void write_results_csv(const std::string &file, const std::vector<ReportRow> &ro
 std::string results_markdown_table(const std::vector<ReportRow> &rows);
 
 /// results.md: the command line, the dataset, the table, the figures and notes on what the columns mean.
-void write_results_md(const std::string &file, const std::vector<ReportRow> &rows, const Dataset &data,
+void write_results_md(const std::string &file, const std::vector<ReportRow> &rows, const ov_core::Dataset &data,
                       const ReportInfo &info, const ReportFiles &files, const ReportOptions &opt = {});
 
 /// t_d estimate of each run [ms] over time, and the truth when the dataset has one. Returns false (and writes
 /// nothing) when no run carries a time offset.
-bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const Dataset &data,
+bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const ov_core::Dataset &data,
              const ReportOptions &opt = {});
 /// Aligned position error of each evaluated run over time. Returns false when no run was evaluated.
 bool plot_ape(const std::string &file, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows,
-              const Dataset &data, const ReportOptions &opt = {});
+              const ov_core::Dataset &data, const ReportOptions &opt = {});
 /// x-y top view, equal aspect: ground truth and each run after its alignment (raw when it was not evaluated).
 /// Returns false when there is nothing to draw.
 bool plot_top(const std::string &file, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows,
-              const Dataset &data, const ReportOptions &opt = {});
+              const ov_core::Dataset &data, const ReportOptions &opt = {});
 
 /// Everything above into out_dir (created if needed): results.md, results.csv, td.png, ape.png, top.png.
 /// Throws DataError naming a file that cannot be written.
 ReportFiles write_report(const std::string &out_dir, const std::vector<RunRecord> &runs,
-                         const std::vector<ReportRow> &rows, const Dataset &data, const ReportInfo &info,
+                         const std::vector<ReportRow> &rows, const ov_core::Dataset &data, const ReportInfo &info,
                          const ReportOptions &opt = {});
 
 /// Splits a comma-separated list ("off,sr, oracle") and checks every name against `valid`. Throws UsageError naming
@@ -108,4 +108,4 @@ using RunDone = std::function<void(const RunRecord &rec, size_t done, size_t tot
 std::vector<RunRecord> run_parallel(const std::vector<std::string> &names, int jobs, const RunOne &run_one,
                                     const RunDone &on_done = nullptr, const std::function<bool()> &stop = nullptr);
 
-} // namespace ov_core
+} // namespace ov_eval

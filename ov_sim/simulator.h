@@ -1,18 +1,17 @@
 #pragma once
 // Writes a synthetic EuRoC-format folder: mav0/{cam0,imu0,state_groundtruth_estimate0,td_truth} + sim.yaml.
 #include "ov_core/cam/camera_calib.h"
-#include "ov_core/sim/feature_sim.h"
-#include "ov_core/sim/imu_synth.h"
-#include "ov_core/sim/renderer.h"
-#include "ov_core/sim/scene.h"
-#include "ov_core/sim/td_model.h"
-#include "ov_core/sim/trajectory.h"
+#include "ov_sim/feature_sim.h"
+#include "ov_sim/imu_synth.h"
+#include "ov_sim/renderer.h"
+#include "ov_sim/scene.h"
+#include "ov_sim/td_model.h"
+#include "ov_sim/trajectory.h"
 #include <functional>
 #include <memory>
 #include <string>
 
-namespace ov_core {
-namespace sim {
+namespace ov_sim {
 
 struct SimOptions {
   std::string out_dir;
@@ -23,8 +22,8 @@ struct SimOptions {
   double knot_dt_s = 0.1;     ///< B-spline knot spacing of the trajectory fit
   double first_image_s = 0.1; ///< first image this long after the first IMU sample (IMU clock)
   uint64_t seed = 1;
-  CameraCalib cam; ///< defaults to euroc_cam0_calib()
-  ImuCalib imu;    ///< defaults to euroc_imu0_calib()
+  ov_core::CameraCalib cam; ///< defaults to euroc_cam0_calib()
+  ov_core::ImuCalib imu;    ///< defaults to euroc_imu0_calib()
   std::string cam_source = "builtin EuRoC cam0", imu_source = "builtin EuRoC imu0 (ADIS16448)";
   bool imu_noise = true;
   bool imu_bias_walk = true;
@@ -65,7 +64,7 @@ std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt);
 void camera_pose(const TrajectorySample &s, const Eigen::Matrix4d &T_BC, Eigen::Matrix3d &R_WC, Eigen::Vector3d &p_WC);
 
 /// The intrinsics the data are made with: `cam` with its focal lengths scaled by 1 + focal_error.
-CameraCalib true_camera(const SimOptions &opt);
+ov_core::CameraCalib true_camera(const SimOptions &opt);
 
 /// IMU-clock instant at which image row `row` of a frame whose row 0 is exposed at t_imu_ns is exposed.
 int64_t row_time_ns(int64_t t_imu_ns, double row, int height, double readout_s);
@@ -83,5 +82,4 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress = 
 /// Text of sim.yaml for these options (every parameter and the seed).
 std::string sim_yaml(const SimOptions &opt, const Trajectory &traj);
 
-} // namespace sim
-} // namespace ov_core
+} // namespace ov_sim
