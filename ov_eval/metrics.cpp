@@ -51,20 +51,6 @@ ov_core::StateSample interpolate(const ov_core::StateSample &a, const ov_core::S
   return s;
 }
 
-/// True offset at camera-clock time t_cam_ns: linear between truth samples, held constant beyond the ends.
-double td_truth_at(const std::vector<ov_core::TdSample> &td, int64_t t_cam_ns) {
-  if (t_cam_ns <= td.front().t_cam_ns)
-    return td.front().td_s;
-  if (t_cam_ns >= td.back().t_cam_ns)
-    return td.back().td_s;
-  auto it = std::upper_bound(td.begin(), td.end(), t_cam_ns,
-                             [](int64_t t, const ov_core::TdSample &s) { return t < s.t_cam_ns; });
-  const ov_core::TdSample &b = *it;
-  const ov_core::TdSample &a = *(it - 1);
-  const double alpha = static_cast<double>(t_cam_ns - a.t_cam_ns) / static_cast<double>(b.t_cam_ns - a.t_cam_ns);
-  return (1.0 - alpha) * a.td_s + alpha * b.td_s;
-}
-
 double rmse(double sum_sq, int n) {
   return n > 0 ? std::sqrt(sum_sq / n) : kNaN;
 }
@@ -333,6 +319,19 @@ EvalResult evaluate(const std::vector<ov_core::StateSample> &est, const std::vec
     }
   }
   return r;
+}
+
+double td_truth_at(const std::vector<ov_core::TdSample> &td, int64_t t_cam_ns) {
+  if (t_cam_ns <= td.front().t_cam_ns)
+    return td.front().td_s;
+  if (t_cam_ns >= td.back().t_cam_ns)
+    return td.back().td_s;
+  auto it = std::upper_bound(td.begin(), td.end(), t_cam_ns,
+                             [](int64_t t, const ov_core::TdSample &s) { return t < s.t_cam_ns; });
+  const ov_core::TdSample &b = *it;
+  const ov_core::TdSample &a = *(it - 1);
+  const double alpha = static_cast<double>(t_cam_ns - a.t_cam_ns) / static_cast<double>(b.t_cam_ns - a.t_cam_ns);
+  return (1.0 - alpha) * a.td_s + alpha * b.td_s;
 }
 
 } // namespace ov_eval

@@ -30,6 +30,10 @@ struct Association {
 Association associate(const std::vector<ov_core::StateSample> &est, const std::vector<ov_core::StateSample> &gt,
                       double max_gap_s = 0.1);
 
+/// True offset at camera-clock time t_cam_ns: linear between truth samples, held constant beyond the ends.
+/// `td` must not be empty.
+double td_truth_at(const std::vector<ov_core::TdSample> &td, int64_t t_cam_ns);
+
 /// Transform with gt.p ~= s R est.p + t, fitted on positions only (so it works with position-only truth).
 /// SE3: Umeyama without scale, reflection fixed. Sim3: Umeyama with scale (s < 1: the estimate is too large). PosYaw:
 /// translation + rotation about world z only, closed form theta = atan2(sum(x_e*y_g - y_e*x_g), sum(x_e*x_g + y_e*y_g))

@@ -87,8 +87,8 @@ protected:
   /// binary does not link the CLI).
   static RunRecord run_mode(const Dataset &data, const std::string &name) {
     ov_msckf_ton::VioOptions opt;
-    opt.td_mode = ov_msckf_ton::parse_td_mode(name);
-    opt.init_mode = ov_msckf_ton::InitMode::GroundTruth;
+    opt.td.mode = ov_msckf_ton::parse_td_mode(name);
+    opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
     ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
     if (data.has_td_truth())
       vio.set_td_oracle([&data](int64_t t) { return data.td_truth_at(t); });

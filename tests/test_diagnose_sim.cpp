@@ -152,10 +152,10 @@ DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_in
   ov_sim::write_simulation(o);
   const Dataset data = load_dataset(o.out_dir);
   ov_msckf_ton::VioOptions opt;
-  opt.td_mode = ov_msckf_ton::parse_td_mode(mode);
-  opt.td_init_s = td_init_s;
-  opt.init_mode = ov_msckf_ton::InitMode::GroundTruth;
-  opt.sigma_px = o.features.pixel_noise;
+  opt.td.mode = ov_msckf_ton::parse_td_mode(mode);
+  opt.td.init_s = td_init_s;
+  opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
+  opt.update.sigma_px = o.features.pixel_noise;
   ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);
   const std::string log_file = dir / "res.csv";

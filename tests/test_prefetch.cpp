@@ -74,8 +74,8 @@ TEST(ImagePrefetcher, FilterGivesTheSameTrajectory) {
   ov_sim::write_simulation(o);
   const Dataset data = load_dataset(o.out_dir);
   ov_msckf_ton::VioOptions opt;
-  opt.td_mode = ov_msckf_ton::TdMode::Sr;
-  opt.init_mode = ov_msckf_ton::InitMode::GroundTruth;
+  opt.td.mode = ov_msckf_ton::TdMode::Sr;
+  opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
   const auto run = [&](bool prefetch) {
     ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
     vio.set_groundtruth(data.groundtruth);

@@ -27,8 +27,8 @@ struct ModeRun {
 
 ModeRun run_mode(const ov_core::Dataset &data, TdMode mode, const VioOptions &base = VioOptions()) {
   VioOptions opt = base;
-  opt.td_mode = mode;
-  opt.init_mode = InitMode::GroundTruth;
+  opt.td.mode = mode;
+  opt.init.mode = InitMode::GroundTruth;
   VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);
   ModeRun r;
@@ -44,7 +44,7 @@ ModeRun run_mode(const ov_core::Dataset &data, TdMode mode, const VioOptions &ba
   r.times = vio.times();
   if (vio.fvon())
     r.fvon = vio.fvon()->stats();
-  r.tpn_clamped = vio.counters().td_rate_clamped;
+  r.tpn_clamped = vio.td_model().stats().rate_clamped;
   return r;
 }
 
@@ -73,9 +73,9 @@ std::unique_ptr<ov_core::Dataset> simulate_constant_10ms(const ovtest::TempDir &
 /// fit, only on FVON supplying a velocity where the constant-speed model has none.
 VioOptions fast_networks() {
   VioOptions o;
-  o.its_epochs = 200;
-  o.f2f_epochs = 300;
-  o.tpn_epochs = 300;
+  o.ton.its_epochs = 200;
+  o.ton.f2f_epochs = 300;
+  o.ton.tpn_epochs = 300;
   return o;
 }
 
@@ -124,8 +124,8 @@ TEST(TonFilter, FvonGateKeepsOnlyPredictionsThatAgreeWithTheTrack) {
   ovtest::TempDir dir;
   const auto data = simulate_constant_10ms(dir);
   VioOptions open = fast_networks(), shut = fast_networks(), normal = fast_networks();
-  open.fvon_gate_px_s = 0.0;  // no check
-  shut.fvon_gate_px_s = 1e-6; // nothing agrees this well with a noisy track
+  open.ton.fvon_gate_px_s = 0.0;  // no check
+  shut.ton.fvon_gate_px_s = 1e-6; // nothing agrees this well with a noisy track
   const ModeRun a = run_mode(*data, TdMode::Fvon, open);
   const ModeRun b = run_mode(*data, TdMode::Fvon, shut);
   const ModeRun c = run_mode(*data, TdMode::Fvon, normal);
@@ -201,8 +201,8 @@ TEST(TonFilter, TpnOnNoiseFreeDrift) {
   // sir run (as the filter feeds it) predicts t̂_d(K) from t̂_d(..K−1); that is what it is trained to do. Against
   // the truth it is printed only, for the reason above.
   VioOptions opt = fast_networks();
-  opt.td_mode = TdMode::Sir;
-  opt.init_mode = InitMode::GroundTruth;
+  opt.td.mode = TdMode::Sir;
+  opt.init.mode = InitMode::GroundTruth;
   VioManager vio(opt, data->cam, data->imu_calib);
   vio.set_groundtruth(data->groundtruth);
   // Table I's 1000 epochs per frame, as the filter uses by default (fast_networks() lowers them for speed).

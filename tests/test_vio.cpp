@@ -15,22 +15,42 @@ TEST(VioOptions, ShippedConfigLoadsAndUnknownKeysFail) {
   std::ostringstream printed;
   const VioOptions o =
       load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml", &printed);
-  EXPECT_EQ(o.td_mode, TdMode::Sr);
-  EXPECT_EQ(o.max_clones, 20);
-  EXPECT_NE(printed.str().find("max_clones: 20"), std::string::npos);
+  EXPECT_EQ(o.td.mode, TdMode::Sr);
+  EXPECT_EQ(o.update.max_clones, 20);
+  EXPECT_NE(printed.str().find("\n  update:\n"), std::string::npos) << printed.str();
+  EXPECT_NE(printed.str().find("\n    max_clones: 20\n"), std::string::npos) << printed.str();
   ovtest::TempDir tmp;
-  ovtest::write_text(tmp / "bad.yaml", "max_clones: 11\nmax_clone: 5\n");
-  try {
-    load_vio_options(tmp / "bad.yaml");
-    FAIL() << "unknown key accepted";
-  } catch (const ov_core::DataError &e) {
-    EXPECT_EQ(e.line(), 2);
-    EXPECT_NE(std::string(e.what()).find("max_clone"), std::string::npos);
-  }
-  ovtest::write_text(tmp / "bad2.yaml", "td_mode: fast\n");
-  EXPECT_THROW(load_vio_options(tmp / "bad2.yaml"), ov_core::UsageError);
-  ovtest::write_text(tmp / "bad3.yaml", "sigma_px: [1, 2]\n");
-  EXPECT_THROW(load_vio_options(tmp / "bad3.yaml"), ov_core::DataError);
+  // Each bad file: the error names the file and the line of the offending key or value.
+  const auto expect_error = [&](const std::string &name, const std::string &text, int line, const std::string &what) {
+    ovtest::write_text(tmp / name, text);
+    try {
+      load_vio_options(tmp / name);
+      ADD_FAILURE() << name << " accepted";
+    } catch (const ov_core::DataError &e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+      if (line > 0) {
+        EXPECT_EQ(e.line(), line) << e.what();
+      }
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  expect_error("unknown.yaml", "update:\n  max_clones: 11\n  max_clone: 5\n", 3, "update.max_clone");
+  expect_error("section.yaml", "updates:\n  max_clones: 11\n", 1, "unknown section 'updates'");
+  expect_error("mode.yaml", "time_offset:\n  mode: fast\n", 2, "unknown time-offset mode 'fast'");
+  expect_error("kind.yaml", "update:\n  sigma_px: [1, 2]\n", 2, "must be a single value");
+  expect_error("flat.yaml", "max_clones: 11\n", 1, "unknown section");
+  expect_error("dup.yaml", "update:\n  sigma_px: 1\n  sigma_px: 2\n", 3, "duplicate key 'update.sigma_px'");
+  expect_error("range.yaml", "imu:\n  gravity_mag: 0\n", 0, "imu.gravity_mag must be > 0");
+  expect_error("enum.yaml", "time_offset:\n  first_velocity: later\n", 2, "expected none, next");
+  // MODE+PROCESS specs: the process overrides the mode's own.
+  VioOptions spec;
+  apply_mode_spec(parse_mode_spec("sr+random_walk"), spec);
+  EXPECT_EQ(spec.td.mode, TdMode::Sr);
+  EXPECT_EQ(resolve_td_process(spec.td.mode, spec.td.process), TdProcess::RandomWalk);
+  EXPECT_EQ(resolve_td_process(TdMode::Ton, TdProcess::Auto), TdProcess::Tpn);
+  EXPECT_EQ(resolve_td_process(TdMode::Drift, TdProcess::Auto), TdProcess::Drift);
+  EXPECT_THROW(parse_mode_spec("oracle+drift"), ov_core::UsageError);
+  EXPECT_THROW(parse_mode_spec("sr+wobble"), ov_core::UsageError);
 }
 
 TEST(StaticInit, RealEurocStillStartMatchesGroundTruth) {

@@ -6,6 +6,7 @@
 #include "ov_sim/simulator.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
+#include "tools/compare_report.h"
 #include "tools/mem_usage.h"
 #include "tools/progress.h"
 #include "tools/run_pipeline.h"
@@ -46,20 +47,6 @@ struct ModeBench {
   double realtime() const { return wall_s > 0 ? data_span_s / wall_s : 0.0; }
   double features_per_frame() const { return images > 0 ? static_cast<double>(features_used) / images : 0.0; }
 };
-
-std::vector<std::string> split_modes(const std::string &s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string m;
-  while (std::getline(ss, m, ','))
-    if (!m.empty()) {
-      ov_msckf_ton::parse_td_mode(m); // fail before any work on a typo
-      out.push_back(m);
-    }
-  if (out.empty())
-    throw ov_core::UsageError("--modes names no mode");
-  return out;
-}
 
 std::string loadavg() {
   std::ifstream f("/proc/loadavg");
@@ -108,7 +95,7 @@ void generate(const std::string &dir, double seconds, bool quiet) {
 ModeBench bench_mode(const ov_core::Dataset &data, RunRequest req, const std::string &mode) {
   ModeBench b;
   b.mode = mode;
-  req.opt.td_mode = ov_msckf_ton::parse_td_mode(mode);
+  ov_msckf_ton::apply_mode_spec(ov_msckf_ton::parse_mode_spec(mode), req.opt);
   req.label = "benchmark " + mode;
 
   b.peak_own = reset_peak_rss();
@@ -275,7 +262,9 @@ int cmd_benchmark(const Args &args) {
     throw ov_core::UsageError("--generate-seconds must be positive");
   if (!init.empty() && init != "static" && init != "groundtruth")
     throw ov_core::UsageError("--init must be static or groundtruth");
-  const auto modes = split_modes(modes_str);
+  std::vector<std::string> modes; // fail before any work on a typo
+  for (const auto &spec : parse_compare_modes(modes_str))
+    modes.push_back(spec.name);
 
   req.opt = config.empty() ? ov_msckf_ton::VioOptions{} : ov_msckf_ton::load_vio_options(config);
   if (!generate_dir.empty()) {
@@ -286,7 +275,7 @@ int cmd_benchmark(const Args &args) {
     dataset = generate_dir;
   }
   if (!init.empty())
-    req.opt.init_mode = init == "static" ? ov_msckf_ton::InitMode::Static : ov_msckf_ton::InitMode::GroundTruth;
+    req.opt.init.mode = ov_msckf_ton::parse_init_mode(init);
   req.progress = !quiet;
 
   // One thread, so that the numbers say what one core does and modes do not compete with each other.
@@ -297,7 +286,7 @@ int cmd_benchmark(const Args &args) {
   const std::string load_start = loadavg();
   std::cout << "dataset " << dataset << ": " << data.images.size() << " images " << data.cam.width << "x"
             << data.cam.height << ", " << data.imu.size() << " IMU readings; init "
-            << (req.opt.init_mode == ov_msckf_ton::InitMode::Static ? "static" : "groundtruth") << "; config "
+            << ov_msckf_ton::to_string(req.opt.init.mode) << "; config "
             << (config.empty() ? "built-in defaults" : config) << "\nmachine: " << std::thread::hardware_concurrency()
             << " cores, load average " << load_start << "; "
             << (req.prefetch ? "filter thread + image-decoding thread" : "one thread")
@@ -306,7 +295,7 @@ int cmd_benchmark(const Args &args) {
 
   // The JSON is rewritten after every mode, so an interrupted or failing benchmark keeps the modes already done;
   // writing it once before the first mode finds an unwritable path before minutes of work.
-  const std::string init_name = req.opt.init_mode == ov_msckf_ton::InitMode::Static ? "static" : "groundtruth";
+  const std::string init_name = ov_msckf_ton::to_string(req.opt.init.mode);
   std::vector<ModeBench> res;
   const auto save = [&] {
     if (!json.empty())

@@ -70,11 +70,8 @@ int cmd_compare(const Args &args) {
   req.report.eval.align = ov_eval::parse_align_mode(align);
 
   req.base = config.empty() ? ov_msckf_ton::VioOptions{} : ov_msckf_ton::load_vio_options(config);
-  if (!init.empty()) {
-    if (init != "static" && init != "groundtruth")
-      throw ov_core::UsageError("--init must be static or groundtruth");
-    req.base.init_mode = init == "static" ? ov_msckf_ton::InitMode::Static : ov_msckf_ton::InitMode::GroundTruth;
-  }
+  if (!init.empty())
+    req.base.init.mode = ov_msckf_ton::parse_init_mode(init);
   req.info.command_line = shell_command(args);
   req.info.config = config;
   std::error_code ec;

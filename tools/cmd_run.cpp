@@ -34,7 +34,7 @@ int cmd_run(const Args &args) {
       ("residual-log", po::value(&req.residual_log), "write every feature residual of every update here") //
       ("init", po::value(&init), "static|groundtruth (overrides the config)")                             //
       ("td-init-ms", po::value(&td_init_ms), "initial / fixed t_d [ms] (overrides the config)")           //
-      ("nees-log", po::value(&nees_log), "with --init groundtruth: write per-frame NEES (t_ns,ori,pos) here")(
+      ("nees-log", po::value(&nees_log), "with --init groundtruth: write per-frame NEES (t_ns,ori,pos,td) here")(
           "max-images", po::value(&req.max_images), "stop after this many images") //
       ("no-prefetch", po::bool_switch(&no_prefetch),
        "decode images on the filter's thread (default: the next ones on a second thread, same results)") //
@@ -50,14 +50,11 @@ int cmd_run(const Args &args) {
 
   req.opt = config.empty() ? ov_msckf_ton::VioOptions{} : ov_msckf_ton::load_vio_options(config);
   if (!mode.empty())
-    req.opt.td_mode = ov_msckf_ton::parse_td_mode(mode);
-  if (!init.empty()) {
-    if (init != "static" && init != "groundtruth")
-      throw ov_core::UsageError("--init must be static or groundtruth");
-    req.opt.init_mode = init == "static" ? ov_msckf_ton::InitMode::Static : ov_msckf_ton::InitMode::GroundTruth;
-  }
+    ov_msckf_ton::apply_mode_spec(ov_msckf_ton::parse_mode_spec(mode), req.opt);
+  if (!init.empty())
+    req.opt.init.mode = ov_msckf_ton::parse_init_mode(init);
   if (!std::isnan(td_init_ms))
-    req.opt.td_init_s = td_init_ms * 1e-3;
+    req.opt.td.init_s = td_init_ms * 1e-3;
 
   const ov_core::Dataset data = ov_core::load_dataset(dataset);
   apply_dataset_defaults(data, !std::isnan(td_init_ms), req.opt);
@@ -70,7 +67,7 @@ int cmd_run(const Args &args) {
   const auto &c = r.counters;
   const auto &tm = r.times;
   std::cout << std::fixed << std::setprecision(3);
-  std::cout << "mode " << ov_msckf_ton::to_string(req.opt.td_mode) << ": " << r.replay.images_fed << " images ("
+  std::cout << "mode " << ov_msckf_ton::to_string(req.opt.td.mode) << ": " << r.replay.images_fed << " images ("
             << c.images_before_init << " before initialisation, " << r.replay.images_skipped << " beyond the IMU log), "
             << c.updates << " updates, " << c.features_used << " features used, " << c.features_gated << " gated, "
             << c.zupts << " zero-velocity updates, " << c.td_rows << " observations constraining t_d\n";
@@ -90,13 +87,17 @@ int cmd_run(const Args &args) {
     std::ofstream out(nees_log);
     if (!out)
       throw ov_core::DataError(nees_log, "cannot open for writing");
-    out << "t_ns,nees_orientation,nees_position\n";
+    out << "t_ns,nees_orientation,nees_position,nees_td\n";
     for (const auto &n : r.nees.per_frame)
-      out << n.t_ns << ',' << n.ori << ',' << n.pos << '\n';
+      out << n.t_ns << ',' << n.ori << ',' << n.pos << ',' << n.td << '\n';
   }
-  if (r.nees.count > 0)
+  if (r.nees.count > 0) {
     std::cout << "NEES orientation " << r.nees.ori() << ", position " << r.nees.pos() << " (average over "
-              << r.nees.count << " frames; 3 is ideal)\n";
+              << r.nees.count << " frames; 3 is ideal)";
+    if (r.nees.td_count > 0)
+      std::cout << ", t_d " << r.nees.td() << " (1 is ideal)";
+    std::cout << "\n";
+  }
   if (data.has_groundtruth() && r.traj.size() > 2) {
     try {
       const auto e = ov_eval::evaluate(r.traj, data.groundtruth, data.td_truth, ov_eval::EvalOptions{});

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <map>
 #include <ostream>
+#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -38,10 +39,19 @@ std::string done_line(const ov_eval::RunRecord &rec, const ov_eval::ReportRow &r
 
 } // namespace
 
-std::vector<ov_msckf_ton::TdMode> parse_compare_modes(const std::string &list) {
-  std::vector<ov_msckf_ton::TdMode> modes;
-  for (const auto &name : ov_eval::parse_name_list(list, ov_msckf_ton::all_td_mode_names(), "mode"))
-    modes.push_back(ov_msckf_ton::parse_td_mode(name));
+std::vector<ov_msckf_ton::ModeSpec> parse_compare_modes(const std::string &list) {
+  // Every MODE+PROCESS combination is valid; the name list checks emptiness and repeats, the spec parser the rest.
+  std::vector<std::string> valid;
+  std::stringstream ss(list);
+  for (std::string item; std::getline(ss, item, ',');) {
+    const size_t b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
+    if (b != std::string::npos)
+      valid.push_back(ov_msckf_ton::parse_mode_spec(item.substr(b, e - b + 1)).name);
+  }
+  std::vector<ov_msckf_ton::ModeSpec> modes;
+  for (const auto &name :
+       ov_eval::parse_name_list(list, valid.empty() ? ov_msckf_ton::all_td_mode_names() : valid, "mode"))
+    modes.push_back(ov_msckf_ton::parse_mode_spec(name));
   return modes;
 }
 
@@ -50,7 +60,7 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
   if (req.modes.empty())
     throw ov_core::UsageError("compare: no mode to run");
   // Every run would fail the same way: say it once, before spending any time.
-  if (req.base.init_mode == ov_msckf_ton::InitMode::GroundTruth &&
+  if (req.base.init.mode == ov_msckf_ton::InitMode::GroundTruth &&
       (!data.has_groundtruth() || !data.groundtruth.front().has_velocity))
     throw ov_core::UsageError("ground-truth initialisation needs full-state ground truth in " + data.root +
                               " (use --init static)");
@@ -63,9 +73,11 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
 
   std::vector<std::string> to_run;
   std::map<std::string, ov_eval::RunRecord> skipped;
-  for (TdMode m : req.modes) {
-    const std::string name = ov_msckf_ton::to_string(m);
-    if (m == TdMode::Oracle && !data.has_td_truth()) {
+  std::map<std::string, ov_msckf_ton::ModeSpec> spec_of;
+  for (const auto &spec : req.modes) {
+    const std::string &name = spec.name;
+    spec_of[name] = spec;
+    if (spec.mode == TdMode::Oracle && !data.has_td_truth()) {
       ov_eval::RunRecord rec;
       rec.name = name;
       rec.status = "skipped: no td_truth/data.csv";
@@ -84,7 +96,7 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
   const auto run_one = [&](const std::string &name) {
     RunRequest rr;
     rr.opt = req.base;
-    rr.opt.td_mode = ov_msckf_ton::parse_td_mode(name);
+    ov_msckf_ton::apply_mode_spec(spec_of.at(name), rr.opt);
     rr.output = (fs::path(req.out_dir) / ("traj_" + name + ".csv")).string();
     rr.max_images = req.max_images;
     rr.progress = false; // parallel bars would overwrite each other; the log has one line per finished mode
@@ -113,9 +125,8 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
 
   CompareResult res;
   size_t k = 0;
-  for (TdMode m : req.modes) {
-    const std::string name = ov_msckf_ton::to_string(m);
-    auto it = skipped.find(name);
+  for (const auto &spec : req.modes) {
+    auto it = skipped.find(spec.name);
     res.runs.push_back(it != skipped.end() ? std::move(it->second) : std::move(ran[k++]));
   }
   for (const auto &r : res.runs) {

@@ -12,8 +12,8 @@
 namespace ovton {
 
 struct CompareRequest {
-  std::vector<ov_msckf_ton::TdMode> modes;
-  ov_msckf_ton::VioOptions base; ///< shared by every run; td_mode is set per run
+  std::vector<ov_msckf_ton::ModeSpec> modes;
+  ov_msckf_ton::VioOptions base; ///< shared by every run; the mode (and process) is set per run
   std::string out_dir;           ///< traj_<mode>.csv, results.md, results.csv, td.png, ape.png, top.png
   int jobs = 2;                  ///< runs at a time, each on its own thread with its own VioManager
   long max_images = 0;           ///< 0 = all
@@ -30,8 +30,9 @@ struct CompareResult {
   bool interrupted = false; ///< SIGINT stopped the comparison; the report covers what was done
 };
 
-/// "off,sr,oracle" -> modes, in that order. Throws UsageError naming an unknown or repeated mode.
-std::vector<ov_msckf_ton::TdMode> parse_compare_modes(const std::string &list);
+/// "off,sr,sr+random_walk,oracle" -> mode specs (MODE[+PROCESS]), in that order. Throws UsageError naming an
+/// unknown or repeated entry.
+std::vector<ov_msckf_ton::ModeSpec> parse_compare_modes(const std::string &list);
 
 /// Runs every mode and writes the report. Modes the dataset cannot support (oracle without td_truth) are skipped
 /// with a row that says why. A failing run is reported in its row and does not stop the others. Throws UsageError

@@ -12,7 +12,7 @@ namespace ovton {
 
 void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov_msckf_ton::VioOptions &opt) {
   if (!td_init_given && data.td_prior_s != 0.0)
-    opt.td_init_s = data.td_prior_s;
+    opt.td.init_s = data.td_prior_s;
 }
 
 RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
@@ -20,12 +20,14 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
   if (data.has_td_truth())
     vio.set_td_oracle([&data](int64_t t) { return data.td_truth_at(t); });
-  else if (opt.td_mode == ov_msckf_ton::TdMode::Oracle)
+  else if (opt.td.mode == ov_msckf_ton::TdMode::Oracle)
     throw ov_core::UsageError("mode oracle needs " + data.root + " to have td_truth/data.csv");
-  if (opt.init_mode == ov_msckf_ton::InitMode::GroundTruth) {
+  std::unique_ptr<ov_eval::NeesAccumulator> nees;
+  if (opt.init.mode == ov_msckf_ton::InitMode::GroundTruth) {
     if (!data.has_groundtruth() || !data.groundtruth.front().has_velocity)
       throw ov_core::UsageError("ground-truth initialisation needs full-state ground truth in " + data.root);
     vio.set_groundtruth(data.groundtruth);
+    nees = std::make_unique<ov_eval::NeesAccumulator>(data.groundtruth, data.td_truth);
   }
   RunResult res;
   std::unique_ptr<ov_core::TrajectoryWriter> writer;
@@ -35,6 +37,8 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   vio.set_state_callback([&](const ov_core::StateSample &s) {
     if (writer)
       writer->write(s);
+    if (nees)
+      nees->add(s);
     res.traj.push_back(s);
   });
   std::unique_ptr<ov_msckf_ton::ResidualLogWriter> rlog;
@@ -48,7 +52,7 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
     prefetcher = std::make_unique<ov_core::ImagePrefetcher>(data.images);
     vio.set_image_source([&prefetcher](const ov_core::ImageEntry &e) { return prefetcher->get(e); });
   }
-  ProgressBar bar(req.label.empty() ? "run " + ov_msckf_ton::to_string(opt.td_mode) : req.label, !req.progress);
+  ProgressBar bar(req.label.empty() ? "run " + ov_msckf_ton::to_string(opt.td.mode) : req.label, !req.progress);
   const auto t0 = std::chrono::steady_clock::now();
   size_t last_i = 0;
   res.replay = ov_core::Replay(data).run(vio, [&](size_t i, size_t n) {
@@ -67,7 +71,8 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
     res.data_span_s = ov_core::ns_to_s(data.images[last_i - 1].t_cam_ns - data.images.front().t_cam_ns);
   res.counters = vio.counters();
   res.times = vio.times();
-  res.nees = vio.nees();
+  if (nees)
+    res.nees = nees->stats();
   res.init_message = vio.init_message();
   return res;
 }

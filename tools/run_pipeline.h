@@ -2,6 +2,7 @@
 // One replay of a dataset through the estimator, shared by `run`, `compare` and `benchmark`.
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/replay.h"
+#include "ov_eval/nees.h"
 #include "ov_msckf_ton/core/vio_manager.h"
 
 #include <functional>
@@ -29,7 +30,7 @@ struct RunResult {
   std::vector<ov_core::StateSample> traj;
   ov_msckf_ton::VioCounters counters;
   ov_msckf_ton::StageTimes times;
-  ov_msckf_ton::NeesStats nees;
+  ov_eval::NeesStats nees; ///< counted with ground-truth initialisation only (the estimate is in its frame)
   ov_core::ReplayStats replay;
   std::string init_message;
   double wall_s = 0.0;

@@ -41,9 +41,13 @@ struct StateSample {
   Eigen::Vector3d ba = Eigen::Vector3d::Zero();
   double td_s = 0.0;
   double td_sigma_s = 0.0;
+  /// Covariance of the pose error [δθ δp] (world-frame rotation error R = Exp(δθ)·R̂, p = p̂ + δp), for NEES;
+  /// only an estimator's samples carry it.
+  Eigen::Matrix<double, 6, 6> P_pose = Eigen::Matrix<double, 6, 6>::Zero();
   bool has_orientation = true;
   bool has_velocity = false;
   bool has_td = false;
+  bool has_pose_cov = false;
 };
 
 /// True time offset at one image, from td_truth/data.csv: t_imu = t_cam + td.

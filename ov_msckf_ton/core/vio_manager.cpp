@@ -1,6 +1,7 @@
 #include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
+#include "ov_core/types/state_interpolation.h"
 #include "ov_msckf_ton/core/static_init.h"
 #include "ov_msckf_ton/state/state_helper.h"
 
@@ -20,34 +21,33 @@ double ms_since(Clock::time_point t0) {
 
 ImuNoise noise_from(const ov_core::ImuCalib &imu, const VioOptions &opt) {
   ImuNoise n;
-  const double k = opt.imu_noise_multiplier;
+  const double k = opt.imu.noise_multiplier;
   n.sigma_w = k * imu.gyro_noise_density;
   n.sigma_a = k * imu.accel_noise_density;
   n.sigma_wb = k * imu.gyro_random_walk;
   n.sigma_ab = k * imu.accel_random_walk;
-  n.sigma_td = uses_tpn(opt.td_mode) ? opt.td_random_walk_tpn : opt.td_random_walk;
   return n;
 }
 
 UpdaterMSCKFOptions updater_options(const VioOptions &o) {
   UpdaterMSCKFOptions u;
-  u.sigma_px = o.sigma_px;
-  u.chi2_multiplier = o.chi2_multiplier;
-  u.min_observations = o.min_track_length;
-  u.min_parallax_deg = o.min_parallax_deg;
-  u.max_features = o.max_features_per_update;
+  u.sigma_px = o.update.sigma_px;
+  u.chi2_multiplier = o.update.chi2_multiplier;
+  u.min_observations = o.update.min_track_length;
+  u.min_parallax_deg = o.update.min_parallax_deg;
+  u.max_features = o.update.max_features;
   return u;
 }
 
 TdObservation td_observation(TdMode m) {
-  if (m == TdMode::Sr)
+  if (uses_state_relevant(m))
     return TdObservation::StateRelevant;
   if (uses_sir(m))
     return TdObservation::ImagePlane;
   return TdObservation::None;
 }
 
-FvonProviderOptions fvon_options(const VioOptions &o) {
+FvonProviderOptions fvon_options(const TonOptions &o) {
   FvonProviderOptions f;
   f.max_labels = o.fvon_max_labels;
   f.min_f2f_labels = o.fvon_min_f2f_labels;
@@ -57,48 +57,20 @@ FvonProviderOptions fvon_options(const VioOptions &o) {
   return f;
 }
 
-TpnDriverOptions tpn_options(const VioOptions &o) {
-  TpnDriverOptions t;
-  t.tpn.train.max_epochs = o.tpn_epochs;
-  t.min_labels = o.tpn_min_labels;
-  t.td_rate_max = o.td_rate_max;
-  return t;
-}
-
-bool estimates_td(TdMode m) {
-  return m != TdMode::Off && m != TdMode::Oracle;
-}
-
-/// Ground truth interpolated at t (linear position/velocity, slerp rotation); false outside its span.
-bool gt_at(const std::vector<ov_core::StateSample> &gt, int64_t t, ov_core::StateSample &out) {
-  if (gt.size() < 2 || t < gt.front().t_ns || t > gt.back().t_ns)
-    return false;
-  auto it =
-      std::lower_bound(gt.begin(), gt.end(), t, [](const ov_core::StateSample &s, int64_t x) { return s.t_ns < x; });
-  if (it == gt.begin()) {
-    out = *it;
-    return true;
-  }
-  const auto &b = *it, &a = *(it - 1);
-  const double u = static_cast<double>(t - a.t_ns) / static_cast<double>(b.t_ns - a.t_ns);
-  out = a;
-  out.t_ns = t;
-  out.p = (1 - u) * a.p + u * b.p;
-  out.v = (1 - u) * a.v + u * b.v;
-  out.q_WB = a.q_WB.slerp(u, b.q_WB);
-  return true;
-}
-
 } // namespace
 
 VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, const ov_core::ImuCalib &imu)
-    : opt_(opt), camera_(cam), tracker_(camera_, opt.track), propagator_(noise_from(imu, opt), opt.gravity_mag),
-      updater_(cam, updater_options(opt)), state_(std::make_unique<State>(estimates_td(opt.td_mode))) {
-  state_->td = opt.td_init_s;
-  if (uses_fvon(opt.td_mode))
-    fvon_ = std::make_unique<FvonVelocityProvider>(cam, fvon_options(opt));
-  if (uses_tpn(opt.td_mode))
-    tpn_ = std::make_unique<TpnDriver>(tpn_options(opt));
+    : opt_(opt), camera_(cam), tracker_(camera_, opt.track), propagator_(noise_from(imu, opt), opt.imu.gravity_mag),
+      updater_(cam, updater_options(opt)), state_(std::make_unique<State>(estimates_td(opt.td.mode))) {
+  validate_vio_options(opt_);
+  state_->td = opt.td.init_s;
+  if (uses_fvon(opt.td.mode))
+    fvon_ = std::make_unique<FvonVelocityProvider>(cam, fvon_options(opt.ton));
+  td_model_ = make_td_model(opt_, [this](int64_t t_cam_ns) {
+    if (!td_oracle_)
+      throw ov_core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
+    return td_oracle_(t_cam_ns);
+  });
   updater_.set_angular_rate_lookup([this](int64_t t_cam_ns, Eigen::Vector3d &w) {
     auto it = clone_rates_.find(t_cam_ns);
     if (it == clone_rates_.end())
@@ -108,14 +80,14 @@ VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, c
   });
 }
 
+const TpnDriver *VioManager::tpn() const {
+  return tpn_driver_of(*td_model_);
+}
+
 double VioManager::td_for_image_s(int64_t t_cam_ns) const {
-  if (opt_.td_mode == TdMode::Oracle) {
-    if (!td_oracle_)
-      throw ov_core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
-    return td_oracle_(t_cam_ns);
-  }
-  // The replay feeds IMU readings up to this time: it must be where the propagation will go, TPN's rate included.
-  return initialized_ ? td_target(t_cam_ns) : state_->td;
+  // The replay feeds IMU readings up to this time: it must be where the propagation will go, the model's motion
+  // of t_d included.
+  return td_model_->td_at_image(*state_, t_cam_ns, initialized_ ? last_image_ns_ : -1);
 }
 
 void VioManager::on_imu(const ov_core::ImuData &m) {
@@ -123,7 +95,7 @@ void VioManager::on_imu(const ov_core::ImuData &m) {
   if (!initialized_) {
     init_imu_.push_back(m);
     while (init_imu_.size() > 2 &&
-           init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns > ov_core::s_to_ns(opt_.init_window_s + 1.0))
+           init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns > ov_core::s_to_ns(opt_.init.window_s + 1.0))
       init_imu_.pop_front();
   }
 }
@@ -144,9 +116,10 @@ void VioManager::on_image(const ov_core::ImageEntry &e) {
 bool VioManager::try_initialize(int64_t t_cam_ns) {
   const int64_t t_imu = t_cam_ns + ov_core::s_to_ns(td_for_image_s(t_cam_ns));
   State &s = *state_;
-  if (opt_.init_mode == InitMode::GroundTruth) {
+  const InitOptions &io = opt_.init;
+  if (io.mode == InitMode::GroundTruth) {
     ov_core::StateSample g;
-    if (!gt_at(gt_, t_imu, g)) {
+    if (!ov_core::interpolate_state(gt_, t_imu, g)) {
       init_msg_ = "no ground truth at the first image";
       return false;
     }
@@ -157,8 +130,7 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
     s.imu.ba = g.ba;
     init_msg_ = "initialised from ground truth";
   } else {
-    const StaticInitResult r =
-        static_initialize(init_imu_, t_imu, opt_.init_window_s, opt_.init_max_accel_std, opt_.init_max_gyro_std);
+    const StaticInitResult r = static_initialize(init_imu_, t_imu, io.window_s, io.max_accel_std, io.max_gyro_std);
     if (!r.ok) {
       init_msg_ = r.why;
       return false;
@@ -174,14 +146,16 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
   s.imu.set_fej();
   s.P.setZero();
   const auto sq = [](double x) { return x * x; };
-  s.P.diagonal().segment<2>(ImuState::kTheta).setConstant(sq(opt_.init_sigma_rollpitch));
-  s.P(ImuState::kTheta + 2, ImuState::kTheta + 2) = sq(opt_.init_sigma_yaw);
-  s.P.diagonal().segment<3>(ImuState::kPos).setConstant(sq(opt_.init_sigma_pos));
-  s.P.diagonal().segment<3>(ImuState::kVel).setConstant(sq(opt_.init_sigma_vel));
-  s.P.diagonal().segment<3>(ImuState::kBg).setConstant(sq(opt_.init_sigma_bg));
-  s.P.diagonal().segment<3>(ImuState::kBa).setConstant(sq(opt_.init_sigma_ba));
-  if (s.estimates_td())
-    s.P(s.td_index, s.td_index) = sq(opt_.td_sigma_init_s);
+  s.P.diagonal().segment<2>(ImuState::kTheta).setConstant(sq(io.sigma_rollpitch));
+  s.P(ImuState::kTheta + 2, ImuState::kTheta + 2) = sq(io.sigma_yaw);
+  s.P.diagonal().segment<3>(ImuState::kPos).setConstant(sq(io.sigma_pos));
+  s.P.diagonal().segment<3>(ImuState::kVel).setConstant(sq(io.sigma_vel));
+  s.P.diagonal().segment<3>(ImuState::kBg).setConstant(sq(io.sigma_bg));
+  s.P.diagonal().segment<3>(ImuState::kBa).setConstant(sq(io.sigma_ba));
+  if (s.estimates_td()) {
+    s.P(s.td_index, s.td_index) = sq(opt_.td.sigma_init_s);
+    td_model_->initialize(s);
+  }
   initialized_ = true;
   init_imu_.clear();
   return true;
@@ -217,21 +191,16 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
 
   // Propagate to the image's IMU-clock time and clone there.
   t0 = Clock::now();
-  if (opt_.td_mode == TdMode::Oracle)
-    s.td = td_for_image_s(t_cam_ns);
-  double td_rate = 0.0;
-  const int64_t t_imu = propagation_target(t_cam_ns, td_rate);
-  if (!propagator_.propagate(s, t_imu, td_rate))
-    throw ov_core::UsageError("IMU data does not reach image " + std::to_string(t_cam_ns));
-  if (opt_.zupt && is_still(t_cam_ns)) {
+  propagate_to_image(t_cam_ns);
+  if (opt_.zupt.enabled && is_still(t_cam_ns)) {
     // Still platform: no parallax for triangulation, so constrain the velocity instead and keep no clone.
     Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3, s.dim());
     H.block<3, 3>(0, ImuState::kVel).setIdentity();
-    state_helper::ekf_update(s, H, -s.imu.v, opt_.zupt_sigma_v * opt_.zupt_sigma_v);
+    td_tracked_update([&] { state_helper::ekf_update(s, H, -s.imu.v, opt_.zupt.sigma_v * opt_.zupt.sigma_v); });
     db_.remove_observations_at(t_cam_ns);
     ++counters_.zupts;
     times_.propagation += ms_since(t0);
-    tpn_after_image(t_cam_ns);
+    finish_image(t_cam_ns);
     ++times_.frames;
     times_.total += ms_since(t_start);
     if (on_state_)
@@ -243,22 +212,46 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
   ov_core::ImuData at_image;
   const Eigen::Vector3d w_B =
       propagator_.reading_at(s.t_imu_ns, at_image) ? Eigen::Vector3d(at_image.wm - s.imu.bg) : propagator_.last_w_B();
-  state_helper::clone(s, t_cam_ns, opt_.td_mode == TdMode::Sr, w_B, s.imu.v);
+  state_helper::clone(s, t_cam_ns, uses_state_relevant(opt_.td.mode), w_B, s.imu.v);
   clone_rates_[t_cam_ns] = w_B;
-  s.clones.at(t_cam_ns).has_fej = opt_.measurement_fej;
+  s.clones.at(t_cam_ns).has_fej = opt_.update.measurement_fej;
   times_.propagation += ms_since(t0);
 
   t0 = Clock::now();
   const double networks_before = times_.networks;
   update_and_marginalize(t_cam_ns);
   times_.update += ms_since(t0) - (times_.networks - networks_before);
-  tpn_after_image(t_cam_ns);
+  finish_image(t_cam_ns);
 
   ++times_.frames;
   times_.total += ms_since(t_start);
-  accumulate_nees();
   if (on_state_)
     on_state_(snapshot());
+}
+
+void VioManager::propagate_to_image(int64_t t_cam_ns) {
+  State &s = *state_;
+  const double td_end = td_model_->td_at_image(s, t_cam_ns, last_image_ns_);
+  // The clone is placed at t_cam + td_end so that its td_ref agrees with where the mean will be.
+  const int64_t t_imu = std::max(s.t_imu_ns, t_cam_ns + ov_core::s_to_ns(td_end));
+  const double dt_imu = ov_core::ns_to_s(t_imu - s.t_imu_ns);
+  if (!propagator_.propagate(s, t_imu))
+    throw ov_core::UsageError("IMU data does not reach image " + std::to_string(t_cam_ns));
+  td_model_->propagate(s, td_end, dt_imu);
+}
+
+template <typename UpdateFn> void VioManager::td_tracked_update(UpdateFn &&fn) {
+  const double td0 = state_->td, v0 = state_->td_variance();
+  fn();
+  td_model_->after_update(td0, v0, state_->td, state_->td_variance());
+}
+
+void VioManager::finish_image(int64_t t_cam_ns) {
+  last_image_ns_ = t_cam_ns;
+  const auto t0 = Clock::now();
+  td_model_->after_image(*state_, t_cam_ns);
+  if (td_model_->kind() == TdProcess::Tpn) // TPN's training is network time; the other models' bookkeeping is not
+    times_.networks += ms_since(t0);
 }
 
 bool VioManager::is_still(int64_t t_cam_ns) const {
@@ -276,7 +269,7 @@ bool VioManager::is_still(int64_t t_cam_ns) const {
   if (disparity.size() < 10)
     return false;
   std::nth_element(disparity.begin(), disparity.begin() + disparity.size() / 2, disparity.end());
-  return disparity[disparity.size() / 2] < opt_.zupt_max_disparity_px;
+  return disparity[disparity.size() / 2] < opt_.zupt.max_disparity_px;
 }
 
 void VioManager::update_and_marginalize(int64_t t_cam_ns) {
@@ -285,7 +278,7 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
   // oldest clone must be used now or their information about it is lost.
   std::vector<const ov_core::Feature *> feats;
   db_.lost_features(t_cam_ns, feats);
-  const bool window_full = static_cast<int>(s.clones.size()) > opt_.max_clones;
+  const bool window_full = static_cast<int>(s.clones.size()) > opt_.update.max_clones;
   int64_t oldest = s.clones.begin()->first;
   if (window_full) {
     std::vector<const ov_core::Feature *> old;
@@ -296,7 +289,7 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
   }
   if (!feats.empty()) {
     std::vector<ResidualRecord> records;
-    const VelocityProvider *velocities = opt_.sir_velocity == "central"
+    const VelocityProvider *velocities = opt_.td.sir_velocity == SirVelocity::Central
                                              ? static_cast<const VelocityProvider *>(&central_velocities_)
                                              : &tracked_velocities_;
     if (fvon_) {
@@ -307,10 +300,11 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
     }
     // Last, so that with FVON it covers the first observations the networks could not predict (too few labels yet).
     const NextForFirstVelocityProvider with_first(*velocities);
-    if (opt_.sir_first_velocity == "next")
+    if (opt_.td.first_velocity == FirstVelocity::Next)
       velocities = &with_first;
-    const UpdateStats st =
-        updater_.update(s, feats, td_observation(opt_.td_mode), *velocities, log_ ? &records : nullptr);
+    UpdateStats st;
+    td_tracked_update(
+        [&] { st = updater_.update(s, feats, td_observation(opt_.td.mode), *velocities, log_ ? &records : nullptr); });
     ++counters_.updates;
     counters_.features_used += st.features_used;
     counters_.features_gated += st.gated_chi2;
@@ -337,64 +331,6 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
   }
 }
 
-double VioManager::td_target(int64_t t_cam_ns, bool *clamped) const {
-  const State &s = *state_;
-  if (clamped)
-    *clamped = false;
-  if (!tpn_ || last_image_ns_ < 0 || t_cam_ns <= last_image_ns_)
-    return s.td;
-  // Paper eq. 14 with dt the time between images: the mean reaches t_d^TPN(K) (or the clamped step towards it)
-  // exactly at this image.
-  const double dt = ov_core::ns_to_s(t_cam_ns - last_image_ns_);
-  return s.td + tpn_->rate(s.td, dt, clamped) * dt;
-}
-
-int64_t VioManager::propagation_target(int64_t t_cam_ns, double &td_rate) {
-  const State &s = *state_;
-  bool clamped = false;
-  const double target = td_target(t_cam_ns, &clamped);
-  counters_.td_rate_clamped += clamped ? 1 : 0;
-  // The clone is placed at t_cam + target so that its td_ref agrees with where the mean will be.
-  const int64_t t_imu = std::max(s.t_imu_ns, t_cam_ns + ov_core::s_to_ns(target));
-  // The propagator moves t_d at td_rate over the IMU-clock interval, which differs from the camera interval by the
-  // change in t_d itself: the rate is taken over the interval actually propagated.
-  const double dt_imu = ov_core::ns_to_s(t_imu - s.t_imu_ns);
-  td_rate = dt_imu > 0 ? (target - s.td) / dt_imu : 0.0;
-  return t_imu;
-}
-
-void VioManager::tpn_after_image(int64_t t_cam_ns) {
-  last_image_ns_ = t_cam_ns;
-  if (!tpn_)
-    return;
-  // The labels are the filter's own estimates: while t_d is still converging (σ above tpn_start_sigma_s) they
-  // trace the convergence transient, not the offset's motion, and a network trained on them extrapolates the
-  // transient (measured: on a constant +10 ms offset, t_d overshot to 14 ms and the trajectory diverged).
-  if (state_->td_sigma() > opt_.tpn_start_sigma_s)
-    return;
-  const auto t0 = Clock::now();
-  tpn_->step(state_->td);
-  times_.networks += ms_since(t0);
-}
-
-void VioManager::accumulate_nees() {
-  // Only meaningful when the estimate lives in the ground truth's frame (ground-truth initialisation).
-  ov_core::StateSample g;
-  if (opt_.init_mode != InitMode::GroundTruth || !gt_at(gt_, state_->t_imu_ns, g))
-    return;
-  const State &s = *state_;
-  // Errors in the convention of state.h: R_true = Exp(δθ) R̂, p_true = p̂ + δp.
-  const Eigen::Vector3d e_th = ov_core::so3_log(g.q_WB.toRotationMatrix() * s.imu.R.transpose());
-  const Eigen::Vector3d e_p = g.p - s.imu.p;
-  const Eigen::Matrix3d P_th = s.P.block<3, 3>(ImuState::kTheta, ImuState::kTheta);
-  const Eigen::Matrix3d P_p = s.P.block<3, 3>(ImuState::kPos, ImuState::kPos);
-  const double n_ori = e_th.dot(P_th.ldlt().solve(e_th)), n_pos = e_p.dot(P_p.ldlt().solve(e_p));
-  nees_.ori_sum += n_ori;
-  nees_.pos_sum += n_pos;
-  ++nees_.count;
-  nees_.per_frame.push_back({s.t_imu_ns, n_ori, n_pos});
-}
-
 ov_core::StateSample VioManager::snapshot() const {
   const State &s = *state_;
   ov_core::StateSample o;
@@ -408,6 +344,11 @@ ov_core::StateSample VioManager::snapshot() const {
   o.td_sigma_s = s.td_sigma();
   o.has_velocity = true;
   o.has_td = true;
+  o.P_pose.topLeftCorner<3, 3>() = s.P.block<3, 3>(ImuState::kTheta, ImuState::kTheta);
+  o.P_pose.topRightCorner<3, 3>() = s.P.block<3, 3>(ImuState::kTheta, ImuState::kPos);
+  o.P_pose.bottomLeftCorner<3, 3>() = s.P.block<3, 3>(ImuState::kPos, ImuState::kTheta);
+  o.P_pose.bottomRightCorner<3, 3>() = s.P.block<3, 3>(ImuState::kPos, ImuState::kPos);
+  o.has_pose_cov = true;
   return o;
 }
 

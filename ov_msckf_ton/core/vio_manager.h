@@ -8,6 +8,8 @@
 #include "ov_msckf_ton/core/vio_options.h"
 #include "ov_msckf_ton/state/propagator.h"
 #include "ov_msckf_ton/state/state.h"
+#include "ov_msckf_ton/td/td_model.h"
+#include "ov_msckf_ton/td/td_models.h"
 #include "ov_msckf_ton/ton/fvon_provider.h"
 #include "ov_msckf_ton/ton/tpn_driver.h"
 #include "ov_msckf_ton/update/residual_log.h"
@@ -37,22 +39,8 @@ struct VioCounters {
   /// from ITS/F2F: a new feature's first observation has no tracked velocity, and without one none of its rows
   /// may carry t_d (updater_msckf.cpp).
   std::array<long, kNumVelocitySources> td_rows_by_source{};
-  long td_features = 0;     ///< used features whose rows carried t_d
-  long td_rate_clamped = 0; ///< propagations whose TPN rate hit td_rate_max
-  long zupts = 0;           ///< frames handled by a zero-velocity update
-};
-
-/// Normalised estimation error squared of orientation and position against ground truth (3 is ideal for each).
-struct NeesStats {
-  double ori_sum = 0, pos_sum = 0;
-  long count = 0;
-  struct Sample {
-    int64_t t_ns;
-    double ori, pos;
-  };
-  std::vector<Sample> per_frame; ///< for `ovton run --nees-log`
-  double ori() const { return count ? ori_sum / count : 0.0; }
-  double pos() const { return count ? pos_sum / count : 0.0; }
+  long td_features = 0; ///< used features whose rows carried t_d
+  long zupts = 0;       ///< frames handled by a zero-velocity update
 };
 
 class VioManager : public ov_core::ReplayConsumer {
@@ -61,7 +49,7 @@ public:
 
   VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, const ov_core::ImuCalib &imu);
 
-  /// Oracle mode: the true offset at a camera stamp.
+  /// Oracle mode: the true offset at a camera stamp (needed before the first image).
   void set_td_oracle(std::function<double(int64_t t_cam_ns)> f) { td_oracle_ = std::move(f); }
   /// Ground-truth initialisation: the true state at an IMU-clock time.
   void set_groundtruth(std::vector<ov_core::StateSample> gt) { gt_ = std::move(gt); }
@@ -86,14 +74,14 @@ public:
   const State &state() const { return *state_; }
   const StageTimes &times() const { return times_; }
   const VioCounters &counters() const { return counters_; }
-  /// Average NEES over the frames so far; counted only with ground-truth initialisation.
-  const NeesStats &nees() const { return nees_; }
   const VioOptions &options() const { return opt_; }
   const std::string &init_message() const { return init_msg_; }
   /// FVON diagnostics (modes fvon, ton), nullptr otherwise.
   const FvonVelocityProvider *fvon() const { return fvon_.get(); }
-  /// TPN driver (modes tpn, ton), nullptr otherwise.
-  const TpnDriver *tpn() const { return tpn_.get(); }
+  /// How t_d moves between images (td/td_model.h).
+  const TdModel &td_model() const { return *td_model_; }
+  /// TPN driver (process tpn: modes tpn, ton), nullptr otherwise.
+  const TpnDriver *tpn() const;
 
 private:
   void process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time_point t_start);
@@ -101,14 +89,13 @@ private:
   void update_and_marginalize(int64_t t_cam_ns);
   /// Median feature motion since the previous frame is below the ZUPT threshold.
   bool is_still(int64_t t_cam_ns) const;
-  /// Stages 3-4 of Algorithm 1 after an image: feeds t̂_d to TPN and keeps its prediction for the next image.
-  void tpn_after_image(int64_t t_cam_ns);
-  /// t_d the propagation to image t_cam_ns will end at: the current mean, moved by TPN's rate in tpn/ton.
-  double td_target(int64_t t_cam_ns, bool *clamped = nullptr) const;
-  /// IMU-clock target of the propagation to image t_cam_ns and the t_d rate that moves the mean there.
-  int64_t propagation_target(int64_t t_cam_ns, double &td_rate);
+  /// Propagates the IMU state and t_d (through its model) to the image's IMU-clock time.
+  void propagate_to_image(int64_t t_cam_ns);
+  /// An EKF update wrapped so that t_d's model sees the correction it made.
+  template <typename UpdateFn> void td_tracked_update(UpdateFn &&fn);
+  /// After an image: the t_d model learns (TPN), the networks' time is counted.
+  void finish_image(int64_t t_cam_ns);
   ov_core::StateSample snapshot() const;
-  void accumulate_nees();
 
   VioOptions opt_;
   ov_core::CameraModel camera_;
@@ -127,15 +114,14 @@ private:
 
   bool initialized_ = false;
   std::string init_msg_;
-  VelocityProvider tracked_velocities_;            ///< constant-speed velocities of the front end (paper eq. 2)
-  CentralVelocityProvider central_velocities_;     ///< option sir_velocity: central
-  std::unique_ptr<FvonVelocityProvider> fvon_;     ///< modes fvon, ton
-  std::unique_ptr<TpnDriver> tpn_;                 ///< modes tpn, ton
+  VelocityProvider tracked_velocities_;        ///< constant-speed velocities of the front end (paper eq. 2)
+  CentralVelocityProvider central_velocities_; ///< option sir_velocity: central
+  std::unique_ptr<FvonVelocityProvider> fvon_; ///< modes fvon, ton
+  std::unique_ptr<TdModel> td_model_;
   int64_t last_image_ns_ = -1;                     ///< camera stamp of the previous processed image
   std::map<int64_t, Eigen::Vector3d> clone_rates_; ///< body rate at each clone, for the residual log
   StageTimes times_;
   VioCounters counters_;
-  NeesStats nees_;
 };
 
 } // namespace ov_msckf_ton

@@ -5,83 +5,218 @@
 
 #include <cmath>
 #include <functional>
-#include <map>
 #include <ostream>
+#include <set>
+#include <vector>
 
 namespace ov_msckf_ton {
 
 namespace {
 
-/// One table of (key -> reader, printer) so that keys are parsed in exactly one place and printed from the same.
+/// One entry of the option table: section.key, how to read it from a YAML scalar (with the file named in errors),
+/// how to print it. Keys are written once, here; loading and printing both walk this table.
 struct Field {
+  const char *section;
+  const char *key;
   std::function<void(const YAML::Node &, const std::string &)> read;
   std::function<void(std::ostream &)> print;
 };
 
-template <typename T> Field field(T &ref, const char *key) {
-  return {[&ref, key](const YAML::Node &n, const std::string &file) {
+int line_of(const YAML::Node &n) {
+  return n.Mark().line + 1;
+}
+
+template <typename T> Field field(const char *section, const char *key, T &ref) {
+  return {section, key,
+          [&ref, key](const YAML::Node &n, const std::string &file) {
+            if (!n.IsScalar())
+              throw ov_core::DataError(file, line_of(n), std::string("'") + key + "' must be a single value");
             try {
               ref = n.as<T>();
             } catch (const YAML::Exception &e) {
-              throw ov_core::DataError(file, e.mark.line + 1, std::string("bad value for '") + key + "': " + e.msg);
+              throw ov_core::DataError(file, line_of(n), std::string("bad value for '") + key + "': " + e.msg);
             }
             if constexpr (std::is_floating_point_v<T>)
               if (!std::isfinite(ref))
-                throw ov_core::DataError(file, std::string("non-finite value for '") + key + "'");
+                throw ov_core::DataError(file, line_of(n), std::string("non-finite value for '") + key + "'");
           },
-          [&ref](std::ostream &os) { os << ref; }};
+          [&ref](std::ostream &os) {
+            if constexpr (std::is_same_v<T, bool>)
+              os << (ref ? "true" : "false");
+            else
+              os << ref;
+          }};
 }
 
-std::map<std::string, Field> fields(VioOptions &o) {
-  std::map<std::string, Field> f;
-  f["td_init_s"] = field(o.td_init_s, "td_init_s");
-  f["td_sigma_init_s"] = field(o.td_sigma_init_s, "td_sigma_init_s");
-  f["td_random_walk"] = field(o.td_random_walk, "td_random_walk");
-  f["td_random_walk_tpn"] = field(o.td_random_walk_tpn, "td_random_walk_tpn");
-  f["fvon_max_labels"] = field(o.fvon_max_labels, "fvon_max_labels");
-  f["fvon_min_f2f_labels"] = field(o.fvon_min_f2f_labels, "fvon_min_f2f_labels");
-  f["fvon_gate_px_s"] = field(o.fvon_gate_px_s, "fvon_gate_px_s");
-  f["its_epochs"] = field(o.its_epochs, "its_epochs");
-  f["f2f_epochs"] = field(o.f2f_epochs, "f2f_epochs");
-  f["tpn_epochs"] = field(o.tpn_epochs, "tpn_epochs");
-  f["tpn_min_labels"] = field(o.tpn_min_labels, "tpn_min_labels");
-  f["td_rate_max"] = field(o.td_rate_max, "td_rate_max");
-  f["sir_velocity"] = field(o.sir_velocity, "sir_velocity");
-  f["sir_first_velocity"] = field(o.sir_first_velocity, "sir_first_velocity");
-  f["measurement_fej"] = field(o.measurement_fej, "measurement_fej");
-  f["tpn_start_sigma_s"] = field(o.tpn_start_sigma_s, "tpn_start_sigma_s");
-  f["max_clones"] = field(o.max_clones, "max_clones");
-  f["min_track_length"] = field(o.min_track_length, "min_track_length");
-  f["min_parallax_deg"] = field(o.min_parallax_deg, "min_parallax_deg");
-  f["sigma_px"] = field(o.sigma_px, "sigma_px");
-  f["chi2_multiplier"] = field(o.chi2_multiplier, "chi2_multiplier");
-  f["max_features_per_update"] = field(o.max_features_per_update, "max_features_per_update");
-  f["zupt"] = field(o.zupt, "zupt");
-  f["zupt_max_disparity_px"] = field(o.zupt_max_disparity_px, "zupt_max_disparity_px");
-  f["zupt_sigma_v"] = field(o.zupt_sigma_v, "zupt_sigma_v");
-  f["num_features"] = field(o.track.num_features, "num_features");
-  f["grid_x"] = field(o.track.grid_x, "grid_x");
-  f["grid_y"] = field(o.track.grid_y, "grid_y");
-  f["min_px_dist"] = field(o.track.min_px_dist, "min_px_dist");
-  f["fast_threshold"] = field(o.track.fast_threshold, "fast_threshold");
-  f["pyr_levels"] = field(o.track.pyr_levels, "pyr_levels");
-  f["win_size"] = field(o.track.win_size, "win_size");
-  f["ransac_px"] = field(o.track.ransac_px, "ransac_px");
-  f["imu_noise_multiplier"] = field(o.imu_noise_multiplier, "imu_noise_multiplier");
-  f["gravity_mag"] = field(o.gravity_mag, "gravity_mag");
-  f["init_window_s"] = field(o.init_window_s, "init_window_s");
-  f["init_max_accel_std"] = field(o.init_max_accel_std, "init_max_accel_std");
-  f["init_max_gyro_std"] = field(o.init_max_gyro_std, "init_max_gyro_std");
-  f["init_sigma_rollpitch"] = field(o.init_sigma_rollpitch, "init_sigma_rollpitch");
-  f["init_sigma_yaw"] = field(o.init_sigma_yaw, "init_sigma_yaw");
-  f["init_sigma_pos"] = field(o.init_sigma_pos, "init_sigma_pos");
-  f["init_sigma_vel"] = field(o.init_sigma_vel, "init_sigma_vel");
-  f["init_sigma_bg"] = field(o.init_sigma_bg, "init_sigma_bg");
-  f["init_sigma_ba"] = field(o.init_sigma_ba, "init_sigma_ba");
-  return f;
+/// An enum read from its name; `parse` throws ov_core::UsageError for unknown names.
+template <typename E>
+Field enum_field(const char *section, const char *key, E &ref, std::function<E(const std::string &)> parse,
+                 std::function<std::string(E)> name) {
+  return {section, key,
+          [&ref, key, parse](const YAML::Node &n, const std::string &file) {
+            if (!n.IsScalar())
+              throw ov_core::DataError(file, line_of(n), std::string("'") + key + "' must be a single value");
+            try {
+              ref = parse(n.as<std::string>());
+            } catch (const ov_core::UsageError &e) {
+              throw ov_core::DataError(file, line_of(n), std::string("'") + key + "': " + e.what());
+            }
+          },
+          [&ref, name](std::ostream &os) { os << name(ref); }};
+}
+
+template <typename E> std::function<E(const std::string &)> parser(std::vector<std::pair<const char *, E>> names) {
+  return [names](const std::string &s) {
+    std::string valid;
+    for (const auto &[n, e] : names) {
+      if (s == n)
+        return e;
+      valid += (valid.empty() ? "" : ", ") + std::string(n);
+    }
+    throw ov_core::UsageError("unknown value '" + s + "' (expected " + valid + ")");
+  };
+}
+
+template <typename E> std::function<std::string(E)> namer(std::vector<std::pair<const char *, E>> names) {
+  return [names](E e) {
+    for (const auto &[n, v] : names)
+      if (v == e)
+        return std::string(n);
+    return std::string("?");
+  };
+}
+
+const std::vector<std::pair<const char *, SirVelocity>> kSirVelocity = {{"backward", SirVelocity::Backward},
+                                                                        {"central", SirVelocity::Central}};
+const std::vector<std::pair<const char *, FirstVelocity>> kFirstVelocity = {{"none", FirstVelocity::None},
+                                                                            {"next", FirstVelocity::Next}};
+const std::vector<std::pair<const char *, ov_core::ImageEqualization>> kEqualization = {
+    {"none", ov_core::ImageEqualization::None},
+    {"histogram", ov_core::ImageEqualization::Histogram},
+    {"clahe", ov_core::ImageEqualization::Clahe}};
+
+std::vector<Field> fields(VioOptions &o) {
+  auto &td = o.td;
+  auto &ton = o.ton;
+  auto &up = o.update;
+  auto &tr = o.track;
+  auto &in = o.init;
+  const char *T = "time_offset", *N = "ton", *U = "update", *Z = "zupt", *K = "tracker", *I = "imu", *S = "init";
+  return {
+      enum_field<TdMode>(T, "mode", td.mode, parse_td_mode, [](TdMode m) { return to_string(m); }),
+      enum_field<TdProcess>(T, "process", td.process, parse_td_process, [](TdProcess p) { return to_string(p); }),
+      field(T, "init_s", td.init_s),
+      field(T, "sigma_init_s", td.sigma_init_s),
+      field(T, "random_walk", td.random_walk),
+      field(T, "random_walk_tpn", td.random_walk_tpn),
+      field(T, "rate_sigma_init", td.rate_sigma_init),
+      field(T, "rate_random_walk", td.rate_random_walk),
+      field(T, "rate_max", td.rate_max),
+      field(T, "adaptive_noise", td.adaptive_noise),
+      enum_field<SirVelocity>(T, "sir_velocity", td.sir_velocity, parser(kSirVelocity), namer(kSirVelocity)),
+      enum_field<FirstVelocity>(T, "first_velocity", td.first_velocity, parser(kFirstVelocity), namer(kFirstVelocity)),
+      field(N, "fvon_max_labels", ton.fvon_max_labels),
+      field(N, "fvon_min_f2f_labels", ton.fvon_min_f2f_labels),
+      field(N, "fvon_gate_px_s", ton.fvon_gate_px_s),
+      field(N, "its_epochs", ton.its_epochs),
+      field(N, "f2f_epochs", ton.f2f_epochs),
+      field(N, "tpn_epochs", ton.tpn_epochs),
+      field(N, "tpn_min_labels", ton.tpn_min_labels),
+      field(N, "tpn_start_sigma_s", ton.tpn_start_sigma_s),
+      field(U, "measurement_fej", up.measurement_fej),
+      field(U, "max_clones", up.max_clones),
+      field(U, "min_track_length", up.min_track_length),
+      field(U, "min_parallax_deg", up.min_parallax_deg),
+      field(U, "sigma_px", up.sigma_px),
+      field(U, "chi2_multiplier", up.chi2_multiplier),
+      field(U, "max_features", up.max_features),
+      field(Z, "enabled", o.zupt.enabled),
+      field(Z, "max_disparity_px", o.zupt.max_disparity_px),
+      field(Z, "sigma_v", o.zupt.sigma_v),
+      field(K, "num_features", tr.num_features),
+      field(K, "grid_x", tr.grid_x),
+      field(K, "grid_y", tr.grid_y),
+      field(K, "min_px_dist", tr.min_px_dist),
+      field(K, "fast_threshold", tr.fast_threshold),
+      field(K, "pyr_levels", tr.pyr_levels),
+      field(K, "win_size", tr.win_size),
+      field(K, "ransac_px", tr.ransac_px),
+      field(K, "forward_backward", tr.forward_backward),
+      enum_field<ov_core::ImageEqualization>(K, "equalization", tr.equalization, parser(kEqualization),
+                                             namer(kEqualization)),
+      field(I, "noise_multiplier", o.imu.noise_multiplier),
+      field(I, "gravity_mag", o.imu.gravity_mag),
+      enum_field<InitMode>(S, "mode", in.mode, parse_init_mode, [](InitMode m) { return to_string(m); }),
+      field(S, "window_s", in.window_s),
+      field(S, "max_accel_std", in.max_accel_std),
+      field(S, "max_gyro_std", in.max_gyro_std),
+      field(S, "sigma_rollpitch", in.sigma_rollpitch),
+      field(S, "sigma_yaw", in.sigma_yaw),
+      field(S, "sigma_pos", in.sigma_pos),
+      field(S, "sigma_vel", in.sigma_vel),
+      field(S, "sigma_bg", in.sigma_bg),
+      field(S, "sigma_ba", in.sigma_ba),
+  };
+}
+
+void require(bool ok, const std::string &what) {
+  if (!ok)
+    throw ov_core::UsageError("estimator option out of range: " + what);
 }
 
 } // namespace
+
+std::string to_string(InitMode m) {
+  return m == InitMode::Static ? "static" : "groundtruth";
+}
+
+InitMode parse_init_mode(const std::string &s) {
+  if (s == "static")
+    return InitMode::Static;
+  if (s == "groundtruth")
+    return InitMode::GroundTruth;
+  throw ov_core::UsageError("unknown initialisation '" + s + "' (expected static or groundtruth)");
+}
+
+void apply_mode_spec(const ModeSpec &spec, VioOptions &o) {
+  o.td.mode = spec.mode;
+  if (spec.process != TdProcess::Auto)
+    o.td.process = spec.process;
+}
+
+void validate_vio_options(const VioOptions &o) {
+  const auto &td = o.td;
+  require(td.sigma_init_s > 0, "time_offset.sigma_init_s must be > 0");
+  require(td.random_walk >= 0 && td.random_walk_tpn >= 0 && td.rate_random_walk >= 0,
+          "time_offset random walks must be >= 0");
+  require(td.rate_sigma_init > 0, "time_offset.rate_sigma_init must be > 0");
+  require(td.rate_max >= 0, "time_offset.rate_max must be >= 0");
+  const auto &n = o.ton;
+  require(n.fvon_max_labels >= 1 && n.fvon_min_f2f_labels >= 1, "ton.fvon_max_labels and fvon_min_f2f_labels >= 1");
+  require(n.its_epochs >= 0 && n.f2f_epochs >= 0 && n.tpn_epochs >= 0, "ton epochs must be >= 0");
+  require(n.tpn_min_labels >= 2, "ton.tpn_min_labels must be >= 2");
+  require(n.fvon_gate_px_s >= 0, "ton.fvon_gate_px_s must be >= 0");
+  const auto &u = o.update;
+  require(u.max_clones >= 3, "update.max_clones must be >= 3");
+  require(u.min_track_length >= 2, "update.min_track_length must be >= 2");
+  require(u.min_parallax_deg >= 0, "update.min_parallax_deg must be >= 0");
+  require(u.sigma_px > 0, "update.sigma_px must be > 0");
+  require(u.chi2_multiplier > 0, "update.chi2_multiplier must be > 0");
+  require(u.max_features >= 0, "update.max_features must be >= 0 (0 = no limit)");
+  require(o.zupt.max_disparity_px >= 0 && o.zupt.sigma_v > 0, "zupt.max_disparity_px >= 0 and zupt.sigma_v > 0");
+  require(o.imu.noise_multiplier > 0, "imu.noise_multiplier must be > 0");
+  require(o.imu.gravity_mag > 0, "imu.gravity_mag must be > 0");
+  const auto &i = o.init;
+  require(i.window_s > 0, "init.window_s must be > 0");
+  require(i.max_accel_std > 0 && i.max_gyro_std > 0, "init.max_accel_std and init.max_gyro_std must be > 0");
+  require(i.sigma_rollpitch > 0 && i.sigma_yaw > 0 && i.sigma_pos > 0 && i.sigma_vel > 0 && i.sigma_bg > 0 &&
+              i.sigma_ba > 0,
+          "init sigmas must be > 0");
+  const auto &t = o.track;
+  require(t.num_features > 0 && t.grid_x > 0 && t.grid_y > 0, "tracker.num_features, grid_x and grid_y must be > 0");
+  require(t.win_size >= 3 && t.pyr_levels >= 0 && t.min_px_dist >= 0 && t.ransac_px > 0,
+          "tracker.win_size >= 3, pyr_levels >= 0, min_px_dist >= 0, ransac_px > 0");
+}
 
 VioOptions load_vio_options(const std::string &file, std::ostream *print) {
   VioOptions o;
@@ -94,38 +229,44 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
   } catch (const YAML::Exception &e) {
     throw ov_core::DataError(file, e.mark.line + 1, "unreadable YAML: " + e.msg);
   }
+  if (root.IsNull())
+    throw ov_core::DataError(file, "empty estimator config");
   if (!root.IsMap())
-    throw ov_core::DataError(file, "expected a YAML mapping");
-  auto table = fields(o);
-  for (const auto &kv : root) {
-    const std::string key = kv.first.as<std::string>();
-    if (key == "td_mode") {
-      o.td_mode = parse_td_mode(kv.second.as<std::string>());
-    } else if (key == "init_mode") {
-      const std::string m = kv.second.as<std::string>();
-      if (m != "static" && m != "groundtruth")
-        throw ov_core::DataError(file, kv.first.Mark().line + 1, "init_mode must be static or groundtruth");
-      o.init_mode = m == "static" ? InitMode::Static : InitMode::GroundTruth;
-    } else if (auto it = table.find(key); it != table.end()) {
-      it->second.read(kv.second, file);
-    } else {
-      throw ov_core::DataError(file, kv.first.Mark().line + 1, "unknown key '" + key + "'");
+    throw ov_core::DataError(file, "expected a YAML mapping of sections (time_offset, ton, update, ...)");
+  const std::vector<Field> table = fields(o);
+  std::set<std::string> sections_seen;
+  for (const auto &sec : root) {
+    const std::string section = sec.first.as<std::string>();
+    if (!sections_seen.insert(section).second)
+      throw ov_core::DataError(file, line_of(sec.first), "duplicate section '" + section + "'");
+    bool known = false;
+    for (const Field &f : table)
+      known = known || section == f.section;
+    if (!known)
+      throw ov_core::DataError(file, line_of(sec.first),
+                               "unknown section '" + section +
+                                   "' (expected time_offset, ton, update, zupt, tracker, imu or init)");
+    if (!sec.second.IsMap())
+      throw ov_core::DataError(file, line_of(sec.first), "section '" + section + "' must be a mapping of keys");
+    std::set<std::string> keys_seen;
+    for (const auto &kv : sec.second) {
+      const std::string key = kv.first.as<std::string>();
+      if (!keys_seen.insert(key).second)
+        throw ov_core::DataError(file, line_of(kv.first), "duplicate key '" + section + "." + key + "'");
+      const Field *match = nullptr;
+      for (const Field &f : table)
+        if (section == f.section && key == f.key)
+          match = &f;
+      if (!match)
+        throw ov_core::DataError(file, line_of(kv.first), "unknown key '" + section + "." + key + "'");
+      match->read(kv.second, file);
     }
   }
-  if (o.sir_velocity != "backward" && o.sir_velocity != "central")
-    throw ov_core::DataError(file, "sir_velocity must be backward or central");
-  if (o.sir_first_velocity != "none" && o.sir_first_velocity != "next")
-    throw ov_core::DataError(file, "sir_first_velocity must be none or next");
-  if (!(o.min_parallax_deg >= 0))
-    throw ov_core::DataError(file, "min_parallax_deg must be >= 0");
-  if (o.max_clones < 3)
-    throw ov_core::DataError(file, "max_clones must be at least 3");
-  if (o.sigma_px <= 0 || o.td_sigma_init_s <= 0)
-    throw ov_core::DataError(file, "sigma_px and td_sigma_init_s must be positive");
-  if (o.fvon_max_labels < 1 || o.fvon_min_f2f_labels < 1 || o.its_epochs < 0 || o.f2f_epochs < 0 || o.tpn_epochs < 0 ||
-      o.tpn_min_labels < 2 || o.td_rate_max < 0 || o.fvon_gate_px_s < 0)
-    throw ov_core::DataError(file, "network options out of range (labels >= 1, tpn_min_labels >= 2, epochs, "
-                                   "td_rate_max and fvon_gate_px_s >= 0)");
+  try {
+    validate_vio_options(o);
+  } catch (const ov_core::UsageError &e) {
+    throw ov_core::DataError(file, e.what());
+  }
   if (print)
     print_vio_options(o, *print);
   return o;
@@ -134,10 +275,13 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
 void print_vio_options(const VioOptions &o_in, std::ostream &os) {
   VioOptions o = o_in; // the field table binds by reference
   os << "estimator options" << (o.source.empty() ? " (defaults)" : " from " + o.source) << ":\n";
-  os << "  td_mode: " << to_string(o.td_mode) << "\n";
-  os << "  init_mode: " << (o.init_mode == InitMode::Static ? "static" : "groundtruth") << "\n";
-  for (const auto &[key, f] : fields(o)) {
-    os << "  " << key << ": ";
+  std::string section;
+  for (const Field &f : fields(o)) {
+    if (section != f.section) {
+      section = f.section;
+      os << "  " << section << ":\n";
+    }
+    os << "    " << f.key << ": ";
     f.print(os);
     os << "\n";
   }

@@ -119,7 +119,7 @@ template <typename StepFn> bool Propagator::integrate(int64_t t_from, int64_t t_
   }
 }
 
-bool Propagator::propagate(State &s, int64_t t_to_ns, double td_rate) {
+bool Propagator::propagate(State &s, int64_t t_to_ns) {
   ImuState x = s.imu;
   Mat15 Phi_total = Mat15::Identity(), Q_total = Mat15::Zero();
   Eigen::Vector3d w_last = last_w_B_;
@@ -139,11 +139,9 @@ bool Propagator::propagate(State &s, int64_t t_to_ns, double td_rate) {
   });
   if (!ok)
     return false;
-  const double dt_total = ov_core::ns_to_s(t_to_ns - s.t_imu_ns);
-  state_helper::propagate_covariance(s, Phi_total, Q_total, noise_.sigma_td * noise_.sigma_td * dt_total);
+  state_helper::propagate_covariance(s, Phi_total, Q_total);
   s.imu = x; // x carries the propagated values as its first estimates (set_fej in each step)
   s.t_imu_ns = t_to_ns;
-  s.td += td_rate * dt_total;
   last_w_B_ = w_last;
   return true;
 }

@@ -7,13 +7,13 @@
 
 namespace ov_msckf_ton {
 
-/// Continuous-time IMU noise (EuRoC imu0/sensor.yaml units) and the t_d random walk.
+/// Continuous-time IMU noise (EuRoC imu0/sensor.yaml units). The time offset's process noise belongs to its model
+/// (td/td_model.h).
 struct ImuNoise {
   double sigma_w = 1.6968e-04;  ///< gyro white noise, rad/s/sqrt(Hz)
   double sigma_a = 2.0e-3;      ///< accel white noise, m/s^2/sqrt(Hz)
   double sigma_wb = 1.9393e-05; ///< gyro bias random walk, rad/s^2/sqrt(Hz)
   double sigma_ab = 3.0e-3;     ///< accel bias random walk, m/s^3/sqrt(Hz)
-  double sigma_td = 0.0;        ///< t_d random walk, s/sqrt(s) (0: t_d is a constant)
 };
 
 using Mat15 = Eigen::Matrix<double, 15, 15>;
@@ -36,10 +36,10 @@ public:
 
   void feed_imu(const ov_core::ImuData &m);
 
-  /// Propagates the state (mean, covariance and t_d) from s.t_imu_ns to t_to_ns (IMU clock). Readings are
-  /// interpolated at both ends. td_rate [s/s] drives the t_d mean (TPN's J_td; 0 for a constant offset).
+  /// Propagates the IMU state (mean and covariance, with its cross terms) from s.t_imu_ns to t_to_ns (IMU clock).
+  /// Readings are interpolated at both ends. t_d is left to its model (td/td_model.h).
   /// Returns false (state untouched) when the IMU buffer does not reach t_to_ns.
-  bool propagate(State &s, int64_t t_to_ns, double td_rate = 0.0);
+  bool propagate(State &s, int64_t t_to_ns);
 
   /// Mean-only propagation of a copy (no covariance), e.g. to predict a pose.
   bool predict_mean(const State &s, int64_t t_to_ns, ImuState &out) const;

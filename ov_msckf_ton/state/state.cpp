@@ -10,6 +10,15 @@ State::State(bool estimate_td) {
     td_index = ImuState::kSize;
 }
 
+int State::add_variable(const Eigen::MatrixXd &prior) {
+  const int n = dim(), k = static_cast<int>(prior.rows());
+  Eigen::MatrixXd Pn = Eigen::MatrixXd::Zero(n + k, n + k);
+  Pn.topLeftCorner(n, n) = P;
+  Pn.bottomRightCorner(k, k) = prior;
+  P = std::move(Pn);
+  return n;
+}
+
 void State::boxplus(const Eigen::VectorXd &dx) {
   imu.R = ov_core::so3_exp(dx.segment<3>(ImuState::kTheta)) * imu.R;
   imu.p += dx.segment<3>(ImuState::kPos);
@@ -18,6 +27,8 @@ void State::boxplus(const Eigen::VectorXd &dx) {
   imu.ba += dx.segment<3>(ImuState::kBa);
   if (td_index >= 0)
     td += dx(td_index);
+  if (td_rate_index >= 0)
+    td_rate += dx(td_rate_index);
   for (auto &[key, c] : clones) {
     c.R = ov_core::so3_exp(dx.segment<3>(c.index)) * c.R;
     c.p += dx.segment<3>(c.index + 3);

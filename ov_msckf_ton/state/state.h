@@ -7,6 +7,7 @@
 //   p = p̂ + δp,  v = v̂ + δv        world-frame position and velocity of the IMU/body
 //   b_g = b̂_g + δb_g,  b_a = b̂_a + δb_a
 //   t_d = t̂_d + δt_d               t_imu = t_cam + t_d
+//   ṫ_d = ṫ̂_d + δṫ_d               rate of t_d [s/s], only with the drift-state model (td/td_drift.cpp)
 // Clones use the same rotation and position convention.
 //
 // Why world-frame: the directions the filter cannot observe (yaw about gravity, global position) are then fixed
@@ -66,13 +67,20 @@ public:
   ImuState imu;
   int64_t t_imu_ns = 0; ///< time the IMU state refers to
   double td = 0.0;
-  int td_index = -1; ///< -1 when t_d is not estimated
+  int td_index = -1;    ///< -1 when t_d is not estimated
+  double td_rate = 0.0; ///< ṫ_d [s/s]; a state variable only when td_rate_index >= 0 (drift-state model)
+  int td_rate_index = -1;
   std::map<int64_t, CloneState> clones;
   Eigen::MatrixXd P;
 
   int dim() const { return static_cast<int>(P.rows()); }
   bool estimates_td() const { return td_index >= 0; }
   double td_sigma() const { return estimates_td() ? std::sqrt(std::max(0.0, P(td_index, td_index))) : 0.0; }
+  double td_variance() const { return estimates_td() ? P(td_index, td_index) : 0.0; }
+
+  /// Appends a variable of `size` error dimensions with prior covariance `prior` (uncorrelated with the rest);
+  /// returns its index. Clones keep their indices (they are appended by state_helper::clone the same way).
+  int add_variable(const Eigen::MatrixXd &prior);
 
   /// Applies an error-state correction dx (size dim()) with the convention above.
   void boxplus(const Eigen::VectorXd &dx);

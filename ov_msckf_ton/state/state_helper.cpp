@@ -8,8 +8,7 @@
 namespace ov_msckf_ton {
 namespace state_helper {
 
-void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q,
-                          double td_var_increment) {
+void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q) {
   const int n = s.dim();
   constexpr int I = ImuState::kSize;
   const Eigen::Matrix<double, 15, 15> Pii = s.P.topLeftCorner<I, I>();
@@ -19,8 +18,6 @@ void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, co
     s.P.topRightCorner(I, n - I) = Pix;
     s.P.bottomLeftCorner(n - I, I) = Pix.transpose();
   }
-  if (s.estimates_td())
-    s.P(s.td_index, s.td_index) += td_var_increment;
   s.P = 0.5 * (s.P + s.P.transpose());
 }
 
@@ -78,6 +75,8 @@ void marginalize_clone(State &s, int64_t t_cam_ns) {
       c.index -= k;
   if (s.td_index > idx)
     s.td_index -= k;
+  if (s.td_rate_index > idx)
+    s.td_rate_index -= k;
 }
 
 double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, double sigma2) {

@@ -5,9 +5,8 @@
 namespace ov_msckf_ton {
 namespace state_helper {
 
-/// P_II <- Φ P_II Φᵀ + Q, cross terms P_IX <- Φ P_IX; t_d's variance grows by td_var_increment (random walk).
-void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q,
-                          double td_var_increment);
+/// P_II <- Φ P_II Φᵀ + Q, cross terms P_IX <- Φ P_IX (the IMU block; t_d's model propagates its own block).
+void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q);
 
 /// Clones the current IMU pose for the image stamped t_cam_ns (camera clock) at IMU time s.t_imu_ns.
 /// In state-relevant mode the clone depends on t_d: the true image time is t̂_imu + δt_d, so

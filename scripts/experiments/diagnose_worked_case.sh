@@ -3,7 +3,7 @@
 #  1. data: `ovton simulate --features-only` along V1_03_difficult (or the built-in flight without ../shared/data),
 #     60 s, offset drifting 10 -> ~40 ms (0.5 ms/s plus the paper's 0.1 ms/sqrt(s) random walk);
 #  2. the constant-offset model: mode sr (t_d in the state, no process noise), run with --residual-log, diagnosed;
-#  3. the drift added to the model, three ways: sr with t_d process noise (td_random_walk; the rate read off the
+#  3. the drift added to the model, three ways: sr with t_d process noise (time_offset.process random_walk; the rate read off the
 #     diagnosis), tpn and ton (the paper's networks); each run diagnosed again; oracle as the floor;
 #  4. APE / ARE / TPE of every run (`ovton eval`), OUT/worked_case.md with the table and the diagnoses.
 # Usage: scripts/experiments/diagnose_worked_case.sh [OUT] [--rendered]
@@ -27,10 +27,10 @@ if [ "$RENDERED" = "--rendered" ]; then SIGMA=0.5; else SIM+=(--features-only); 
 [ -d "$DS/mav0" ] && [ -f "$OUT/.sim_args" ] && [ "$(cat "$OUT/.sim_args")" = "${SIM[*]}" ] ||
   { "$BIN" "${SIM[@]}" >/dev/null && echo "${SIM[*]}" >"$OUT/.sim_args"; }
 
-printf 'init_mode: groundtruth\nsigma_px: %s\n' "$SIGMA" >"$OUT/constant.yaml"
+printf 'init:\n  mode: groundtruth\nupdate:\n  sigma_px: %s\n' "$SIGMA" >"$OUT/constant.yaml"
 # The drift as t_d process noise: the diagnosis of the sr run (below) implies the offset moves ~0.5 ms per second;
 # a random walk of 1 ms/sqrt(s) lets the estimate follow that within about a second.
-printf 'init_mode: groundtruth\nsigma_px: %s\ntd_random_walk: 1.0e-3\n' "$SIGMA" >"$OUT/random_walk.yaml"
+printf 'init:\n  mode: groundtruth\nupdate:\n  sigma_px: %s\ntime_offset:\n  process: random_walk\n  random_walk: 1.0e-3\n' "$SIGMA" >"$OUT/random_walk.yaml"
 
 run() { # name mode config
   local name=$1 mode=$2 cfg=$3

@@ -21,7 +21,7 @@ DS="$OUT/data_V1_03"
   echo "|---|---|---|---|---|"
 } > "$OUT/summary.md"
 for C in 8 11 15 20 30; do
-  printf "max_clones: %s\n" "$C" > "$OUT/cfg_$C.yaml"
+  printf "update:\n  max_clones: %s\n" "$C" > "$OUT/cfg_$C.yaml"
   LINE=$("$BIN" run --dataset "$DS" --config "$OUT/cfg_$C.yaml" --td-mode oracle --init groundtruth \
     --output "$OUT/traj_$C.csv" -q)
   UPD=$(echo "$LINE" | sed -n 's/.*update \([0-9.]*\);.*/\1/p')

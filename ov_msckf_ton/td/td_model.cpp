@@ -1,0 +1,43 @@
+#include "ov_msckf_ton/td/td_model.h"
+#include "ov_core/types/errors.h"
+#include "ov_msckf_ton/td/td_models.h"
+
+namespace ov_msckf_ton {
+
+std::unique_ptr<TdModel> make_td_model(const VioOptions &opt, std::function<double(int64_t)> truth) {
+  const TimeOffsetOptions &o = opt.td;
+  if (o.mode == TdMode::Oracle) {
+    if (!truth)
+      throw ov_core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
+    return make_oracle_model(std::move(truth));
+  }
+  switch (resolve_td_process(o.mode, o.process)) {
+  case TdProcess::Tpn:
+    return make_tpn_model(o, opt.ton);
+  case TdProcess::Drift:
+    return make_drift_model(o);
+  case TdProcess::RandomWalk:
+    return make_random_walk_model(o.random_walk, o.adaptive_noise);
+  default:
+    return make_random_walk_model(0.0, o.adaptive_noise && estimates_td(o.mode));
+  }
+}
+
+void propagate_td_covariance(State &s, double q_td, double q_rate, double dt_s) {
+  if (!s.estimates_td() || !(dt_s > 0))
+    return;
+  const int d = s.td_index, r = s.td_rate_index;
+  if (r >= 0) {
+    // Φ P Φᵀ with Φ = I + dt·e_d e_rᵀ: row d += dt·row r, then column d += dt·column r.
+    s.P.row(d) += dt_s * s.P.row(r);
+    s.P.col(d) += dt_s * s.P.col(r);
+    const double qr = q_rate * q_rate;
+    s.P(d, d) += qr * dt_s * dt_s * dt_s / 3.0;
+    s.P(d, r) += qr * dt_s * dt_s / 2.0;
+    s.P(r, d) += qr * dt_s * dt_s / 2.0;
+    s.P(r, r) += qr * dt_s;
+  }
+  s.P(d, d) += q_td * q_td * dt_s;
+}
+
+} // namespace ov_msckf_ton

@@ -1,0 +1,96 @@
+// The paper's TPN in the filter (Sec. IV-C, eq. 14, Algorithm 1 stages 3-4): after each image the filter's estimate
+// t̂_d(K−1) is a label, the network predicts t_d^TPN(K), and the propagation to image K moves the mean at
+// J_td = (t_d^TPN(K) − t̂_d(K−1)) / dt, bounded by rate_max; t_d carries random-walk noise.
+#include "ov_core/types/sensor_data.h"
+#include "ov_msckf_ton/td/td_models.h"
+#include "ov_msckf_ton/td/td_noise_adapter.h"
+
+#include <optional>
+
+namespace ov_msckf_ton {
+
+namespace {
+
+TpnDriverOptions driver_options(const TimeOffsetOptions &o, const TonOptions &ton) {
+  TpnDriverOptions t;
+  t.tpn.train.max_epochs = ton.tpn_epochs;
+  t.min_labels = ton.tpn_min_labels;
+  t.td_rate_max = o.rate_max;
+  return t;
+}
+
+class TpnTdModel : public TdModel {
+public:
+  TpnTdModel(const TimeOffsetOptions &o, const TonOptions &ton)
+      : driver_(driver_options(o, ton)), q_(o.random_walk_tpn), start_sigma_s_(ton.tpn_start_sigma_s) {
+    if (o.adaptive_noise)
+      adapter_.emplace(o.random_walk_tpn);
+    stats_.process_sigma = q_;
+  }
+  TdProcess kind() const override { return TdProcess::Tpn; }
+  const TpnDriver &driver() const { return driver_; }
+
+  /// Paper eq. 14 with dt the time between images: the mean reaches t_d^TPN(K) (or the bounded step towards it)
+  /// exactly at this image.
+  double td_at_image(const State &s, int64_t t_cam_ns, int64_t last_image_ns) const override {
+    last_clamped_ = false;
+    if (last_image_ns < 0 || t_cam_ns <= last_image_ns)
+      return s.td;
+    const double dt = ov_core::ns_to_s(t_cam_ns - last_image_ns);
+    return s.td + driver_.rate(s.td, dt, &last_clamped_) * dt;
+  }
+
+  void propagate(State &s, double td_end, double dt_s) override {
+    stats_.rate_clamped += last_clamped_ ? 1 : 0;
+    last_clamped_ = false;
+    // The IMU-clock interval differs from the camera interval by the change in t_d itself: the rate is taken over
+    // the interval actually propagated.
+    const double rate = dt_s > 0 ? (td_end - s.td) / dt_s : 0.0;
+    s.td += rate * dt_s;
+    const double q = adapter_ ? adapter_->q() : q_;
+    propagate_td_covariance(s, q, 0.0, dt_s);
+    if (adapter_ && dt_s > 0)
+      adapter_->add_process(q * q * dt_s);
+    dt_since_image_ += dt_s;
+  }
+
+  void after_update(double td0, double v0, double td1, double v1) override {
+    if (adapter_)
+      adapter_->add_update(td0, v0, td1, v1);
+  }
+
+  void after_image(const State &s, int64_t) override {
+    if (adapter_) {
+      adapter_->close_image(dt_since_image_);
+      stats_.process_sigma = adapter_->q();
+    }
+    dt_since_image_ = 0.0;
+    // The labels are the filter's own estimates: while t_d is still converging (σ above tpn_start_sigma_s) they
+    // trace the convergence transient, not the offset's motion, and a network trained on them extrapolates the
+    // transient (measured: on a constant +10 ms offset, t_d overshot to 14 ms and the trajectory diverged).
+    if (s.td_sigma() > start_sigma_s_)
+      return;
+    driver_.step(s.td);
+    ++stats_.learning_steps;
+  }
+
+private:
+  TpnDriver driver_;
+  double q_, start_sigma_s_;
+  std::optional<TdNoiseAdapter> adapter_;
+  double dt_since_image_ = 0.0;
+  mutable bool last_clamped_ = false;
+};
+
+} // namespace
+
+std::unique_ptr<TdModel> make_tpn_model(const TimeOffsetOptions &o, const TonOptions &ton) {
+  return std::make_unique<TpnTdModel>(o, ton);
+}
+
+const TpnDriver *tpn_driver_of(const TdModel &m) {
+  const auto *t = dynamic_cast<const TpnTdModel *>(&m);
+  return t ? &t->driver() : nullptr;
+}
+
+} // namespace ov_msckf_ton

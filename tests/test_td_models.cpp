@@ -1,0 +1,238 @@
+// Time-offset process models (ov_msckf_ton/td/): the drift state's covariance propagation, where each model puts t_d
+// at the next image, and consistency (t_d NEES) of the models in a scalar filter that observes t_d directly.
+#include "ov_core/math/so3.h"
+#include "ov_eval/nees.h"
+#include "ov_msckf_ton/state/state_helper.h"
+#include "ov_msckf_ton/td/td_model.h"
+#include "ov_msckf_ton/td/td_models.h"
+#include "ov_msckf_ton/td/td_noise_adapter.h"
+#include "test_util.h"
+
+#include <Eigen/Cholesky>
+#include <random>
+
+using namespace ov_msckf_ton;
+
+namespace {
+
+VioOptions with_process(TdMode mode, TdProcess process) {
+  VioOptions o;
+  o.td.mode = mode;
+  o.td.process = process;
+  return o;
+}
+
+/// A State with an IMU block, t_d, and (for the drift model) its rate, initialised as the VioManager does.
+State initialised_state(TdModel &m, double td_sigma) {
+  State s(true);
+  s.P.diagonal().setConstant(1e-4);
+  s.P(s.td_index, s.td_index) = td_sigma * td_sigma;
+  m.initialize(s);
+  return s;
+}
+
+} // namespace
+
+TEST(TdModels, DriftCovariancePropagationIsPhiPPhiTPlusQ) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0, 1);
+  State s(true);
+  s.td_rate_index = s.add_variable(Eigen::MatrixXd::Constant(1, 1, 1e-6));
+  Eigen::MatrixXd A(s.dim(), s.dim());
+  for (int i = 0; i < A.rows(); ++i)
+    for (int j = 0; j < A.cols(); ++j)
+      A(i, j) = n(rng);
+  s.P = A * A.transpose();
+  const Eigen::MatrixXd P0 = s.P;
+  const double dt = 0.05, q_td = 2e-4, q_r = 3e-5;
+  propagate_td_covariance(s, q_td, q_r, dt);
+  Eigen::MatrixXd Phi = Eigen::MatrixXd::Identity(s.dim(), s.dim());
+  Phi(s.td_index, s.td_rate_index) = dt;
+  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(s.dim(), s.dim());
+  Q(s.td_index, s.td_index) = q_td * q_td * dt + q_r * q_r * dt * dt * dt / 3;
+  Q(s.td_index, s.td_rate_index) = Q(s.td_rate_index, s.td_index) = q_r * q_r * dt * dt / 2;
+  Q(s.td_rate_index, s.td_rate_index) = q_r * q_r * dt;
+  const Eigen::MatrixXd expected = Phi * P0 * Phi.transpose() + Q;
+  EXPECT_LT((s.P - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff());
+  // A clone marginalised in front of the rate keeps its index pointing at the rate.
+  state_helper::clone(s, 1, false, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+  const double var_rate = s.P(s.td_rate_index, s.td_rate_index);
+  state_helper::marginalize_clone(s, 1);
+  EXPECT_EQ(s.P(s.td_rate_index, s.td_rate_index), var_rate);
+}
+
+TEST(TdModels, EachModelPutsTdWhereItsPropagationEnds) {
+  // Drift: t_d(end) must equal t_d + rate * (t_cam + t_d(end) - t_state), the interval actually propagated.
+  VioOptions o = with_process(TdMode::Drift, TdProcess::Auto);
+  auto drift = make_td_model(o);
+  ASSERT_EQ(drift->kind(), TdProcess::Drift);
+  State s = initialised_state(*drift, 0.01);
+  ASSERT_GE(s.td_rate_index, 0);
+  s.t_imu_ns = 1000000000;
+  s.td = 0.012;
+  s.td_rate = 2e-4;
+  const int64_t t_cam = 1050000000;
+  const double td_end = drift->td_at_image(s, t_cam, 1000000000);
+  const double dt = ov_core::ns_to_s(t_cam - s.t_imu_ns) + td_end;
+  EXPECT_NEAR(td_end, s.td + s.td_rate * dt, 1e-15);
+  drift->propagate(s, td_end, dt);
+  EXPECT_NEAR(s.td, td_end, 1e-15);
+  // Constant: t_d stays; its variance does not grow. Random walk: it grows by q^2 dt.
+  auto constant = make_td_model(with_process(TdMode::Sr, TdProcess::Auto));
+  EXPECT_EQ(constant->kind(), TdProcess::Constant);
+  State c = initialised_state(*constant, 0.01);
+  const double v0 = c.td_variance();
+  constant->propagate(c, constant->td_at_image(c, t_cam, -1), 0.05);
+  EXPECT_EQ(c.td_variance(), v0);
+  VioOptions rw_opt = with_process(TdMode::Sr, TdProcess::RandomWalk);
+  rw_opt.td.random_walk = 1e-3;
+  auto rw = make_td_model(rw_opt);
+  State r = initialised_state(*rw, 0.01);
+  rw->propagate(r, r.td, 0.05);
+  EXPECT_NEAR(r.td_variance() - v0, 1e-6 * 0.05, 1e-18);
+  // Oracle needs the truth and reads it.
+  EXPECT_THROW(make_td_model(with_process(TdMode::Oracle, TdProcess::Auto)), ov_core::UsageError);
+  auto oracle = make_td_model(with_process(TdMode::Oracle, TdProcess::Auto), [](int64_t t) { return 1e-12 * t; });
+  EXPECT_DOUBLE_EQ(oracle->td_at_image(r, 5000000000, -1), 5e-3);
+}
+
+namespace {
+
+/// A scalar filter around the State: t_d is observed directly with noise sigma_z at 20 Hz while the truth follows
+/// the paper's eq. 4 (constant drift plus random walk). Returns the average t_d NEES and the final error.
+struct ScalarRun {
+  double nees = 0, final_err = 0, final_rate = 0;
+};
+ScalarRun run_scalar(const VioOptions &o, double drift, double q_true, double sigma_z, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0, 1);
+  auto model = make_td_model(o);
+  State s = initialised_state(*model, 0.01);
+  double truth = 0.01 + 0.01 * n(rng); // prior error drawn from the prior
+  const double dt = 0.05;
+  ScalarRun r;
+  int counted = 0;
+  for (int k = 0; k < 2000; ++k) { // 100 s
+    truth += drift * dt + q_true * std::sqrt(dt) * n(rng);
+    const int64_t t_cam = static_cast<int64_t>((k + 1) * dt * 1e9);
+    const double td_end = model->td_at_image(s, t_cam, k == 0 ? -1 : t_cam - 50000000);
+    model->propagate(s, td_end, dt);
+    s.t_imu_ns = t_cam;
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(1, s.dim());
+    H(0, s.td_index) = 1;
+    const double td0 = s.td, v0 = s.td_variance();
+    state_helper::ekf_update(s, H, Eigen::VectorXd::Constant(1, truth + sigma_z * n(rng) - s.td), sigma_z * sigma_z);
+    model->after_update(td0, v0, s.td, s.td_variance());
+    model->after_image(s, t_cam);
+    if (k >= 200) { // after 10 s
+      const double e = truth - s.td;
+      r.nees += e * e / s.td_variance();
+      ++counted;
+    }
+  }
+  r.nees /= counted;
+  r.final_err = truth - s.td;
+  r.final_rate = s.td_rate;
+  return r;
+}
+
+double mean_nees(const VioOptions &o, double drift, double q_true, double sigma_z) {
+  double sum = 0;
+  for (unsigned seed = 1; seed <= 10; ++seed)
+    sum += run_scalar(o, drift, q_true, sigma_z, seed).nees;
+  return sum / 10;
+}
+
+} // namespace
+
+TEST(TdModels, DriftStateIsConsistentAndFindsTheRate) {
+  // The paper's drift: 0.1 ms/s bias, 0.1 ms/sqrt(s) noise; t_d observed to 0.2 ms per image.
+  VioOptions o = with_process(TdMode::Drift, TdProcess::Auto);
+  o.td.random_walk = 1e-4;
+  o.td.rate_random_walk = 1e-6;
+  const double nees = mean_nees(o, 1e-4, 1e-4, 2e-4);
+  std::cout << "[td models] drift state: t_d NEES " << nees << " (1 is ideal)\n";
+  EXPECT_GT(nees, 0.6);
+  EXPECT_LT(nees, 1.5);
+  const ScalarRun r = run_scalar(o, 1e-4, 1e-4, 2e-4, 1);
+  EXPECT_NEAR(r.final_rate, 1e-4, 3e-5) << "the rate state should learn the 0.1 ms/s drift";
+}
+
+TEST(TdModels, AdaptiveNoiseMakesAConstantModelHonestOnADriftingOffset) {
+  // A constant model on a drifting offset is over-confident (its variance shrinks while the truth walks away);
+  // covariance matching grows the process noise until the corrections fit the variance.
+  VioOptions fixed = with_process(TdMode::Sr, TdProcess::Auto), adaptive = fixed;
+  adaptive.td.adaptive_noise = true;
+  const double nees_fixed = mean_nees(fixed, 1e-4, 1e-4, 2e-4);
+  const double nees_adaptive = mean_nees(adaptive, 1e-4, 1e-4, 2e-4);
+  std::cout << "[td models] constant on the paper's drift: t_d NEES " << nees_fixed << " fixed, " << nees_adaptive
+            << " adaptive (1 is ideal)\n";
+  EXPECT_GT(nees_fixed, 20.0);
+  EXPECT_LT(nees_adaptive, 2.0);
+  EXPECT_GT(nees_adaptive, 0.5);
+}
+
+TEST(TdModels, NoiseAdapterConvergesToTheTrueRandomWalk) {
+  VioOptions o = with_process(TdMode::Sr, TdProcess::RandomWalk);
+  o.td.random_walk = 1e-5; // ten times too small; the floor
+  o.td.adaptive_noise = true;
+  auto model = make_td_model(o);
+  // Drive the scalar filter and read the adapted sigma.
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0, 1);
+  State s = initialised_state(*model, 0.01);
+  double truth = s.td, q_sum = 0;
+  int q_count = 0;
+  for (int k = 0; k < 4000; ++k) {
+    truth += 3e-4 * std::sqrt(0.05) * n(rng);
+    model->propagate(s, s.td, 0.05);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(1, s.dim());
+    H(0, s.td_index) = 1;
+    const double td0 = s.td, v0 = s.td_variance();
+    state_helper::ekf_update(s, H, Eigen::VectorXd::Constant(1, truth + 2e-4 * n(rng) - s.td), 4e-8);
+    model->after_update(td0, v0, s.td, s.td_variance());
+    model->after_image(s, k);
+    if (k >= 1000) {
+      q_sum += model->stats().process_sigma;
+      ++q_count;
+    }
+  }
+  const double q_mean = q_sum / q_count;
+  std::cout << "[td models] adapted random walk " << q_mean * 1e3 << " ms/sqrt(s) for a true 0.3\n";
+  EXPECT_NEAR(q_mean, 3e-4, 0.6e-4);
+}
+
+TEST(Nees, SamplesDrawnFromTheCovarianceAverageTheirDimension) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n(0, 1);
+  std::vector<ov_core::StateSample> gt(2);
+  gt[0].t_ns = 0;
+  gt[1].t_ns = 2000000000;
+  gt[1].p = Eigen::Vector3d(1, 0, 0);
+  std::vector<ov_core::TdSample> td_truth = {{0, 0.01}, {2000000000, 0.01}};
+  ov_eval::NeesAccumulator acc(gt, td_truth);
+  Eigen::Matrix<double, 6, 6> A;
+  for (int i = 0; i < 36; ++i)
+    A(i / 6, i % 6) = 0.01 * n(rng);
+  const Eigen::Matrix<double, 6, 6> P = A * A.transpose() + 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
+  const Eigen::Matrix<double, 6, 6> L = P.llt().matrixL();
+  for (int k = 0; k < 4000; ++k) {
+    ov_core::StateSample e;
+    e.t_ns = 1000000000;
+    Eigen::Matrix<double, 6, 1> z;
+    for (int i = 0; i < 6; ++i)
+      z(i) = n(rng);
+    const Eigen::Matrix<double, 6, 1> err = L * z; // truth = estimate + err
+    e.p = Eigen::Vector3d(0.5, 0, 0) - err.tail<3>();
+    e.q_WB = Eigen::Quaterniond(ov_core::so3_exp(-err.head<3>()));
+    e.P_pose = P;
+    e.has_pose_cov = true;
+    e.has_td = true;
+    e.td_sigma_s = 1e-4;
+    e.td_s = 0.01 + 1e-4 * n(rng);
+    acc.add(e);
+  }
+  EXPECT_NEAR(acc.stats().ori(), 3.0, 0.25);
+  EXPECT_NEAR(acc.stats().pos(), 3.0, 0.25);
+  EXPECT_NEAR(acc.stats().td(), 1.0, 0.1);
+}
