@@ -295,14 +295,28 @@ EvalResult evaluate(const std::vector<ov_core::StateSample> &est, const std::vec
 
   if (!td_truth.empty()) {
     r.has_tpe = true;
-    double sq = 0.0;
-    for (size_t k : td_rows) {
+    double sq = 0.0, td_sq = 0.0, td_sq_late = 0.0, nees = 0.0;
+    int nees_count = 0;
+    const size_t half = td_rows.size() / 2;
+    for (size_t m = 0; m < td_rows.size(); ++m) {
+      const size_t k = td_rows[m];
       const double td_gt = td_truth_at(td_truth, est[k].t_ns - ov_core::s_to_ns(est[k].td_s));
-      const double tpe_m = (est[k].td_s - td_gt) * est_velocity(est, k).norm();
+      const double e = est[k].td_s - td_gt;
+      const double tpe_m = e * est_velocity(est, k).norm();
       sq += tpe_m * tpe_m;
+      td_sq += e * e;
+      if (m >= half)
+        td_sq_late += e * e;
+      if (est[k].td_sigma_s > 0) {
+        nees += e * e / (est[k].td_sigma_s * est[k].td_sigma_s);
+        ++nees_count;
+      }
     }
     r.tpe_count = static_cast<int>(td_rows.size());
     r.tpe_rmse_mm = std::sqrt(sq / td_rows.size()) * 1e3;
+    r.td_err_rmse_ms = std::sqrt(td_sq / td_rows.size()) * 1e3;
+    r.td_err_rmse_late_ms = std::sqrt(td_sq_late / (td_rows.size() - half)) * 1e3;
+    r.td_nees = nees_count > 0 ? nees / nees_count : std::numeric_limits<double>::quiet_NaN();
   }
 
   const bool truth_target = opt.cit.target_from_truth;

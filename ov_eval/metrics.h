@@ -67,6 +67,9 @@ struct EvalResult {
   bool has_tpe = false;
   int tpe_count = 0; ///< estimate frames that entered the TPE
   double tpe_rmse_mm = 0.0;
+  /// With has_tpe: RMSE of t̂_d − t_d over all rows and over the second half of them (past convergence) [ms], and
+  /// the mean of (t̂_d − t_d)² / σ² over rows with σ > 0 (t_d NEES, 1 is ideal; NaN when no row has a σ).
+  double td_err_rmse_ms = 0.0, td_err_rmse_late_ms = 0.0, td_nees = 0.0;
   bool has_cit = false;
   int cit = -1;                       ///< frame index of convergence, -1 if never
   std::vector<double> ape_per_pose_m; ///< aligned position error at each matched estimate

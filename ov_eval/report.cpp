@@ -104,7 +104,7 @@ std::string utc_now() {
 
 ReportRow::ReportRow()
     : ape_rmse_m(kNaN), are_deg(kNaN), tpe_rmse_mm(kNaN), final_td_ms(kNaN), td_sigma_ms(kNaN), runtime_s(kNaN),
-      realtime_factor(kNaN), ms_per_frame(kNaN) {}
+      realtime_factor(kNaN), ms_per_frame(kNaN), td_err_rmse_ms(kNaN), td_err_late_ms(kNaN), td_nees(kNaN) {}
 
 std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const ov_core::Dataset &data,
                                      const ReportOptions &opt) {
@@ -137,8 +137,12 @@ std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const o
         row.evaluated = true;
         row.ape_rmse_m = row.eval.ape_rmse_m;
         row.are_deg = row.eval.are_rmse_deg;
-        if (row.eval.has_tpe)
+        if (row.eval.has_tpe) {
           row.tpe_rmse_mm = row.eval.tpe_rmse_mm;
+          row.td_err_rmse_ms = row.eval.td_err_rmse_ms;
+          row.td_err_late_ms = row.eval.td_err_rmse_late_ms;
+          row.td_nees = row.eval.td_nees;
+        }
         row.has_cit = row.eval.has_cit;
         row.cit = row.eval.cit;
       } catch (const ov_core::UsageError &e) {
@@ -154,28 +158,31 @@ std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const o
 void write_results_csv(const std::string &file, const std::vector<ReportRow> &rows) {
   std::ostringstream os;
   os << "mode,status,ape_rmse_m,are_deg,tpe_rmse_mm,cit_frames,final_td_ms,td_sigma_ms,runtime_s,realtime_factor,"
-        "ms_per_frame\n";
+        "ms_per_frame,td_err_rmse_ms,td_err_late_ms,td_nees\n";
   for (const auto &r : rows)
     os << csv_field(r.name) << ',' << csv_field(r.status) << ',' << ov_core::csv_number(r.ape_rmse_m) << ','
        << ov_core::csv_number(r.are_deg) << ',' << ov_core::csv_number(r.tpe_rmse_mm) << ','
        << (r.has_cit ? std::to_string(r.cit) : "") << ',' << ov_core::csv_number(r.final_td_ms) << ','
        << ov_core::csv_number(r.td_sigma_ms) << ',' << ov_core::csv_number(r.runtime_s) << ','
-       << ov_core::csv_number(r.realtime_factor) << ',' << ov_core::csv_number(r.ms_per_frame) << '\n';
+       << ov_core::csv_number(r.realtime_factor) << ',' << ov_core::csv_number(r.ms_per_frame) << ','
+       << ov_core::csv_number(r.td_err_rmse_ms) << ',' << ov_core::csv_number(r.td_err_late_ms) << ','
+       << ov_core::csv_number(r.td_nees) << '\n';
   write_file_atomically(file, os.str());
 }
 
 std::string results_markdown_table(const std::vector<ReportRow> &rows) {
   std::ostringstream os;
   os << "| mode | status | APE RMSE [m] | ARE [deg] | TPE RMSE [mm] | CIT [frames] | final t_d [ms] | t_d sigma [ms] "
-        "| runtime [s] | x real time | ms / frame |\n";
-  os << "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+        "| t_d err RMSE [ms] (2nd half) | t_d NEES | runtime [s] | x real time | ms / frame |\n";
+  os << "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   for (const auto &r : rows) {
     const std::string cit = !r.has_cit ? "n/a" : r.cit < 0 ? "never" : std::to_string(r.cit);
     os << "| " << md_cell(r.name) << " | " << md_cell(r.status) << " | " << ov_core::format_fixed(r.ape_rmse_m, 4)
        << " | " << ov_core::format_fixed(r.are_deg, 3) << " | " << ov_core::format_fixed(r.tpe_rmse_mm, 3) << " | "
        << cit << " | " << ov_core::format_fixed(r.final_td_ms, 3) << " | " << ov_core::format_fixed(r.td_sigma_ms, 4)
-       << " | " << ov_core::format_fixed(r.runtime_s, 2) << " | " << ov_core::format_fixed(r.realtime_factor, 2)
-       << " | " << ov_core::format_fixed(r.ms_per_frame, 2) << " |\n";
+       << " | " << ov_core::format_fixed(r.td_err_rmse_ms, 3) << " (" << ov_core::format_fixed(r.td_err_late_ms, 3)
+       << ") | " << ov_core::format_fixed(r.td_nees, 2) << " | " << ov_core::format_fixed(r.runtime_s, 2) << " | "
+       << ov_core::format_fixed(r.realtime_factor, 2) << " | " << ov_core::format_fixed(r.ms_per_frame, 2) << " |\n";
   }
   return os.str();
 }

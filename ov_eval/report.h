@@ -33,6 +33,7 @@ struct ReportRow {
   std::string eval_note; ///< why the run was not evaluated (no ground truth, no overlap, ...)
   EvalResult eval;
   double ape_rmse_m, are_deg, tpe_rmse_mm, final_td_ms, td_sigma_ms, runtime_s, realtime_factor, ms_per_frame;
+  double td_err_rmse_ms, td_err_late_ms, td_nees; ///< see EvalResult; NaN without time-offset truth
   int cit = -1;
   bool has_cit = false;
   ReportRow();

@@ -129,6 +129,13 @@ int ovton::cmd_eval(const ovton::Args &args) {
      << "TPE RMSE [mm]          "
      << (r.has_tpe ? ov_core::format_fixed(r.tpe_rmse_mm, 3) : std::string("n/a (needs td column and --td-truth)"))
      << "\n"
+     << "t_d err RMSE [ms]      "
+     << (r.has_tpe ? ov_core::format_fixed(r.td_err_rmse_ms, 3) + "  (second half " +
+                         ov_core::format_fixed(r.td_err_rmse_late_ms, 3) + ")"
+                   : std::string("n/a"))
+     << "\n"
+     << "t_d NEES               " << (r.has_tpe ? ov_core::format_fixed(r.td_nees, 3) : std::string("n/a"))
+     << (r.has_tpe ? "   (1 is ideal)" : "") << "\n"
      << "CIT [frame]            "
      << (r.has_cit ? (r.cit >= 0 ? std::to_string(r.cit) : std::string("never converged"))
                    : std::string("n/a (needs td column and --td-truth or --cit-target-ms)"))
@@ -149,6 +156,9 @@ int ovton::cmd_eval(const ovton::Args &args) {
         << ",\n  \"ape_max_m\": " << ov_core::json_number(r.ape_max_m)
         << ",\n  \"are_rmse_deg\": " << ov_core::json_number(r.are_rmse_deg)
         << ",\n  \"tpe_rmse_mm\": " << (r.has_tpe ? ov_core::json_number(r.tpe_rmse_mm) : "null")
+        << ",\n  \"td_err_rmse_ms\": " << (r.has_tpe ? ov_core::json_number(r.td_err_rmse_ms) : "null")
+        << ",\n  \"td_err_rmse_late_ms\": " << (r.has_tpe ? ov_core::json_number(r.td_err_rmse_late_ms) : "null")
+        << ",\n  \"td_nees\": " << (r.has_tpe ? ov_core::json_number(r.td_nees) : "null")
         << ",\n  \"cit\": " << (r.has_cit ? std::to_string(r.cit) : "null") << ",\n  \"rpe\": [";
     for (size_t i = 0; i < r.rpe.size(); ++i)
       out << (i ? "," : "") << "\n    {\"segment_m\": " << ov_core::json_number(r.rpe[i].segment_m)
@@ -159,7 +169,8 @@ int ovton::cmd_eval(const ovton::Args &args) {
   }
   if (!csv_file.empty()) {
     std::ofstream out = open_out(csv_file);
-    out << "align,n_est,n_matched,ape_rmse_m,ape_mean_m,ape_max_m,are_rmse_deg,tpe_rmse_mm,cit";
+    out << "align,n_est,n_matched,ape_rmse_m,ape_mean_m,ape_max_m,are_rmse_deg,tpe_rmse_mm,cit,td_err_rmse_ms,"
+           "td_err_rmse_late_ms,td_nees";
     for (const auto &rr : r.rpe)
       out << ",rpe_" << ov_core::json_number(rr.segment_m) << "m_trans_rmse_m,rpe_"
           << ov_core::json_number(rr.segment_m) << "m_rot_rmse_deg";
@@ -167,7 +178,10 @@ int ovton::cmd_eval(const ovton::Args &args) {
         << ov_eval::to_string(r.align_mode) << "," << r.n_est << "," << r.n_matched << ","
         << ov_core::csv_number(r.ape_rmse_m) << "," << ov_core::csv_number(r.ape_mean_m) << ","
         << ov_core::csv_number(r.ape_max_m) << "," << ov_core::csv_number(r.are_rmse_deg) << ","
-        << (r.has_tpe ? ov_core::csv_number(r.tpe_rmse_mm) : "") << "," << (r.has_cit ? std::to_string(r.cit) : "");
+        << (r.has_tpe ? ov_core::csv_number(r.tpe_rmse_mm) : "") << "," << (r.has_cit ? std::to_string(r.cit) : "")
+        << "," << (r.has_tpe ? ov_core::csv_number(r.td_err_rmse_ms) : "") << ","
+        << (r.has_tpe ? ov_core::csv_number(r.td_err_rmse_late_ms) : "") << ","
+        << (r.has_tpe ? ov_core::csv_number(r.td_nees) : "");
     for (const auto &rr : r.rpe)
       out << "," << ov_core::csv_number(rr.trans_rmse_m) << "," << ov_core::csv_number(rr.rot_rmse_deg);
     out << "\n";
