@@ -25,13 +25,17 @@ int cmd_run(const Args &args) {
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
   bool quiet = false, no_prefetch = false;
   RunRequest req;
-  desc.add_options()("help,h", "this help")                                                               //
-      ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")              //
-      ("dataset,d", po::value(&dataset)->required(), "dataset folder (EuRoC or SCube)")                   //
-      ("td-mode,m", po::value(&mode), "off|sr|sir|fvon|tpn|ton|oracle (overrides the config)")            //
+  desc.add_options()("help,h", "this help")                                                  //
+      ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)") //
+      ("dataset,d", po::value(&dataset)->required(), "dataset folder (EuRoC or SCube)")      //
+      ("td-mode,m", po::value(&mode),
+       "off|sr|sir|fvon|tpn|ton|oracle|drift, optionally +PROCESS (constant|random_walk|drift|tpn), e.g. "
+       "sr+random_walk (overrides the config)")                                                           //
       ("output,o", po::value(&req.output)->required(), "trajectory file to write")                        //
       ("format", po::value(&format), "csv (default) or tum")                                              //
       ("residual-log", po::value(&req.residual_log), "write every feature residual of every update here") //
+      ("velocity-log", po::value(&req.velocity_log),
+       "write each observation's image velocity by every rule and network here (for `ovton velocities`)") //
       ("init", po::value(&init), "static|groundtruth (overrides the config)")                             //
       ("td-init-ms", po::value(&td_init_ms), "initial / fixed t_d [ms] (overrides the config)")           //
       ("nees-log", po::value(&nees_log), "with --init groundtruth: write per-frame NEES (t_ns,ori,pos,td) here")(

@@ -16,5 +16,6 @@ int cmd_run(const Args &args);
 int cmd_compare(const Args &args);
 int cmd_benchmark(const Args &args);
 int cmd_diagnose(const Args &args);
+int cmd_velocities(const Args &args);
 
 } // namespace ovton

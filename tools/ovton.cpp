@@ -24,6 +24,7 @@ const std::map<std::string, Command> &commands() {
       {"perturb", {ovton::cmd_perturb, "rewrite a real folder's image stamps with a time-offset model"}},
       {"benchmark", {ovton::cmd_benchmark, "per-frame cost by stage, x real time and memory, mode by mode"}},
       {"diagnose", {ovton::cmd_diagnose, "rank candidate effects behind the residuals of `run --residual-log`"}},
+      {"velocities", {ovton::cmd_velocities, "score the image velocities of `run --velocity-log` against the truth"}},
   };
   return cmds;
 }
@@ -31,7 +32,7 @@ const std::map<std::string, Command> &commands() {
 void usage(std::ostream &os) {
   os << "usage: ovton <command> [options]   (ovton <command> --help for its options)\n\ncommands:\n";
   for (const auto &[name, c] : commands())
-    os << "  " << name << std::string(10 - name.size(), ' ') << c.help << "\n";
+    os << "  " << name << std::string(12 - name.size(), ' ') << c.help << "\n";
 }
 
 } // namespace

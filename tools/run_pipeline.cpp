@@ -46,6 +46,11 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
     rlog = std::make_unique<ov_msckf_ton::ResidualLogWriter>(req.residual_log);
     vio.set_residual_log(rlog.get());
   }
+  std::unique_ptr<ov_core::VelocityLogWriter> vlog;
+  if (!req.velocity_log.empty()) {
+    vlog = std::make_unique<ov_core::VelocityLogWriter>(req.velocity_log);
+    vio.set_velocity_log(vlog.get());
+  }
 
   std::unique_ptr<ov_core::ImagePrefetcher> prefetcher;
   if (req.prefetch && !data.images.empty() && !data.images.front().features) {

@@ -16,6 +16,7 @@ struct RunRequest {
   std::string output;       ///< trajectory file ("" = none)
   bool tum = false;         ///< TUM text instead of the project CSV
   std::string residual_log; ///< "" = none
+  std::string velocity_log; ///< "" = none (see ov_core/io/velocity_log.h)
   long max_images = 0;      ///< 0 = all
   bool progress = true;     ///< progress bar on stderr
   std::string label;        ///< progress bar label

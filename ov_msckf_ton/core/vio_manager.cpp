@@ -53,7 +53,9 @@ FvonProviderOptions fvon_options(const TonOptions &o) {
   f.min_f2f_labels = o.fvon_min_f2f_labels;
   f.gate_px_s = o.fvon_gate_px_s;
   f.its.train.max_epochs = o.its_epochs;
+  f.its.residual = o.its_residual;
   f.f2f.train.max_epochs = o.f2f_epochs;
+  f.f2f.inverse_depth_input = o.f2f_inverse_depth;
   return f;
 }
 
@@ -82,6 +84,58 @@ VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, c
 
 const TpnDriver *VioManager::tpn() const {
   return tpn_driver_of(*td_model_);
+}
+
+void VioManager::set_velocity_log(ov_core::VelocityLogWriter *log) {
+  velocity_log_ = log;
+  if (fvon_)
+    fvon_->set_evaluate_both(log != nullptr);
+}
+
+void VioManager::log_velocities(const std::vector<const ov_core::Feature *> &feats, const VelocityProvider &used) {
+  const double focal = 0.5 * (camera_.calib().intrinsics(0) + camera_.calib().intrinsics(1));
+  std::vector<ov_core::VelocityLogRow> rows;
+  for (const auto *f : feats) {
+    const FvonCandidates *cand = nullptr;
+    if (fvon_) {
+      const auto it = fvon_->candidates().find(f->id);
+      cand = it == fvon_->candidates().end() ? nullptr : &it->second;
+    }
+    for (size_t i = 0; i < f->obs.size(); ++i) {
+      const ov_core::FeatureObservation &o = f->obs[i];
+      ov_core::VelocityLogRow r;
+      r.t_cam_ns = o.t_cam_ns;
+      r.feature_id = f->id;
+      r.obs_index = static_cast<int>(i);
+      r.track_length = static_cast<int>(f->obs.size());
+      r.u_px = o.uv.x();
+      r.v_px = o.uv.y();
+      r.x_norm = o.xy.x();
+      r.y_norm = o.xy.y();
+      r.focal_px = focal;
+      const auto set = [focal](double &x, double &y, const Eigen::Vector2d &v) {
+        x = v.x() * focal;
+        y = v.y() * focal;
+      };
+      if (o.vel_valid)
+        set(r.eq2_x, r.eq2_y, o.vel_xy);
+      if (i + 1 < f->obs.size() && f->obs[i + 1].vel_valid)
+        set(r.next_x, r.next_y, f->obs[i + 1].vel_xy);
+      if (i == 0 && cand) {
+        if (cand->has_its)
+          set(r.its_x, r.its_y, cand->its);
+        if (cand->has_f2f)
+          set(r.f2f_x, r.f2f_y, cand->f2f);
+        r.fvon_source = cand->chosen;
+        r.gated = cand->gated ? 1 : 0;
+      }
+      Eigen::Vector2d v;
+      int src = kVelocityNone;
+      r.used_source = used.velocity(*f, i, v, src) ? src : kVelocityNone;
+      rows.push_back(r);
+    }
+  }
+  velocity_log_->write(rows);
 }
 
 double VioManager::td_for_image_s(int64_t t_cam_ns) const {
@@ -302,6 +356,8 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
     const NextForFirstVelocityProvider with_first(*velocities);
     if (opt_.td.first_velocity == FirstVelocity::Next)
       velocities = &with_first;
+    if (velocity_log_)
+      log_velocities(feats, *velocities);
     UpdateStats st;
     td_tracked_update(
         [&] { st = updater_.update(s, feats, td_observation(opt_.td.mode), *velocities, log_ ? &records : nullptr); });

@@ -3,6 +3,7 @@
 // propagation, cloning, MSCKF update and the time-offset strategy. It owns no files: output goes to callbacks.
 #include "ov_core/cam/camera_model.h"
 #include "ov_core/io/replay.h"
+#include "ov_core/io/velocity_log.h"
 #include "ov_core/track/feature_database.h"
 #include "ov_core/track/track_klt.h"
 #include "ov_msckf_ton/core/vio_options.h"
@@ -55,6 +56,9 @@ public:
   void set_groundtruth(std::vector<ov_core::StateSample> gt) { gt_ = std::move(gt); }
   void set_state_callback(StateCallback cb) { on_state_ = std::move(cb); }
   void set_residual_log(ResidualLogWriter *log) { log_ = log; }
+  /// Per observation of every feature an update uses, each rule's and network's image velocity (for
+  /// `ovton velocities`). In modes fvon/ton it makes FVON predict with both networks (on a copy; same trajectory).
+  void set_velocity_log(ov_core::VelocityLogWriter *log);
   /// Where on_image gets its decoded image (e.g. an ov_core::ImagePrefetcher); default cv::imread of the entry's path.
   /// An empty image is reported as unreadable, naming the file.
   using ImageSource = std::function<cv::Mat(const ov_core::ImageEntry &)>;
@@ -110,6 +114,9 @@ private:
   std::vector<ov_core::StateSample> gt_;
   StateCallback on_state_;
   ResidualLogWriter *log_ = nullptr;
+  ov_core::VelocityLogWriter *velocity_log_ = nullptr;
+  /// Rows of the velocity log for the update's features, with the velocities `used` gives them.
+  void log_velocities(const std::vector<const ov_core::Feature *> &feats, const VelocityProvider &used);
   ImageSource image_source_;
 
   bool initialized_ = false;

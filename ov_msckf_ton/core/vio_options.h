@@ -55,6 +55,11 @@ struct TonOptions {
   int tpn_epochs = 1000;            ///< TPN epochs per frame (Table I)
   int tpn_min_labels = 5;           ///< TPN drives t_d only once its buffer holds this many estimates
   double tpn_start_sigma_s = 0.001; ///< TPN learns from t̂_d only once its σ is below this (past convergence)
+  /// Beyond the paper (docs/results.md): ITS and TPN learn the change from their last input (a skip connection
+  /// around the same LSTM), F2F sees the 3D point as (X/Z, Y/Z, 1/Z). All false in config/paper/.
+  bool its_residual = true;
+  bool tpn_residual = true;
+  bool f2f_inverse_depth = true;
 };
 
 struct UpdateOptions {

@@ -26,9 +26,16 @@ void F2fFvon::clear_labels() {
   velocities_.clear();
 }
 
+Eigen::Vector3d F2fFvon::input(const Eigen::Vector3d &p) const {
+  if (!options_.inverse_depth_input)
+    return p;
+  return Eigen::Vector3d(p.x() / p.z(), p.y() / p.z(), 1.0 / p.z());
+}
+
 void F2fFvon::add_label(const Eigen::Vector3d &p_in_cam, const Eigen::Vector2d &velocity) {
   OVTON_TON_CHECK(p_in_cam.allFinite() && velocity.allFinite(), "F2fFvon::add_label: non-finite label");
-  positions_.push_back(p_in_cam);
+  OVTON_TON_CHECK(!options_.inverse_depth_input || p_in_cam.z() > 0, "F2fFvon::add_label: point behind the camera");
+  positions_.push_back(input(p_in_cam));
   velocities_.push_back(velocity);
 }
 
@@ -54,7 +61,7 @@ TrainReport F2fFvon::train() {
 Eigen::Vector2d F2fFvon::predict(const Eigen::Vector3d &p_in_cam) const {
   OVTON_TON_CHECK(trained_, "F2fFvon::predict before train");
   OVTON_TON_CHECK(p_in_cam.allFinite(), "F2fFvon::predict: non-finite position");
-  return vel_norm_.denormalize(net_.predict(pos_norm_.normalize(p_in_cam)));
+  return vel_norm_.denormalize(net_.predict(pos_norm_.normalize(input(p_in_cam))));
 }
 
 } // namespace ton

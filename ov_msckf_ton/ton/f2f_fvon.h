@@ -20,6 +20,11 @@ struct F2fFvonOptions {
   /// Spreads below which a dimension is treated as flat: position [m], velocity [px/s].
   double min_position_range = 1e-3;
   double min_velocity_range = 1.0;
+  /// Feed the 3D position as (X/Z, Y/Z, 1/Z) instead of (X, Y, Z): the same point, in coordinates in which the image
+  /// velocity is a low-order polynomial (ω enters through x, y; translation through 1/Z), so that new features —
+  /// detected where no tracked feature is, i.e. outside the labels — are less of an extrapolation. Not the paper's
+  /// input; measured in docs/results.md. (min_position_range then applies to these coordinates.)
+  bool inverse_depth_input = true;
 };
 
 class F2fFvon {
@@ -48,6 +53,7 @@ public:
   const F2fFvonOptions &options() const { return options_; }
 
 private:
+  Eigen::Vector3d input(const Eigen::Vector3d &p_in_cam) const;
   F2fFvonOptions options_;
   F2fMlp net_;
   Adam<F2fMlp::kNumParams> adam_;

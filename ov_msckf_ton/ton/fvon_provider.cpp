@@ -41,18 +41,36 @@ FvonVelocityProvider::FvonVelocityProvider(const ov_core::CameraCalib &calib, co
 }
 
 bool FvonVelocityProvider::keep_prediction(const ov_core::Feature &f, const Prediction &p) {
+  FvonCandidates &c = candidates_[f.id];
+  c.chosen = p.source;
   if (opt_.gate_px_s > 0 && f.obs.size() >= 2 && f.obs[1].vel_valid &&
       (p.vel_xy - f.obs[1].vel_xy).norm() * focal_ > opt_.gate_px_s) {
     ++stats_.gated;
+    c.gated = true;
     return false;
   }
   predictions_[f.id] = p;
   return true;
 }
 
+Eigen::Vector2d FvonVelocityProvider::predict_its(const ov_core::Feature &f) {
+  const int n = later_velocities(f);
+  its_seq_.clear();
+  for (int i = 1; i <= n; ++i)
+    its_seq_.push_back(f.obs[i].vel_xy * focal_);
+  const Eigen::Vector2d v = its_.predict(its_seq_) / focal_;
+  FvonCandidates &c = candidates_[f.id];
+  c.has_its = true;
+  c.its = v;
+  return v;
+}
+
 void FvonVelocityProvider::prepare(const State &state, const std::vector<const ov_core::Feature *> &features,
                                    const UpdaterMSCKF &updater) {
   predictions_.clear();
+  candidates_.clear();
+  p_W_.clear();
+  updater_ = &updater;
   std::vector<const ov_core::Feature *> need_its, need_f2f;
   for (const auto *f : features) {
     if (f->obs.empty() || f->obs.front().vel_valid)
@@ -61,8 +79,9 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
   }
   if (need_its.empty() && need_f2f.empty())
     return;
+  const std::vector<const ov_core::Feature *> f2f_by_rule = need_f2f;
 
-  std::vector<Eigen::Vector2d> seq;
+  std::vector<const ov_core::Feature *> its_done;
   if (!need_its.empty()) {
     // Stage 2, ITS branch: train on the velocity sequences of the well-tracked features of this update, longest
     // first (most (V^{k+1} -> V^k) pairs per track) until the label budget is used.
@@ -77,11 +96,11 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
     for (const auto *f : tracks) {
       if (pairs >= opt_.max_labels)
         break;
-      seq.clear();
+      its_seq_.clear();
       for (const auto &o : f->obs)
-        seq.push_back(o.vel_xy * focal_);
-      its_.add_track(seq);
-      pairs += static_cast<int>(seq.size()) - 1;
+        its_seq_.push_back(o.vel_xy * focal_);
+      its_.add_track(its_seq_);
+      pairs += static_cast<int>(its_seq_.size()) - 1;
     }
     if (its_.num_tracks() > 0) {
       its_.train();
@@ -92,46 +111,80 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
         need_f2f.push_back(f); // no well-tracked feature has been seen yet: F2F is the only option
         continue;
       }
-      const int n = later_velocities(*f);
-      seq.clear();
-      for (int i = 1; i <= n; ++i)
-        seq.push_back(f->obs[i].vel_xy * focal_);
       Prediction p;
       p.t_cam_ns = f->obs.front().t_cam_ns;
-      p.vel_xy = its_.predict(seq) / focal_;
+      p.vel_xy = predict_its(*f);
       p.source = kVelocityItsFvon;
       ++stats_.its_predictions;
       keep_prediction(*f, p);
+      its_done.push_back(f);
     }
   }
-  if (need_f2f.empty())
-    return;
+  if (opt_.evaluate_both && its_.trained())
+    for (const auto *f : f2f_by_rule)
+      if (later_velocities(*f) >= 1)
+        predict_its(*f);
 
+  if (!need_f2f.empty())
+    f2f_pass(
+        state, features, need_f2f, f2f_,
+        [&](const ov_core::Feature &f, const Eigen::Vector2d &v, int64_t t) {
+          FvonCandidates &c = candidates_[f.id];
+          c.has_f2f = true;
+          c.f2f = v;
+          Prediction p;
+          p.t_cam_ns = t;
+          p.vel_xy = v;
+          p.source = kVelocityF2fFvon;
+          ++stats_.f2f_predictions;
+          keep_prediction(f, p);
+        },
+        [&](const ov_core::Feature &) { ++stats_.no_prediction; });
+  if (opt_.evaluate_both && !its_done.empty()) {
+    // On a copy: training F2F on more frames would move the weights the filter's own predictions warm-start from.
+    ton::F2fFvon shadow = f2f_;
+    f2f_pass(
+        state, features, its_done, shadow,
+        [&](const ov_core::Feature &f, const Eigen::Vector2d &v, int64_t) {
+          FvonCandidates &c = candidates_[f.id];
+          c.has_f2f = true;
+          c.f2f = v;
+        },
+        [](const ov_core::Feature &) {});
+  }
+}
+
+void FvonVelocityProvider::f2f_pass(
+    const State &state, const std::vector<const ov_core::Feature *> &features,
+    const std::vector<const ov_core::Feature *> &need, ton::F2fFvon &net,
+    const std::function<void(const ov_core::Feature &, const Eigen::Vector2d &, int64_t)> &out,
+    const std::function<void(const ov_core::Feature &)> &none) {
   // Stage 2, F2F branch: one training per frame that holds a new feature, on the 3D positions (in that camera) and
   // tracked velocities of the other features the frame sees. Points come from the same triangulation the update
   // does, from the current clone estimates; observations are shifted by tracked velocities only.
-  std::unordered_map<size_t, Eigen::Vector3d> p_W;
-  for (const auto *f : features) {
-    const TriangulationResult tr = updater.triangulate_feature(state, *f, TdObservation::ImagePlane, tracked_);
-    if (tr.ok())
-      p_W[f->id] = tr.p_W;
-  }
+  if (p_W_.empty())
+    for (const auto *f : features) {
+      const TriangulationResult tr = updater_->triangulate_feature(state, *f, TdObservation::ImagePlane, tracked_);
+      if (tr.ok())
+        p_W_[f->id] = tr.p_W;
+    }
   std::map<int64_t, std::vector<const ov_core::Feature *>> by_frame;
-  for (const auto *f : need_f2f)
+  for (const auto *f : need)
     by_frame[f->obs.front().t_cam_ns].push_back(f);
 
   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector2d>> labels;
   for (const auto &[t, group] : by_frame) {
     const auto clone = state.clones.find(t);
     if (clone == state.clones.end()) {
-      stats_.no_prediction += static_cast<long>(group.size());
+      for (const auto *f : group)
+        none(*f);
       continue;
     }
     const CloneState &c = clone->second;
     const auto in_camera = [&](size_t id, Eigen::Vector3d &p_C) {
-      const auto it = p_W.find(id);
+      const auto it = p_W_.find(id);
       Eigen::Vector2d z;
-      return it != p_W.end() && project_in_clone(c.R, c.p, R_BC_, p_BC_, it->second, z, &p_C);
+      return it != p_W_.end() && project_in_clone(c.R, c.p, R_BC_, p_BC_, it->second, z, &p_C);
     };
     labels.clear();
     Eigen::Vector3d p_C;
@@ -141,30 +194,27 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
         labels.emplace_back(p_C, o->vel_xy * focal_);
     }
     if (static_cast<int>(labels.size()) < opt_.min_f2f_labels) {
-      stats_.no_prediction += static_cast<long>(group.size());
+      for (const auto *f : group)
+        none(*f);
       continue;
     }
     // Evenly spaced subset (features are in id order, i.e. roughly detection order): the budget bounds the cost
     // without favouring one part of the image.
-    f2f_.clear_labels();
+    net.clear_labels();
     const size_t n = labels.size(), keep = std::min(n, static_cast<size_t>(opt_.max_labels));
     for (size_t k = 0; k < keep; ++k) {
       const auto &l = labels[k * n / keep];
-      f2f_.add_label(l.first, l.second);
+      net.add_label(l.first, l.second);
     }
-    f2f_.train();
-    ++stats_.f2f_trainings;
+    net.train();
+    if (&net == &f2f_)
+      ++stats_.f2f_trainings;
     for (const auto *f : group) {
       if (!in_camera(f->id, p_C)) {
-        ++stats_.no_prediction;
+        none(*f);
         continue;
       }
-      Prediction p;
-      p.t_cam_ns = t;
-      p.vel_xy = f2f_.predict(p_C) / focal_;
-      p.source = kVelocityF2fFvon;
-      ++stats_.f2f_predictions;
-      keep_prediction(*f, p);
+      out(*f, net.predict(p_C) / focal_, t);
     }
   }
 }

@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <unordered_map>
 #include <vector>
 
@@ -35,6 +36,18 @@ struct FvonProviderOptions {
   /// labels (F2F on a handful of points, ITS on an unusual track) can be off by hundreds of px/s, and every such
   /// velocity becomes a wrong t_d regressor; a missing velocity only costs the feature its t_d column.
   double gate_px_s = 80.0;
+  /// For evaluation (`ovton run --velocity-log`): also predict every first observation with the network the rule
+  /// did not pick (ITS where F2F was chosen, and the reverse), on a copy of F2F so the filter's own predictions and
+  /// hence its trajectory are unchanged. Costs one more F2F training per frame.
+  bool evaluate_both = false;
+};
+
+/// What the networks said about one first observation (for the velocity log). Velocities in normalised units/s.
+struct FvonCandidates {
+  bool has_its = false, has_f2f = false;
+  Eigen::Vector2d its = Eigen::Vector2d::Zero(), f2f = Eigen::Vector2d::Zero();
+  int chosen = 0;     ///< VelocitySource of the prediction the filter was offered (0: none)
+  bool gated = false; ///< that prediction failed the sanity check
 };
 
 /// Counts of what prepare() did since construction (diagnostics; the updater counts what was used).
@@ -59,6 +72,9 @@ public:
   bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy, int &source) const override;
 
   const FvonStats &stats() const { return stats_; }
+  void set_evaluate_both(bool on) { opt_.evaluate_both = on; }
+  /// Per feature id, the candidates of the last prepare() (first observations only).
+  const std::unordered_map<size_t, FvonCandidates> &candidates() const { return candidates_; }
   const ton::ItsFvon &its() const { return its_; }
   const ton::F2fFvon &f2f() const { return f2f_; }
 
@@ -71,6 +87,15 @@ private:
 
   /// Stores the prediction unless the sanity check rejects it; returns whether it was kept.
   bool keep_prediction(const ov_core::Feature &f, const Prediction &p);
+  /// ITS-FVON's prediction for a first observation from the track's later velocities (ITS must be trained).
+  Eigen::Vector2d predict_its(const ov_core::Feature &f);
+  /// F2F-FVON over the frames of `need` (first observations): one training of `net` per frame on the other features'
+  /// 3D points and tracked velocities, then `out(feature, velocity)` for each point it can predict. Features of a
+  /// frame without enough labels, or untriangulable, are passed to `none`.
+  void f2f_pass(const State &state, const std::vector<const ov_core::Feature *> &features,
+                const std::vector<const ov_core::Feature *> &need, ton::F2fFvon &net,
+                const std::function<void(const ov_core::Feature &, const Eigen::Vector2d &, int64_t)> &out,
+                const std::function<void(const ov_core::Feature &)> &none);
 
   FvonProviderOptions opt_;
   Eigen::Matrix3d R_BC_;
@@ -82,6 +107,11 @@ private:
   ton::F2fFvon f2f_;
   VelocityProvider tracked_; ///< constant-speed velocities only, for triangulating before predictions exist
   std::unordered_map<size_t, Prediction> predictions_; ///< by feature id, for its first observation
+  std::unordered_map<size_t, FvonCandidates> candidates_;
+  /// Triangulated points of the update's features (F2F's inputs), filled once per prepare().
+  std::unordered_map<size_t, Eigen::Vector3d> p_W_;
+  const UpdaterMSCKF *updater_ = nullptr;
+  std::vector<Eigen::Vector2d> its_seq_; ///< scratch
   FvonStats stats_;
 };
 

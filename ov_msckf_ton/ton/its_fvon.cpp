@@ -47,8 +47,11 @@ TrainReport ItsFvon::train() {
     const int e = s + 1 < starts_.size() ? starts_[s + 1] : static_cast<int>(raw_.size());
     data_.begin_sequence();
     // Reverse time: input V^{j+1}, target V^j, walking back to the track's first velocity.
-    for (int k = e - 1; k > b; --k)
-      data_.push(norm_.normalize(raw_[k]), norm_.normalize(raw_[k - 1]));
+    for (int k = e - 1; k > b; --k) {
+      const Eigen::Vector2d in = norm_.normalize(raw_[k]);
+      data_.push(in, options_.residual ? Eigen::Vector2d(norm_.normalize(raw_[k - 1]) - in)
+                                       : Eigen::Vector2d(norm_.normalize(raw_[k - 1])));
+    }
   }
   last_report_ = train_network(net_, adam_, data_, options_.train);
   trained_ = true;
@@ -64,6 +67,8 @@ Eigen::Vector2d ItsFvon::predict(const Eigen::Vector2d *future, int count) const
     OVTON_TON_CHECK(future[k].allFinite(), "ItsFvon::predict: non-finite velocity");
     y = net_.step(norm_.normalize(future[k]), state);
   }
+  if (options_.residual)
+    y += norm_.normalize(future[0]);
   return norm_.denormalize(y);
 }
 

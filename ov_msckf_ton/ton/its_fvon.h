@@ -19,6 +19,10 @@ struct ItsFvonOptions {
   unsigned seed = 1;
   /// Velocity spread [px/s] below which the window is treated as flat by the normaliser.
   double min_velocity_range = 1.0;
+  /// Learn the change V^k − V^{k+1} instead of V^k (a skip connection around the same LSTM): an untrained or
+  /// mistrained net then predicts ≈ V^{k+1} (the constant-speed rule) instead of an arbitrary velocity. Not the
+  /// paper's output; measured against the truth in docs/results.md (`ovton velocities`).
+  bool residual = true;
 };
 
 class ItsFvon {

@@ -44,9 +44,11 @@ TrainReport Tpn::train() {
   fit_normalizer();
   data_.clear();
   data_.begin_sequence();
-  for (size_t j = 0; j + 1 < buffer_.size(); ++j)
-    data_.push(norm_.normalize(Eigen::Matrix<double, 1, 1>(buffer_[j])),
-               norm_.normalize(Eigen::Matrix<double, 1, 1>(buffer_[j + 1])));
+  for (size_t j = 0; j + 1 < buffer_.size(); ++j) {
+    const Eigen::Matrix<double, 1, 1> in = norm_.normalize(Eigen::Matrix<double, 1, 1>(buffer_[j]));
+    const Eigen::Matrix<double, 1, 1> next = norm_.normalize(Eigen::Matrix<double, 1, 1>(buffer_[j + 1]));
+    data_.push(in, options_.residual ? Eigen::Matrix<double, 1, 1>(next - in) : next);
+  }
   last_report_ = train_network(net_, adam_, data_, options_.train);
   trained_ = true;
   return last_report_;
@@ -61,6 +63,8 @@ double Tpn::predict() const {
   Eigen::Matrix<double, 1, 1> y = Eigen::Matrix<double, 1, 1>::Zero();
   for (double td : buffer_)
     y = net_.step(norm_.normalize(Eigen::Matrix<double, 1, 1>(td)), state);
+  if (options_.residual)
+    y += norm_.normalize(Eigen::Matrix<double, 1, 1>(buffer_.back()));
   return norm_.denormalize(y)[0];
 }
 

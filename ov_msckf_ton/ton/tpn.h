@@ -21,6 +21,10 @@ struct TpnOptions {
   /// Window spread [s] below which t_d is treated as flat. 10 us shifts a 300 px/s feature by 0.003 px, so a flat
   /// window is not worth resolving more finely, and this keeps a network error from being amplified by ~1/spread.
   double min_range_s = 1e-5;
+  /// Learn the step t_d(j+1) − t_d(j) instead of t_d(j+1) (a skip connection around the same LSTM): the net then
+  /// only has to represent the drift rate, and an untrained net predicts "no change" instead of an arbitrary value.
+  /// Not the paper's output; measured in docs/results.md.
+  bool residual = true;
 };
 
 class Tpn {
