@@ -53,6 +53,8 @@ FvonProviderOptions fvon_options(const TonOptions &o) {
   f.min_f2f_labels = o.fvon_min_f2f_labels;
   f.gate_px_s = o.fvon_gate_px_s;
   f.its.train.max_epochs = o.its_epochs;
+  f.its.train.plateau_epochs = f.f2f.train.plateau_epochs = o.plateau_epochs;
+  f.its.train.plateau_rel = f.f2f.train.plateau_rel = o.plateau_rel;
   f.its.residual = o.its_residual;
   f.f2f.train.max_epochs = o.f2f_epochs;
   f.f2f.inverse_depth_input = o.f2f_inverse_depth;
@@ -347,6 +349,7 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
                                              ? static_cast<const VelocityProvider *>(&central_velocities_)
                                              : &tracked_velocities_;
     if (fvon_) {
+      fvon_->set_tracked(velocities);
       const auto t0 = Clock::now();
       fvon_->prepare(s, feats, updater_);
       velocities = fvon_.get();

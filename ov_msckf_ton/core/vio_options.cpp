@@ -126,6 +126,8 @@ std::vector<Field> fields(VioOptions &o) {
       field(N, "its_residual", ton.its_residual),
       field(N, "tpn_residual", ton.tpn_residual),
       field(N, "f2f_inverse_depth", ton.f2f_inverse_depth),
+      field(N, "plateau_epochs", ton.plateau_epochs),
+      field(N, "plateau_rel", ton.plateau_rel),
       field(U, "measurement_fej", up.measurement_fej),
       field(U, "max_clones", up.max_clones),
       field(U, "min_track_length", up.min_track_length),
@@ -199,6 +201,7 @@ void validate_vio_options(const VioOptions &o) {
   require(n.its_epochs >= 0 && n.f2f_epochs >= 0 && n.tpn_epochs >= 0, "ton epochs must be >= 0");
   require(n.tpn_min_labels >= 2, "ton.tpn_min_labels must be >= 2");
   require(n.fvon_gate_px_s >= 0, "ton.fvon_gate_px_s must be >= 0");
+  require(n.plateau_epochs >= 0 && n.plateau_rel >= 0, "ton.plateau_epochs and ton.plateau_rel must be >= 0");
   const auto &u = o.update;
   require(u.max_clones >= 3, "update.max_clones must be >= 3");
   require(u.min_track_length >= 2, "update.min_track_length must be >= 2");

@@ -18,8 +18,8 @@ std::unique_ptr<TdModel> make_td_model(const VioOptions &opt, std::function<doub
     return make_drift_model(o);
   case TdProcess::RandomWalk:
     return make_random_walk_model(o.random_walk, o.adaptive_noise);
-  default:
-    return make_random_walk_model(0.0, o.adaptive_noise && estimates_td(o.mode));
+  default: // a constant stays a constant (OpenVINS' model): adaptive noise would make it a random walk
+    return make_random_walk_model(0.0, false);
   }
 }
 

@@ -14,6 +14,8 @@ namespace {
 TpnDriverOptions driver_options(const TimeOffsetOptions &o, const TonOptions &ton) {
   TpnDriverOptions t;
   t.tpn.train.max_epochs = ton.tpn_epochs;
+  t.tpn.train.plateau_epochs = ton.plateau_epochs;
+  t.tpn.train.plateau_rel = ton.plateau_rel;
   t.tpn.residual = ton.tpn_residual;
   t.min_labels = ton.tpn_min_labels;
   t.td_rate_max = o.rate_max;

@@ -223,7 +223,7 @@ bool FvonVelocityProvider::velocity(const ov_core::Feature &feature, size_t obs_
                                     int &source) const {
   const ov_core::FeatureObservation &o = feature.obs[obs_index];
   if (o.vel_valid)
-    return VelocityProvider::velocity(feature, obs_index, vel_xy, source);
+    return tracked_for_update_->velocity(feature, obs_index, vel_xy, source);
   const auto it = predictions_.find(feature.id);
   if (it == predictions_.end() || it->second.t_cam_ns != o.t_cam_ns) {
     source = kVelocityNone;

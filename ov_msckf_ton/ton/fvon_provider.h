@@ -69,7 +69,11 @@ public:
   /// estimates in `state`. Predictions of the previous call are forgotten.
   void prepare(const State &state, const std::vector<const ov_core::Feature *> &features, const UpdaterMSCKF &updater);
 
+  /// Tracked observations get the velocity of `tracked` (eq. 2's backward difference by default, or the central
+  /// difference of time_offset.sir_velocity); first observations FVON's prediction, when it made one.
   bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy, int &source) const override;
+  /// The provider for tracked observations (must outlive this one); default: eq. 2.
+  void set_tracked(const VelocityProvider *tracked) { tracked_for_update_ = tracked ? tracked : &tracked_; }
 
   const FvonStats &stats() const { return stats_; }
   void set_evaluate_both(bool on) { opt_.evaluate_both = on; }
@@ -106,6 +110,7 @@ private:
   ton::ItsFvon its_;
   ton::F2fFvon f2f_;
   VelocityProvider tracked_; ///< constant-speed velocities only, for triangulating before predictions exist
+  const VelocityProvider *tracked_for_update_ = &tracked_;
   std::unordered_map<size_t, Prediction> predictions_; ///< by feature id, for its first observation
   std::unordered_map<size_t, FvonCandidates> candidates_;
   /// Triangulated points of the update's features (F2F's inputs), filled once per prepare().
