@@ -101,7 +101,9 @@ def svg_bars(path, title, groups, series, values, log=True):
     open(path, "w").write("\n".join(out))
 
 
-def commit():
+def commit(cfg):
+    if cfg.get("commit"):
+        return cfg["commit"]
     try:
         return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
     except OSError:
@@ -117,7 +119,7 @@ def make_tables(runs, out_dir, cfg):
     wall = sum(r.get("wall_s", 0) for r in recs.values())
     stamps = [os.path.getmtime(p) for p in glob.glob(os.path.join(runs, "*", "*.json"))]
     span_h = (max(stamps) - min(stamps)) / 3600 if stamps else 0
-    src = (f"Made by `snakemake -s workflow/Snakefile` (commit {commit()}): rendered EuRoC-format folders, "
+    src = (f"Made by `snakemake -s workflow/Snakefile` (commit {commit(cfg)}): rendered EuRoC-format folders, "
            f"{cfg['duration_s']} s from {cfg['start_s']} s into each ground truth, simulate args "
            f"`{cfg['simulate_args'] or '(defaults)'}`, estimator config `{cfg['estimator_config']}`. "
            f"{len(recs)} runs, {wall / 3600:.2f} h of run wall time; records written over {span_h:.2f} h.\n\n")
