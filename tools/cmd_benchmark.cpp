@@ -38,6 +38,9 @@ struct ModeBench {
   // Mean cost per processed image [ms]. `other` is what the stage clocks do not see: IMU hand-over, replay,
   // trajectory output and the progress bar; total = wall / images, so the columns add up.
   double load = 0, track = 0, prop = 0, update = 0, nets = 0, other = 0, total = 0;
+  /// Process CPU time (user + system) per image [ms]: what a loaded, shared machine distorts least; with
+  /// --prefetch it includes the decoding thread.
+  double cpu = 0;
   std::array<double, 4> rss_quarter{}; ///< RSS [MB] at 25/50/75/100 % of the images
   double rss_start = 0, peak = 0;
   bool peak_own = false; ///< peak belongs to this mode alone (kernel mark was reset before it)
@@ -124,7 +127,9 @@ ModeBench bench_mode(const ov_core::Dataset &data, RunRequest req, const std::st
       }
   };
 
+  const double cpu0 = process_cpu_s();
   const RunResult r = run_dataset(data, req);
+  const double cpu_s = process_cpu_s() - cpu0;
   // A replay can end short of n_run (interrupted, images beyond the IMU log): the 100 % column is then its last frame.
   if (!taken[3])
     b.rss_quarter[3] = last_rss;
@@ -152,6 +157,7 @@ ModeBench bench_mode(const ov_core::Dataset &data, RunRequest req, const std::st
     b.update = t.update / n;
     b.nets = t.networks / n;
     b.total = r.wall_s * 1e3 / n;
+    b.cpu = cpu_s * 1e3 / n;
     b.other = b.total - (b.load + b.track + b.prop + b.update + b.nets);
   }
   return b;
@@ -161,15 +167,19 @@ void print_tables(const std::vector<ModeBench> &res, std::ostream &os) {
   char line[256];
   os << "\nper-frame cost [ms], mean over the images processed (stage clocks of VioManager; total = wall / images;\n"
         "x realtm = data span / wall; feat/frame = features used by MSCKF updates per image)\n";
-  std::snprintf(line, sizeof(line), "%-7s %6s %7s %7s %7s %7s %7s %7s %7s %9s %8s %10s\n", "mode", "images", "load",
-                "track", "prop", "update", "nets", "other", "total", "x realtm", "x first", "feat/frame");
+  std::snprintf(line, sizeof(line), "%-7s %6s %7s %7s %7s %7s %7s %7s %7s %9s %8s %7s %9s %10s\n", "mode", "images",
+                "load", "track", "prop", "update", "nets", "other", "total", "x realtm", "x first", "cpu", "cpu/first",
+                "feat/frame");
   os << line;
   for (const auto &b : res) {
-    std::snprintf(line, sizeof(line), "%-7s %6ld %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %9.1f %8.2f %10.1f\n",
+    std::snprintf(line, sizeof(line),
+                  "%-7s %6ld %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %9.1f %8.2f %7.2f %9.2f %10.1f\n",
                   b.mode.c_str(), b.images, b.load, b.track, b.prop, b.update, b.nets, b.other, b.total, b.realtime(),
-                  res.front().total > 0 ? b.total / res.front().total : 0.0, b.features_per_frame());
+                  res.front().total > 0 ? b.total / res.front().total : 0.0, b.cpu,
+                  res.front().cpu > 0 ? b.cpu / res.front().cpu : 0.0, b.features_per_frame());
     os << line;
   }
+  os << "cpu = process CPU time per image [ms] (user + system); cpu/first: its ratio to the first mode's\n";
   os << "\nresident memory [MB] at 25/50/75/100 % of the images; growth = 100 % - 25 %\n";
   std::snprintf(line, sizeof(line), "%-7s %8s %8s %8s %8s %8s %8s %8s\n", "mode", "start", "25%", "50%", "75%", "100%",
                 "peak", "growth");
@@ -217,10 +227,10 @@ void write_json(const std::string &file, const std::vector<ModeBench> &res, cons
         << ",\n     \"ms_per_frame\": {\"image_load\": " << num(b.load, 4) << ", \"tracking\": " << num(b.track, 4)
         << ", \"propagation\": " << num(b.prop, 4) << ", \"update\": " << num(b.update, 4)
         << ", \"networks\": " << num(b.nets, 4) << ", \"other\": " << num(b.other, 4)
-        << ", \"total\": " << num(b.total, 4) << "},\n     \"rss_mb\": {\"start\": " << num(b.rss_start, 2)
-        << ", \"p25\": " << num(b.rss_quarter[0], 2) << ", \"p50\": " << num(b.rss_quarter[1], 2)
-        << ", \"p75\": " << num(b.rss_quarter[2], 2) << ", \"p100\": " << num(b.rss_quarter[3], 2)
-        << ", \"peak\": " << num(b.peak, 2)
+        << ", \"total\": " << num(b.total, 4) << ", \"cpu\": " << num(b.cpu, 4)
+        << "},\n     \"rss_mb\": {\"start\": " << num(b.rss_start, 2) << ", \"p25\": " << num(b.rss_quarter[0], 2)
+        << ", \"p50\": " << num(b.rss_quarter[1], 2) << ", \"p75\": " << num(b.rss_quarter[2], 2)
+        << ", \"p100\": " << num(b.rss_quarter[3], 2) << ", \"peak\": " << num(b.peak, 2)
         << ", \"peak_scope\": " << ov_core::json_string(b.peak_own ? "mode" : "process")
         << "},\n     \"interrupted\": " << (b.interrupted ? "true" : "false") << "}";
   }

@@ -75,6 +75,9 @@ int cmd_run(const Args &args) {
             << c.images_before_init << " before initialisation, " << r.replay.images_skipped << " beyond the IMU log), "
             << c.updates << " updates, " << c.features_used << " features used, " << c.features_gated << " gated, "
             << c.zupts << " zero-velocity updates, " << c.td_rows << " observations constraining t_d\n";
+  if (c.slam_initialised > 0)
+    std::cout << "SLAM: " << c.slam_initialised << " landmarks initialised, " << c.slam_updates
+              << " landmark observations used, " << c.slam_gated << " gated\n";
   std::cout << "t_d rows by velocity source: tracked " << c.td_rows_by_source[ov_msckf_ton::kVelocityTracked]
             << ", ITS-FVON " << c.td_rows_by_source[ov_msckf_ton::kVelocityItsFvon] << ", F2F-FVON "
             << c.td_rows_by_source[ov_msckf_ton::kVelocityF2fFvon] << " (" << c.td_features << " features); networks "

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
 namespace ov_msckf_ton {
 
@@ -39,6 +40,13 @@ UpdaterMSCKFOptions updater_options(const VioOptions &o) {
   return u;
 }
 
+UpdaterSlamOptions slam_options(const VioOptions &o) {
+  UpdaterSlamOptions u;
+  u.sigma_px = o.slam.sigma_px > 0 ? o.slam.sigma_px : o.update.sigma_px;
+  u.chi2_multiplier = o.slam.chi2_multiplier;
+  return u;
+}
+
 TdObservation td_observation(TdMode m) {
   if (uses_state_relevant(m))
     return TdObservation::StateRelevant;
@@ -65,7 +73,8 @@ FvonProviderOptions fvon_options(const TonOptions &o) {
 
 VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, const ov_core::ImuCalib &imu)
     : opt_(opt), camera_(cam), tracker_(camera_, opt.track), propagator_(noise_from(imu, opt), opt.imu.gravity_mag),
-      updater_(cam, updater_options(opt)), state_(std::make_unique<State>(estimates_td(opt.td.mode))) {
+      updater_(cam, updater_options(opt)), slam_(cam, slam_options(opt), updater_),
+      state_(std::make_unique<State>(estimates_td(opt.td.mode))) {
   validate_vio_options(opt_);
   state_->td = opt.td.init_s;
   if (uses_fvon(opt.td.mode))
@@ -328,66 +337,122 @@ bool VioManager::is_still(int64_t t_cam_ns) const {
   return disparity[disparity.size() / 2] < opt_.zupt.max_disparity_px;
 }
 
+const VelocityProvider &VioManager::prepare_velocities(const std::vector<const ov_core::Feature *> &feats,
+                                                       std::optional<NextForFirstVelocityProvider> &with_first) {
+  const VelocityProvider *velocities = opt_.td.sir_velocity == SirVelocity::Central
+                                           ? static_cast<const VelocityProvider *>(&central_velocities_)
+                                           : &tracked_velocities_;
+  if (fvon_) {
+    fvon_->set_tracked(velocities);
+    const auto t0 = Clock::now();
+    fvon_->prepare(*state_, feats, updater_);
+    velocities = fvon_.get();
+    times_.networks += ms_since(t0);
+  }
+  // Last, so that with FVON it covers the first observations the networks could not predict (too few labels yet).
+  if (opt_.td.first_velocity != FirstVelocity::Next)
+    return *velocities;
+  with_first.emplace(*velocities);
+  return *with_first;
+}
+
 void VioManager::update_and_marginalize(int64_t t_cam_ns) {
   State &s = *state_;
   // Features the tracker lost in this frame have complete tracks; when the window is full, features seen by the
-  // oldest clone must be used now or their information about it is lost.
-  std::vector<const ov_core::Feature *> feats;
+  // oldest clone must be used now or their information about it is lost — unless they are still tracked and there
+  // is room for SLAM features: then they become landmarks in the state instead (delayed initialisation below).
+  std::vector<const ov_core::Feature *> feats, slam_init;
   db_.lost_features(t_cam_ns, feats);
   const bool window_full = static_cast<int>(s.clones.size()) > opt_.update.max_clones;
   int64_t oldest = s.clones.begin()->first;
   if (window_full) {
     std::vector<const ov_core::Feature *> old;
     db_.features_observed_at(oldest, old);
-    feats.insert(feats.end(), old.begin(), old.end());
+    int room = std::min(opt_.slam.max_features - static_cast<int>(s.landmarks.size()), opt_.slam.max_init_per_frame);
+    for (const auto *f : old) {
+      if (room > 0 && f->newest().t_cam_ns == t_cam_ns && !s.landmarks.count(f->id)) {
+        slam_init.push_back(f);
+        --room;
+      } else {
+        feats.push_back(f);
+      }
+    }
     std::sort(feats.begin(), feats.end(), [](const auto *a, const auto *b) { return a->id < b->id; });
     feats.erase(std::unique(feats.begin(), feats.end()), feats.end());
   }
-  if (!feats.empty()) {
-    std::vector<ResidualRecord> records;
-    const VelocityProvider *velocities = opt_.td.sir_velocity == SirVelocity::Central
-                                             ? static_cast<const VelocityProvider *>(&central_velocities_)
-                                             : &tracked_velocities_;
-    if (fvon_) {
-      fvon_->set_tracked(velocities);
-      const auto t0 = Clock::now();
-      fvon_->prepare(s, feats, updater_);
-      velocities = fvon_.get();
-      times_.networks += ms_since(t0);
-    }
-    // Last, so that with FVON it covers the first observations the networks could not predict (too few labels yet).
-    const NextForFirstVelocityProvider with_first(*velocities);
-    if (opt_.td.first_velocity == FirstVelocity::Next)
-      velocities = &with_first;
-    if (velocity_log_)
-      log_velocities(feats, *velocities);
-    UpdateStats st;
-    td_tracked_update(
-        [&] { st = updater_.update(s, feats, td_observation(opt_.td.mode), *velocities, log_ ? &records : nullptr); });
-    ++counters_.updates;
-    counters_.features_used += st.features_used;
-    counters_.features_gated += st.gated_chi2;
-    counters_.features_rejected += st.rejected_triangulation;
-    for (int k = 0; k < kNumVelocitySources; ++k) {
-      counters_.td_rows += st.td_obs_used[k];
-      counters_.td_rows_by_source[k] += st.td_obs_used[k];
-    }
-    counters_.td_features += st.td_features_used;
-    if (log_)
-      log_->write(records);
-    // A feature used in an update must not be used again: its information is in the state now.
-    std::vector<size_t> ids;
-    ids.reserve(feats.size());
-    for (const auto *f : feats)
-      ids.push_back(f->id);
-    for (size_t id : ids)
-      db_.remove(id);
+  // A landmark's observations are its own: the MSCKF never sees them.
+  feats.erase(std::remove_if(feats.begin(), feats.end(), [&](const auto *f) { return s.landmarks.count(f->id) > 0; }),
+              feats.end());
+  std::optional<NextForFirstVelocityProvider> with_first;
+  const bool any_slam = !s.landmarks.empty() || !slam_init.empty();
+  if (!feats.empty() || any_slam) {
+    const VelocityProvider &velocities = prepare_velocities(feats, with_first);
+    if (!feats.empty())
+      msckf_update(feats, velocities);
+    if (any_slam)
+      slam_update(t_cam_ns, slam_init, velocities);
   }
   if (window_full) {
     state_helper::marginalize_clone(s, oldest);
     clone_rates_.erase(oldest);
     db_.remove_observations_older_than(s.clones.begin()->first);
   }
+}
+
+void VioManager::msckf_update(const std::vector<const ov_core::Feature *> &feats, const VelocityProvider &velocities) {
+  State &s = *state_;
+  std::vector<ResidualRecord> records;
+  if (velocity_log_)
+    log_velocities(feats, velocities);
+  UpdateStats st;
+  td_tracked_update(
+      [&] { st = updater_.update(s, feats, td_observation(opt_.td.mode), velocities, log_ ? &records : nullptr); });
+  ++counters_.updates;
+  counters_.features_used += st.features_used;
+  counters_.features_gated += st.gated_chi2;
+  counters_.features_rejected += st.rejected_triangulation;
+  for (int k = 0; k < kNumVelocitySources; ++k) {
+    counters_.td_rows += st.td_obs_used[k];
+    counters_.td_rows_by_source[k] += st.td_obs_used[k];
+  }
+  counters_.td_features += st.td_features_used;
+  if (log_)
+    log_->write(records);
+  // A feature used in an update must not be used again: its information is in the state now.
+  std::vector<size_t> ids;
+  ids.reserve(feats.size());
+  for (const auto *f : feats)
+    ids.push_back(f->id);
+  for (size_t id : ids)
+    db_.remove(id);
+}
+
+void VioManager::slam_update(int64_t t_cam_ns, const std::vector<const ov_core::Feature *> &init,
+                             const VelocityProvider &velocities) {
+  State &s = *state_;
+  const TdObservation td_obs = td_observation(opt_.td.mode);
+  SlamStats st;
+  // OpenVINS' order: existing landmarks with this image's observation, then new ones from the window.
+  std::vector<size_t> lost;
+  td_tracked_update([&] { slam_.update(s, db_, t_cam_ns, td_obs, velocities, st, lost); });
+  if (!init.empty())
+    td_tracked_update([&] { slam_.initialize(s, init, t_cam_ns, td_obs, velocities, st); });
+  // Landmarks the tracker lost in this image (or that left the camera's depth range) leave the state.
+  for (const auto &[id, l] : s.landmarks) {
+    const ov_core::Feature *f = db_.get(id);
+    if (!f || f->newest().t_cam_ns != t_cam_ns)
+      lost.push_back(id);
+  }
+  std::sort(lost.begin(), lost.end());
+  lost.erase(std::unique(lost.begin(), lost.end()), lost.end());
+  for (size_t id : lost) {
+    state_helper::marginalize_landmark(s, id);
+    db_.remove(id);
+  }
+  st.marginalised = static_cast<int>(lost.size());
+  counters_.slam_initialised += st.initialised;
+  counters_.slam_updates += st.updated;
+  counters_.slam_gated += st.gated;
 }
 
 ov_core::StateSample VioManager::snapshot() const {

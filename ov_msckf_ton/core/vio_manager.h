@@ -15,6 +15,7 @@
 #include "ov_msckf_ton/ton/tpn_driver.h"
 #include "ov_msckf_ton/update/residual_log.h"
 #include "ov_msckf_ton/update/updater_msckf.h"
+#include "ov_msckf_ton/update/updater_slam.h"
 
 #include <array>
 #include <chrono>
@@ -22,6 +23,7 @@
 #include <map>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 namespace ov_msckf_ton {
@@ -40,8 +42,9 @@ struct VioCounters {
   /// from ITS/F2F: a new feature's first observation has no tracked velocity, and without one none of its rows
   /// may carry t_d (updater_msckf.cpp).
   std::array<long, kNumVelocitySources> td_rows_by_source{};
-  long td_features = 0; ///< used features whose rows carried t_d
-  long zupts = 0;       ///< frames handled by a zero-velocity update
+  long td_features = 0;                                        ///< used features whose rows carried t_d
+  long zupts = 0;                                              ///< frames handled by a zero-velocity update
+  long slam_initialised = 0, slam_updates = 0, slam_gated = 0; ///< SLAM landmarks initialised, observations used
 };
 
 class VioManager : public ov_core::ReplayConsumer {
@@ -91,6 +94,14 @@ private:
   void process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time_point t_start);
   bool try_initialize(int64_t t_cam_ns);
   void update_and_marginalize(int64_t t_cam_ns);
+  /// The velocities every update of this image uses: the configured rule for tracked observations, FVON's
+  /// predictions (fvon/ton) and the next observation's for first ones (first_velocity next).
+  const VelocityProvider &prepare_velocities(const std::vector<const ov_core::Feature *> &feats,
+                                             std::optional<NextForFirstVelocityProvider> &with_first);
+  void msckf_update(const std::vector<const ov_core::Feature *> &feats, const VelocityProvider &velocities);
+  /// SLAM landmarks: update with this image, initialise `init` from the window, marginalise the lost ones.
+  void slam_update(int64_t t_cam_ns, const std::vector<const ov_core::Feature *> &init,
+                   const VelocityProvider &velocities);
   /// Median feature motion since the previous frame is below the ZUPT threshold.
   bool is_still(int64_t t_cam_ns) const;
   /// Propagates the IMU state and t_d (through its model) to the image's IMU-clock time.
@@ -107,6 +118,7 @@ private:
   ov_core::FeatureDatabase db_;
   Propagator propagator_;
   UpdaterMSCKF updater_;
+  UpdaterSLAM slam_;
   std::unique_ptr<State> state_;
   std::deque<ov_core::ImuData> init_imu_;
 

@@ -101,7 +101,8 @@ std::vector<Field> fields(VioOptions &o) {
   auto &up = o.update;
   auto &tr = o.track;
   auto &in = o.init;
-  const char *T = "time_offset", *N = "ton", *U = "update", *Z = "zupt", *K = "tracker", *I = "imu", *S = "init";
+  const char *T = "time_offset", *N = "ton", *U = "update", *L = "slam", *Z = "zupt", *K = "tracker", *I = "imu",
+             *S = "init";
   return {
       enum_field<TdMode>(T, "mode", td.mode, parse_td_mode, [](TdMode m) { return to_string(m); }),
       enum_field<TdProcess>(T, "process", td.process, parse_td_process, [](TdProcess p) { return to_string(p); }),
@@ -135,6 +136,10 @@ std::vector<Field> fields(VioOptions &o) {
       field(U, "sigma_px", up.sigma_px),
       field(U, "chi2_multiplier", up.chi2_multiplier),
       field(U, "max_features", up.max_features),
+      field(L, "max_features", o.slam.max_features),
+      field(L, "max_init_per_frame", o.slam.max_init_per_frame),
+      field(L, "chi2_multiplier", o.slam.chi2_multiplier),
+      field(L, "sigma_px", o.slam.sigma_px),
       field(Z, "enabled", o.zupt.enabled),
       field(Z, "max_disparity_px", o.zupt.max_disparity_px),
       field(Z, "sigma_v", o.zupt.sigma_v),
@@ -209,6 +214,8 @@ void validate_vio_options(const VioOptions &o) {
   require(u.sigma_px > 0, "update.sigma_px must be > 0");
   require(u.chi2_multiplier > 0, "update.chi2_multiplier must be > 0");
   require(u.max_features >= 0, "update.max_features must be >= 0 (0 = no limit)");
+  require(o.slam.max_features >= 0 && o.slam.max_init_per_frame >= 0 && o.slam.chi2_multiplier > 0,
+          "slam.max_features and slam.max_init_per_frame >= 0, slam.chi2_multiplier > 0");
   require(o.zupt.max_disparity_px >= 0 && o.zupt.sigma_v > 0, "zupt.max_disparity_px >= 0 and zupt.sigma_v > 0");
   require(o.imu.noise_multiplier > 0, "imu.noise_multiplier must be > 0");
   require(o.imu.gravity_mag > 0, "imu.gravity_mag must be > 0");
@@ -251,7 +258,7 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
     if (!known)
       throw ov_core::DataError(file, line_of(sec.first),
                                "unknown section '" + section +
-                                   "' (expected time_offset, ton, update, zupt, tracker, imu or init)");
+                                   "' (expected time_offset, ton, update, slam, zupt, tracker, imu or init)");
     if (!sec.second.IsMap())
       throw ov_core::DataError(file, line_of(sec.first), "section '" + section + "' must be a mapping of keys");
     std::set<std::string> keys_seen;

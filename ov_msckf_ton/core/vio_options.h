@@ -84,6 +84,14 @@ struct UpdateOptions {
   int max_features = 80;         ///< per update
 };
 
+/// SLAM features (update/updater_slam.h): features tracked through the whole window become landmarks in the state.
+struct SlamOptions {
+  int max_features = 0;        ///< landmarks in the state at most (0: MSCKF only; OpenVINS' default is 50)
+  int max_init_per_frame = 10; ///< delayed initialisations per image at most
+  double chi2_multiplier = 1.0;
+  double sigma_px = 0.0; ///< pixel noise of a landmark observation; 0 = update.sigma_px
+};
+
 /// Zero-velocity update: when the features do not move on the image the platform is taken as still, the state
 /// gets a v = 0 measurement instead of a clone (no parallax would make every MSCKF feature untriangulable).
 struct ZuptOptions {
@@ -111,6 +119,7 @@ struct VioOptions {
   TimeOffsetOptions td;
   TonOptions ton;
   UpdateOptions update;
+  SlamOptions slam;
   ZuptOptions zupt;
   ov_core::TrackKLTOptions track; ///< YAML section `tracker`
   ImuOptions imu;

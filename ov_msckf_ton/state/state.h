@@ -59,6 +59,19 @@ struct CloneState {
   const Eigen::Vector3d &p_lin() const { return has_fej ? p_fej : p; }
 };
 
+/// A SLAM feature: a landmark kept in the state across the window (world position, additive error δp_f), updated by
+/// every new observation and marginalised when the tracker loses it. Its measurement Jacobians use its first
+/// estimate (FEJ), like the clones'.
+struct LandmarkState {
+  static constexpr int kSize = 3;
+  size_t id = 0; ///< the tracker's feature id
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();
+  Eigen::Vector3d p_fej = Eigen::Vector3d::Zero();
+  int index = -1;
+  int64_t t_init_ns = 0; ///< camera stamp of the image it was initialised at
+  int updates = 0;       ///< observations that updated it
+};
+
 class State {
 public:
   /// estimate_td: t_d gets a covariance entry (modes sr, sir, fvon, tpn, ton); otherwise it is a fixed parameter.
@@ -71,6 +84,7 @@ public:
   double td_rate = 0.0; ///< ṫ_d [s/s]; a state variable only when td_rate_index >= 0 (drift-state model)
   int td_rate_index = -1;
   std::map<int64_t, CloneState> clones;
+  std::map<size_t, LandmarkState> landmarks; ///< by feature id
   Eigen::MatrixXd P;
 
   int dim() const { return static_cast<int>(P.rows()); }
@@ -81,6 +95,10 @@ public:
   /// Appends a variable of `size` error dimensions with prior covariance `prior` (uncorrelated with the rest);
   /// returns its index. Clones keep their indices (they are appended by state_helper::clone the same way).
   int add_variable(const Eigen::MatrixXd &prior);
+
+  /// Removes the error-state block [idx, idx + size) from P and moves every variable behind it forward. The
+  /// variable that owned the block must be dropped by the caller.
+  void remove_block(int idx, int size);
 
   /// Applies an error-state correction dx (size dim()) with the convention above.
   void boxplus(const Eigen::VectorXd &dx);

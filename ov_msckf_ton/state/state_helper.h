@@ -16,6 +16,8 @@ void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w
 
 /// Removes a clone and its rows/columns from the covariance.
 void marginalize_clone(State &s, int64_t t_cam_ns);
+/// Removes a SLAM landmark and its rows/columns from the covariance.
+void marginalize_landmark(State &s, size_t id);
 
 /// EKF update with a dense Jacobian H (m × dim), residual r = z − h(x̂), and isotropic noise sigma².
 /// Keeps P symmetric; returns the Mahalanobis distance rᵀS⁻¹r.
