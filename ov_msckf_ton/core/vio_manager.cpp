@@ -77,6 +77,12 @@ VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, c
       state_(std::make_unique<State>(estimates_td(opt.td.mode))) {
   validate_vio_options(opt_);
   state_->td = opt.td.init_s;
+  // The calibration as the filter holds it; a variable (and a column in the updates) only where it is estimated.
+  CalibState &c = state_->calib;
+  c.R_BC = cam.T_BC.topLeftCorner<3, 3>();
+  c.p_BC = cam.T_BC.topRightCorner<3, 1>();
+  c.intrinsics << cam.intrinsics, cam.dist_coeffs;
+  c.readout_s = opt.calibration.readout_s;
   if (uses_fvon(opt.td.mode))
     fvon_ = std::make_unique<FvonVelocityProvider>(cam, fvon_options(opt.ton));
   td_model_ = make_td_model(opt_, [this](int64_t t_cam_ns) {
@@ -221,9 +227,33 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
     s.P(s.td_index, s.td_index) = sq(opt_.td.sigma_init_s);
     td_model_->initialize(s);
   }
+  add_calibration_variables();
   initialized_ = true;
   init_imu_.clear();
   return true;
+}
+
+void VioManager::add_calibration_variables() {
+  State &s = *state_;
+  const CalibrationOptions &o = opt_.calibration;
+  const auto add = [&](const Eigen::VectorXd &sigmas) {
+    return s.add_variable(Eigen::MatrixXd(sigmas.array().square().matrix().asDiagonal()));
+  };
+  if (o.extrinsics) {
+    Eigen::VectorXd sig(6);
+    sig << Eigen::Vector3d::Constant(o.sigma_ext_rot), Eigen::Vector3d::Constant(o.sigma_ext_pos);
+    s.calib.extrinsics_index = add(sig);
+  }
+  if (o.intrinsics) {
+    Eigen::VectorXd sig(8);
+    sig << o.sigma_focal_px, o.sigma_focal_px, o.sigma_center_px, o.sigma_center_px,
+        Eigen::Vector4d::Constant(o.sigma_distortion);
+    s.calib.intrinsics_index = add(sig);
+  }
+  if (o.readout)
+    s.calib.readout_index = add(Eigen::VectorXd::Constant(1, o.sigma_readout_s));
+  if (o.imu_intrinsics)
+    s.calib.imu_intrinsics_index = add(Eigen::VectorXd::Constant(12, o.sigma_imu_intrinsics));
 }
 
 void VioManager::process_image(int64_t t_cam_ns, const cv::Mat &gray) {
@@ -275,8 +305,10 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
   // The clone's t_d Jacobian needs the body rate AT the image time (interpolated reading), not the mean over the
   // last IMU interval, and not a stale value: the first clone after initialisation has no interval behind it.
   ov_core::ImuData at_image;
-  const Eigen::Vector3d w_B =
+  Eigen::Vector3d w_B =
       propagator_.reading_at(s.t_imu_ns, at_image) ? Eigen::Vector3d(at_image.wm - s.imu.bg) : propagator_.last_w_B();
+  if (s.calib.imu_intrinsics_index >= 0 && propagator_.reading_at(s.t_imu_ns, at_image))
+    w_B = s.calib.D_w * w_B; // the gyro's scale and misalignment, as the propagation applies them
   state_helper::clone(s, t_cam_ns, uses_state_relevant(opt_.td.mode), w_B, s.imu.v);
   clone_rates_[t_cam_ns] = w_B;
   s.clones.at(t_cam_ns).has_fej = opt_.update.measurement_fej;

@@ -93,6 +93,8 @@ public:
 private:
   void process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time_point t_start);
   bool try_initialize(int64_t t_cam_ns);
+  /// The calibration variables the options ask for, with their priors (at initialisation, before any clone).
+  void add_calibration_variables();
   void update_and_marginalize(int64_t t_cam_ns);
   /// The velocities every update of this image uses: the configured rule for tracked observations, FVON's
   /// predictions (fvon/ton) and the next observation's for first ones (first_velocity next).

@@ -101,8 +101,9 @@ std::vector<Field> fields(VioOptions &o) {
   auto &up = o.update;
   auto &tr = o.track;
   auto &in = o.init;
-  const char *T = "time_offset", *N = "ton", *U = "update", *L = "slam", *Z = "zupt", *K = "tracker", *I = "imu",
-             *S = "init";
+  const char *T = "time_offset", *N = "ton", *U = "update", *L = "slam", *C = "calibration", *Z = "zupt",
+             *K = "tracker", *I = "imu", *S = "init";
+  auto &cal = o.calibration;
   return {
       enum_field<TdMode>(T, "mode", td.mode, parse_td_mode, [](TdMode m) { return to_string(m); }),
       enum_field<TdProcess>(T, "process", td.process, parse_td_process, [](TdProcess p) { return to_string(p); }),
@@ -140,6 +141,18 @@ std::vector<Field> fields(VioOptions &o) {
       field(L, "max_init_per_frame", o.slam.max_init_per_frame),
       field(L, "chi2_multiplier", o.slam.chi2_multiplier),
       field(L, "sigma_px", o.slam.sigma_px),
+      field(C, "extrinsics", cal.extrinsics),
+      field(C, "sigma_ext_rot", cal.sigma_ext_rot),
+      field(C, "sigma_ext_pos", cal.sigma_ext_pos),
+      field(C, "intrinsics", cal.intrinsics),
+      field(C, "sigma_focal_px", cal.sigma_focal_px),
+      field(C, "sigma_center_px", cal.sigma_center_px),
+      field(C, "sigma_distortion", cal.sigma_distortion),
+      field(C, "readout", cal.readout),
+      field(C, "readout_s", cal.readout_s),
+      field(C, "sigma_readout_s", cal.sigma_readout_s),
+      field(C, "imu_intrinsics", cal.imu_intrinsics),
+      field(C, "sigma_imu_intrinsics", cal.sigma_imu_intrinsics),
       field(Z, "enabled", o.zupt.enabled),
       field(Z, "max_disparity_px", o.zupt.max_disparity_px),
       field(Z, "sigma_v", o.zupt.sigma_v),
@@ -216,6 +229,11 @@ void validate_vio_options(const VioOptions &o) {
   require(u.max_features >= 0, "update.max_features must be >= 0 (0 = no limit)");
   require(o.slam.max_features >= 0 && o.slam.max_init_per_frame >= 0 && o.slam.chi2_multiplier > 0,
           "slam.max_features and slam.max_init_per_frame >= 0, slam.chi2_multiplier > 0");
+  const auto &c = o.calibration;
+  require(c.sigma_ext_rot > 0 && c.sigma_ext_pos > 0 && c.sigma_focal_px > 0 && c.sigma_center_px > 0 &&
+              c.sigma_distortion > 0 && c.sigma_readout_s > 0 && c.sigma_imu_intrinsics > 0,
+          "calibration sigmas must be > 0");
+  require(std::isfinite(c.readout_s) && std::abs(c.readout_s) < 0.1, "calibration.readout_s must be in (-0.1, 0.1) s");
   require(o.zupt.max_disparity_px >= 0 && o.zupt.sigma_v > 0, "zupt.max_disparity_px >= 0 and zupt.sigma_v > 0");
   require(o.imu.noise_multiplier > 0, "imu.noise_multiplier must be > 0");
   require(o.imu.gravity_mag > 0, "imu.gravity_mag must be > 0");
@@ -256,9 +274,10 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
     for (const Field &f : table)
       known = known || section == f.section;
     if (!known)
-      throw ov_core::DataError(file, line_of(sec.first),
-                               "unknown section '" + section +
-                                   "' (expected time_offset, ton, update, slam, zupt, tracker, imu or init)");
+      throw ov_core::DataError(
+          file, line_of(sec.first),
+          "unknown section '" + section +
+              "' (expected time_offset, ton, update, slam, calibration, zupt, tracker, imu or init)");
     if (!sec.second.IsMap())
       throw ov_core::DataError(file, line_of(sec.first), "section '" + section + "' must be a mapping of keys");
     std::set<std::string> keys_seen;

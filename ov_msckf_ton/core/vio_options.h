@@ -92,6 +92,24 @@ struct SlamOptions {
   double sigma_px = 0.0; ///< pixel noise of a landmark observation; 0 = update.sigma_px
 };
 
+/// Online calibration (OpenVINS-style): each estimated quantity becomes a state variable with the prior sigma given
+/// here, starting from the dataset's calibration. Off by default: each costs observability time and, where the
+/// calibration is right, a little accuracy (measured in docs/results.md).
+struct CalibrationOptions {
+  bool extrinsics = false;      ///< camera–IMU rotation and translation
+  double sigma_ext_rot = 0.01;  ///< [rad]
+  double sigma_ext_pos = 0.01;  ///< [m]
+  bool intrinsics = false;      ///< focal lengths, principal point, distortion
+  double sigma_focal_px = 2.0;  ///< fu, fv [px]
+  double sigma_center_px = 2.0; ///< cu, cv [px]
+  double sigma_distortion = 0.005;
+  bool readout = false;   ///< rolling-shutter readout time
+  double readout_s = 0.0; ///< known (or initial) readout [s]: row v is seen at t + t_d + (v/H − ½)·t_r
+  double sigma_readout_s = 0.01;
+  bool imu_intrinsics = false; ///< gyro and accelerometer scale and misalignment (lower-triangular D_w, D_a)
+  double sigma_imu_intrinsics = 0.01;
+};
+
 /// Zero-velocity update: when the features do not move on the image the platform is taken as still, the state
 /// gets a v = 0 measurement instead of a clone (no parallax would make every MSCKF feature untriangulable).
 struct ZuptOptions {
@@ -120,6 +138,7 @@ struct VioOptions {
   TonOptions ton;
   UpdateOptions update;
   SlamOptions slam;
+  CalibrationOptions calibration;
   ZuptOptions zupt;
   ov_core::TrackKLTOptions track; ///< YAML section `tracker`
   ImuOptions imu;

@@ -35,6 +35,10 @@ void State::remove_block(int idx, int size) {
   };
   shift(td_index);
   shift(td_rate_index);
+  shift(calib.extrinsics_index);
+  shift(calib.intrinsics_index);
+  shift(calib.readout_index);
+  shift(calib.imu_intrinsics_index);
   for (auto &[key, c] : clones)
     shift(c.index);
   for (auto &[key, l] : landmarks)
@@ -57,6 +61,19 @@ void State::boxplus(const Eigen::VectorXd &dx) {
   }
   for (auto &[key, l] : landmarks)
     l.p_W += dx.segment<3>(l.index);
+  if (calib.extrinsics_index >= 0) {
+    calib.R_BC = ov_core::so3_exp(dx.segment<3>(calib.extrinsics_index)) * calib.R_BC;
+    calib.p_BC += dx.segment<3>(calib.extrinsics_index + 3);
+  }
+  if (calib.intrinsics_index >= 0)
+    calib.intrinsics += dx.segment<8>(calib.intrinsics_index);
+  if (calib.readout_index >= 0)
+    calib.readout_s += dx(calib.readout_index);
+  if (calib.imu_intrinsics_index >= 0)
+    for (int k = 0; k < 6; ++k) {
+      calib.D_w(kTriRow[k], kTriCol[k]) += dx(calib.imu_intrinsics_index + k);
+      calib.D_a(kTriRow[k], kTriCol[k]) += dx(calib.imu_intrinsics_index + 6 + k);
+    }
 }
 
 } // namespace ov_msckf_ton

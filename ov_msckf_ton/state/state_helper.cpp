@@ -21,6 +21,18 @@ void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, co
   s.P = 0.5 * (s.P + s.P.transpose());
 }
 
+void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q,
+                          const Eigen::Matrix<double, 15, 12> &Gamma, int cal_index) {
+  constexpr int I = ImuState::kSize;
+  const Eigen::MatrixXd rows = Phi * s.P.topRows(I) + Gamma * s.P.middleRows(cal_index, 12); // A·P, 15 x n
+  const Eigen::Matrix<double, 15, 15> Pii =
+      rows.leftCols(I) * Phi.transpose() + rows.middleCols(cal_index, 12) * Gamma.transpose() + Q;
+  s.P.topRows(I) = rows;
+  s.P.leftCols(I) = rows.transpose();
+  s.P.topLeftCorner<I, I>() = Pii;
+  s.P = 0.5 * (s.P + s.P.transpose());
+}
+
 void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w_B, const Eigen::Vector3d &v_W) {
   if (s.clones.count(t_cam_ns))
     throw ov_core::UsageError("clone for image " + std::to_string(t_cam_ns) + " already exists");

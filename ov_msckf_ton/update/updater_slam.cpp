@@ -22,7 +22,8 @@ Eigen::MatrixXd scatter(const Eigen::MatrixXd &compact, const std::vector<int> &
 } // namespace
 
 UpdaterSLAM::UpdaterSLAM(const ov_core::CameraCalib &calib, const UpdaterSlamOptions &opt, const UpdaterMSCKF &msckf)
-    : opt_(opt), msckf_(msckf), R_BC_(calib.T_BC.topLeftCorner<3, 3>()), p_BC_(calib.T_BC.topRightCorner<3, 1>()) {
+    : opt_(opt), msckf_(msckf) {
+  (void)calib; // the calibration comes from the updater's view of the state (fixed or estimated)
   if (!(opt_.sigma_px > 0) || !(opt_.chi2_multiplier > 0))
     throw ov_core::UsageError("UpdaterSLAM: sigma_px and chi2_multiplier must be positive");
 }
@@ -95,32 +96,68 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
   }
 }
 
-bool UpdaterSLAM::linearize(const State &state, const LandmarkState &l, const CloneState &c,
-                            const ov_core::Feature &feature, size_t obs_index, TdObservation td_obs,
-                            const VelocityProvider &velocities, LandmarkLinearization &out) const {
+bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
+                            const CloneState &c, const ov_core::Feature &feature, size_t obs_index,
+                            TdObservation td_obs, const VelocityProvider &velocities,
+                            LandmarkLinearization &out) const {
   Eigen::Vector2d zhat, z_lin;
   Eigen::Vector3d p_C;
   CloneMeasurementJacobians J;
-  if (!project_in_clone(c.R, c.p, R_BC_, p_BC_, l.p_W, zhat, &p_C) ||
-      !project_in_clone(c.R_lin(), c.p_lin(), R_BC_, p_BC_, l.p_fej, z_lin, nullptr, &J))
+  if (!project_in_clone(c.R, c.p, view.R_BC, view.p_BC, l.p_W, zhat, &p_C) ||
+      !project_in_clone(c.R_lin(), c.p_lin(), view.R_BC, view.p_BC, l.p_fej, z_lin, nullptr, &J))
     return false;
   out.depth = p_C.z();
   if (out.depth < opt_.min_depth || out.depth > opt_.max_depth)
     return false;
   const ov_core::FeatureObservation &o = feature.obs[obs_index];
-  Eigen::Vector2d z = o.xy, vel;
+  Eigen::Vector2d vel;
   int src = kVelocityNone;
-  out.td_column =
-      td_obs == TdObservation::ImagePlane && state.estimates_td() && velocities.velocity(feature, obs_index, vel, src);
+  const bool has_vel = velocities.velocity(feature, obs_index, vel, src);
+  out.td_column = td_obs == TdObservation::ImagePlane && state.estimates_td() && has_vel;
+  Eigen::Vector2d shift = Eigen::Vector2d::Zero();
   if (out.td_column)
-    z -= vel * (state.td - c.td_ref);
-  // Pixel rows, as the MSCKF: the tracker's isotropic pixel noise is modelled where it arises.
-  const Eigen::Matrix2d Jd = msckf_.distortion_jacobian(o.xy);
-  out.r = Jd * (z - zhat);
+    shift += vel * (state.td - c.td_ref);
+  const double rho = UpdaterMSCKF::row_factor(view, o);
+  if (view.readout_s != 0.0 && has_vel)
+    shift += vel * (view.readout_s * rho);
+  // Pixel rows, as the MSCKF (UpdaterMSCKF::linearize): scaled by the distortion Jacobian at the observation, or
+  // the raw pixel when the intrinsics are estimated.
+  Eigen::Matrix2d Jd;
+  Eigen::Vector2d zs;
+  if (view.est_intr) {
+    zs = zhat + shift;
+    out.r = o.uv - view.cam->distort(zs, &Jd);
+  } else {
+    view.cam->distort(o.xy, &Jd);
+    out.r = Jd * (o.xy - shift - zhat);
+  }
   out.H_clone.leftCols<3>() = Jd * J.H_theta;
   out.H_clone.rightCols<3>() = Jd * J.H_p;
   out.H_f = Jd * J.H_f;
   out.H_td = out.td_column ? Eigen::Vector2d(Jd * vel) : Eigen::Vector2d::Zero();
+  // Calibration columns, as UpdaterMSCKF::linearize.
+  const CalibState &cal = state.calib;
+  out.calib_cols.clear();
+  const int n = (view.est_ext ? 6 : 0) + (view.est_intr ? 8 : 0) + (view.est_readout && has_vel ? 1 : 0);
+  out.H_calib.setZero(2, n);
+  int k = 0;
+  if (view.est_ext) {
+    out.H_calib.middleCols<3>(k) = Jd * J.H_ext_theta;
+    out.H_calib.middleCols<3>(k + 3) = Jd * J.H_ext_p;
+    for (int j = 0; j < 6; ++j)
+      out.calib_cols.push_back(cal.extrinsics_index + j);
+    k += 6;
+  }
+  if (view.est_intr) {
+    out.H_calib.middleCols<8>(k) = view.cam->intrinsics_jacobian(zs);
+    for (int j = 0; j < 8; ++j)
+      out.calib_cols.push_back(cal.intrinsics_index + j);
+    k += 8;
+  }
+  if (view.est_readout && has_vel) {
+    out.H_calib.col(k) = Jd * vel * rho;
+    out.calib_cols.push_back(cal.readout_index);
+  }
   return true;
 }
 
@@ -130,6 +167,7 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
   if (clone_it == state.clones.end() || state.landmarks.empty())
     return;
   const CloneState &c = clone_it->second;
+  const UpdaterMSCKF::CameraView view = msckf_.camera_view(state);
   const double sigma2 = opt_.sigma_px * opt_.sigma_px;
   const double thr = opt_.chi2_multiplier / msckf_.options().chi2_multiplier * msckf_.chi2_threshold(2);
   const int n = state.dim();
@@ -140,7 +178,7 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
     const ov_core::Feature *f = db.get(id);
     if (!f || f->obs.empty() || f->newest().t_cam_ns != t_cam_ns)
       continue; // not seen in this image: the caller marginalises it
-    if (!linearize(state, l, c, *f, f->obs.size() - 1, td_obs, velocities, lin)) {
+    if (!linearize(view, state, l, c, *f, f->obs.size() - 1, td_obs, velocities, lin)) {
       drop.push_back(id);
       continue;
     }
@@ -151,6 +189,8 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
     H.block<2, 3>(0, cols[1]) = lin.H_f;
     if (lin.td_column)
       H.col(cols[2]) += lin.H_td;
+    for (size_t j = 0; j < lin.calib_cols.size(); ++j)
+      H.col(lin.calib_cols[j]) += lin.H_calib.col(static_cast<Eigen::Index>(j));
     Eigen::Matrix2d S = H * state.P * H.transpose();
     S.diagonal().array() += sigma2;
     const double chi2 = lin.r.dot(S.ldlt().solve(lin.r));

@@ -36,6 +36,8 @@ struct LandmarkLinearization {
   Eigen::Matrix<double, 2, 3> H_f = Eigen::Matrix<double, 2, 3>::Zero();
   Eigen::Vector2d H_td = Eigen::Vector2d::Zero();
   bool td_column = false;
+  std::vector<int> calib_cols;                      ///< state indices of H_calib's columns
+  Eigen::Matrix<double, 2, Eigen::Dynamic> H_calib; ///< extrinsics, intrinsics, readout where estimated
   double depth = 0.0;
 };
 
@@ -63,13 +65,19 @@ public:
   /// the landmark is behind the camera or outside the depth range.
   bool linearize(const State &state, const LandmarkState &l, const CloneState &clone, const ov_core::Feature &feature,
                  size_t obs_index, TdObservation td_obs, const VelocityProvider &velocities,
-                 LandmarkLinearization &out) const;
+                 LandmarkLinearization &out) const {
+    return linearize(msckf_.camera_view(state), state, l, clone, feature, obs_index, td_obs, velocities, out);
+  }
+  /// The same with the calibration view of the update (UpdaterMSCKF::camera_view), computed once per update. The
+  /// calibration columns (extrinsics, intrinsics, readout: those the state estimates) are H_calib, in the order of
+  /// `calib_cols`.
+  bool linearize(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
+                 const CloneState &clone, const ov_core::Feature &feature, size_t obs_index, TdObservation td_obs,
+                 const VelocityProvider &velocities, LandmarkLinearization &out) const;
 
 private:
   UpdaterSlamOptions opt_;
   const UpdaterMSCKF &msckf_;
-  Eigen::Matrix3d R_BC_;
-  Eigen::Vector3d p_BC_;
   FeatureLinearization lin_;
 };
 
