@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -22,115 +21,6 @@
 #include <sstream>
 
 namespace ov_eval {
-
-// ---------------------------------------------------------------------------------------------------------------
-// Reading the log
-// ---------------------------------------------------------------------------------------------------------------
-
-namespace {
-
-/// Like TextTableReader::to_double but lets "nan" through: the writer logs NaN where a quantity does not exist, and
-/// the caller decides per column and status whether that is allowed.
-double parse_number(const ov_core::TextTableReader &rd, const std::string &field, const std::string &what) {
-  if (field.empty())
-    rd.fail("empty " + what);
-  char *end = nullptr;
-  errno = 0;
-  const double v = std::strtod(field.c_str(), &end);
-  if (*end != '\0')
-    rd.fail("bad " + what + " '" + field + "' (expected a number)");
-  if (std::isinf(v))
-    rd.fail("infinite " + what + " '" + field + "'");
-  return v;
-}
-
-double finite_number(const ov_core::TextTableReader &rd, const std::string &field, const std::string &what) {
-  const double v = parse_number(rd, field, what);
-  if (std::isnan(v))
-    rd.fail("NaN " + what);
-  return v;
-}
-
-} // namespace
-
-ResidualLog load_residual_log(const std::string &file) {
-  ov_core::TextTableReader rd(file, ',');
-  ResidualLog log;
-  log.file = file;
-  std::vector<std::string> f;
-  bool have_row = rd.next(f);
-  // The header is the last non-'#' line the reader skipped before the first data row.
-  std::string header;
-  for (auto it = rd.comments().rbegin(); it != rd.comments().rend(); ++it)
-    if (!it->empty() && (*it)[0] != '#') {
-      header = *it;
-      break;
-    }
-  if (header.empty())
-    throw ov_core::DataError(file, 1,
-                             "no header line: expected the residual log's column names (ovton run --residual-log)");
-  const long header_line = have_row ? std::max(1L, rd.line() - 1) : 1L;
-  std::map<std::string, size_t> col;
-  {
-    std::stringstream ss(header);
-    std::string name;
-    size_t i = 0;
-    while (std::getline(ss, name, ',')) {
-      name.erase(0, name.find_first_not_of(" \t\r"));
-      name.erase(name.find_last_not_of(" \t\r") + 1);
-      col[name] = i++;
-    }
-  }
-  static const char *required[] = {"update_id",   "t_cam_ns", "feature_id", "obs_index",  "track_length", "res_u_px",
-                                   "res_v_px",    "u_px",     "v_px",       "vel_u_px_s", "vel_v_px_s",   "vel_source",
-                                   "radius_norm", "w_x",      "w_y",        "w_z",        "td_s",         "status",
-                                   "x_norm",      "y_norm",   "w_valid"};
-  size_t max_col = 0;
-  for (const char *name : required) {
-    const auto it = col.find(name);
-    if (it == col.end())
-      throw ov_core::DataError(file, header_line,
-                               std::string("header has no column '") + name + "': not a residual log of this version");
-    max_col = std::max(max_col, it->second);
-  }
-  const auto idx = [&](const char *name) { return col.at(name); };
-  const size_t depth_col = col.count("depth_m") ? col.at("depth_m") : std::numeric_limits<size_t>::max();
-  while (have_row) {
-    if (f.size() <= max_col)
-      rd.fail("row has " + std::to_string(f.size()) + " fields, the header names " + std::to_string(col.size()));
-    ResidualLogRow r;
-    r.line = rd.line();
-    r.update_id = static_cast<uint64_t>(rd.to_int64(f[idx("update_id")], "update_id"));
-    r.t_cam_ns = rd.to_int64(f[idx("t_cam_ns")], "t_cam_ns");
-    r.feature_id = static_cast<uint64_t>(rd.to_int64(f[idx("feature_id")], "feature_id"));
-    r.obs_index = static_cast<int>(rd.to_int64(f[idx("obs_index")], "obs_index"));
-    r.track_length = static_cast<int>(rd.to_int64(f[idx("track_length")], "track_length"));
-    r.status = static_cast<int>(rd.to_int64(f[idx("status")], "status"));
-    if (r.status < 0 || r.status > 2)
-      rd.fail("status " + std::to_string(r.status) + " is not 0 (accepted), 1 (gated) or 2 (triangulation failed)");
-    r.res_u_px = parse_number(rd, f[idx("res_u_px")], "res_u_px");
-    r.res_v_px = parse_number(rd, f[idx("res_v_px")], "res_v_px");
-    if (r.status != 2 && (std::isnan(r.res_u_px) || std::isnan(r.res_v_px)))
-      rd.fail("NaN residual in a row whose status (" + std::to_string(r.status) + ") says it was computed");
-    r.u_px = finite_number(rd, f[idx("u_px")], "u_px");
-    r.v_px = finite_number(rd, f[idx("v_px")], "v_px");
-    r.x_norm = finite_number(rd, f[idx("x_norm")], "x_norm");
-    r.y_norm = finite_number(rd, f[idx("y_norm")], "y_norm");
-    r.radius_norm = finite_number(rd, f[idx("radius_norm")], "radius_norm");
-    r.vel_u_px_s = finite_number(rd, f[idx("vel_u_px_s")], "vel_u_px_s");
-    r.vel_v_px_s = finite_number(rd, f[idx("vel_v_px_s")], "vel_v_px_s");
-    r.vel_source = static_cast<int>(rd.to_int64(f[idx("vel_source")], "vel_source"));
-    r.w_x = finite_number(rd, f[idx("w_x")], "w_x");
-    r.w_y = finite_number(rd, f[idx("w_y")], "w_y");
-    r.w_z = finite_number(rd, f[idx("w_z")], "w_z");
-    r.w_valid = static_cast<int>(rd.to_int64(f[idx("w_valid")], "w_valid"));
-    r.td_s = finite_number(rd, f[idx("td_s")], "td_s");
-    r.depth_m = depth_col < f.size() ? parse_number(rd, f[depth_col], "depth_m") : std::nan("");
-    log.rows.push_back(r);
-    have_row = rd.next(f);
-  }
-  return log;
-}
 
 // ---------------------------------------------------------------------------------------------------------------
 // Regression machinery
@@ -941,7 +831,7 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   std::vector<const ResidualLogRow *> rows;
   long with_vel = 0;
   for (const auto &r : log.rows) {
-    if (r.status == 2) {
+    if (r.status == ov_core::ResidualStatus::TriangulationFailed) {
       ++rep.rows_triangulation_failed;
       continue;
     }

@@ -9,6 +9,7 @@
 // candidates (offset drift contains a constant offset) are thereby credited only with what their extra terms add.
 // docs/diagnose.md gives each model, its sign convention and the thresholds.
 #include "ov_core/cam/camera_calib.h"
+#include "ov_core/io/residual_log_schema.h"
 #include "ov_core/types/sensor_data.h"
 
 #include <cstdint>
@@ -17,32 +18,11 @@
 
 namespace ov_eval {
 
-/// One row of the residual log (ov_msckf_ton/update/residual_log.h writes it; read here by header name).
-struct ResidualLogRow {
-  long line = 0; ///< 1-based line in the file, for messages
-  uint64_t update_id = 0, feature_id = 0;
-  int64_t t_cam_ns = 0;
-  int obs_index = 0, track_length = 0;
-  double res_u_px = 0, res_v_px = 0; ///< NaN only for triangulation failures
-  double u_px = 0, v_px = 0, x_norm = 0, y_norm = 0, radius_norm = 0;
-  double vel_u_px_s = 0, vel_v_px_s = 0;
-  int vel_source = 0;
-  double w_x = 0, w_y = 0, w_z = 0;
-  int w_valid = 0;
-  double td_s = 0;
-  double depth_m = 0; ///< z of the triangulated point in this camera; NaN (or a log without the column) if unknown
-  int status = 0;     ///< 0 accepted, 1 chi-square gated, 2 triangulation failed
-};
-
-struct ResidualLog {
-  std::string file;
-  std::vector<ResidualLogRow> rows;
-};
-
-/// Reads a residual log. Columns are found by header name (extra columns are ignored, so the writer may append).
-/// Throws DataError with file:line for a missing file, a missing header or required column, a short row, a value
-/// that is not a number, or a NaN where the row's status says a number must be.
-ResidualLog load_residual_log(const std::string &file);
+/// The residual log as `ovton run --residual-log` writes it: its schema is shared with the writer
+/// (ov_core/io/residual_log_schema.h), read by header name, with file:line errors.
+using ov_core::load_residual_log;
+using ov_core::ResidualLog;
+using ov_core::ResidualLogRow;
 
 struct DiagnoseOptions {
   int image_height = 0;                  ///< rows of the image; 0: the largest v_px in the log
