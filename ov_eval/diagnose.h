@@ -7,7 +7,8 @@
 // (significance of its coefficients with standard errors clustered by feature track, and share of loss explained);
 // if it passes, it joins the model and the remaining candidates are tested for what they add beyond it. Nested
 // candidates (offset drift contains a constant offset) are thereby credited only with what their extra terms add.
-// docs/diagnose.md gives each model, its sign convention and the thresholds.
+// docs/diagnose.md gives each model, its sign convention and the thresholds. The stages live in ov_eval/diagnose/
+// (tracks, residual_design, rate_design, candidates, regression, selection, report_writer); diagnose.cpp lists them.
 #include "ov_core/cam/camera_calib.h"
 #include "ov_core/io/residual_log_schema.h"
 #include "ov_core/types/sensor_data.h"
