@@ -4,11 +4,11 @@
 #include "ov_core/types/errors.h"
 #include "ov_eval/diagnose.h"
 #include "ov_eval/plot.h"
+#include "ov_eval/report.h"
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <sstream>
 
@@ -25,16 +25,6 @@ std::string estimates_text(const CandidateResult &c) {
          (e.unit.empty() ? "" : " " + e.unit);
   }
   return s.empty() ? "-" : s;
-}
-
-void write_file(const std::string &file, const std::string &text) {
-  std::ofstream out(file);
-  if (!out)
-    throw ov_core::DataError(file, "cannot open for writing");
-  out << text;
-  out.close();
-  if (!out)
-    throw ov_core::DataError(file, "write failed");
 }
 
 /// The plots' font is ASCII: the few Greek letters and symbols of the model texts spelled out.
@@ -105,29 +95,18 @@ void plot_td_bins(const DiagnoseReport &rep, const std::string &file) {
   p.save_png(file);
 }
 
-} // namespace
-
-std::string format_ranking(const DiagnoseReport &rep) {
-  std::ostringstream os;
-  os << "rank  candidate         verdict        alone[%]  added[%]   sigma  estimate\n";
-  for (const auto &c : rep.candidates) {
-    os << std::left << std::setw(6) << c.rank << std::setw(18) << c.key << std::setw(15)
-       << (c.explained ? "EXPLAINED" : "not explained") << std::right << std::setw(8)
-       << ov_core::format_fixed(100 * c.explained_alone, 2) << std::setw(10)
-       << ov_core::format_fixed(100 * c.explained_added, 2) << std::setw(8) << ov_core::format_fixed(c.sigma, 1) << "  "
-       << estimates_text(c) << (c.note.empty() ? "" : "  [" + c.note + "]") << "\n";
-  }
-  return os.str();
+/// The first candidate the selection explains the residual with; null when none.
+const CandidateResult *top_effect(const DiagnoseReport &rep) {
+  const auto it = std::find_if(rep.candidates.begin(), rep.candidates.end(), [](auto &c) { return c.explained; });
+  return it == rep.candidates.end() ? nullptr : &*it;
 }
 
-std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const std::string &out_dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (!std::filesystem::is_directory(out_dir))
-    throw ov_core::DataError(out_dir, "cannot create the output folder");
-  std::vector<std::string> files;
-  // Plots first, so the report can link them.
-  std::vector<std::pair<std::string, std::string>> plots; // key, file name
+/// (key, file name) of each plot written.
+using PlotList = std::vector<std::pair<std::string, std::string>>;
+
+/// The top three candidates' curves and, with two bins or more, the offset per time bin.
+PlotList write_plots(const DiagnoseReport &rep, const std::string &out_dir) {
+  PlotList plots;
   int plotted = 0;
   for (const auto &c : rep.candidates) {
     if (plotted >= 3)
@@ -137,16 +116,17 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
     const std::string name = "diagnose_" + std::to_string(c.rank) + "_" + c.key + ".png";
     plot_curve(c, ov_core::join_path(out_dir, name));
     plots.push_back({c.key, name});
-    files.push_back(ov_core::join_path(out_dir, name));
     ++plotted;
   }
   if (rep.td_bins.size() >= 2) {
     const std::string name = "diagnose_td_per_time_bin.png";
     plot_td_bins(rep, ov_core::join_path(out_dir, name));
     plots.push_back({"td_bins", name});
-    files.push_back(ov_core::join_path(out_dir, name));
   }
+  return plots;
+}
 
+std::string markdown_text(const DiagnoseReport &rep, const PlotList &plots) {
   const auto &o = rep.options;
   std::ostringstream md;
   md << "# Residual diagnosis\n\n"
@@ -171,8 +151,8 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
      << " sigma (Wald, track-clustered) and >= " << ov_core::format_fixed(100 * o.min_explained, 1)
      << " % of the Huber loss of its data (the residual; for time candidates from rates, the rate mismatch) removed "
         "beyond the candidates selected before it\n\n";
-  const auto first = std::find_if(rep.candidates.begin(), rep.candidates.end(), [](auto &c) { return c.explained; });
-  if (first == rep.candidates.end())
+  const CandidateResult *first = top_effect(rep);
+  if (!first)
     md << "**No candidate explains the residuals** (nothing passes both thresholds).\n\n";
   else
     md << "**Top effect: " << first->key << "** — " << first->description << "; " << estimates_text(*first)
@@ -205,10 +185,12 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
   md << "\nCaveat: residuals are logged after the filter has absorbed part of any effect into its state (poses, "
         "biases, t̂_d); what the tracks' points absorb is projected out, what the poses absorb is not. Residual-based "
         "sizes are therefore lower bounds (docs/diagnose.md, \"What the residuals cannot show\").\n";
-  const std::string md_file = ov_core::join_path(out_dir, "diagnose.md");
-  write_file(md_file, md.str());
-  files.insert(files.begin(), md_file);
+  return md.str();
+}
 
+std::string json_text(const DiagnoseReport &rep) {
+  const auto &o = rep.options;
+  const CandidateResult *first = top_effect(rep);
   std::ostringstream js;
   js << "{\n  \"log\": " << ov_core::json_string(rep.log_file) << ",\n  \"rows_read\": " << rep.rows_read
      << ",\n  \"rows_used\": " << rep.rows_used << ",\n  \"tracks_used\": " << rep.tracks_used
@@ -222,8 +204,7 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
      << ", \"fitted\": " << (rep.intrinsics_fitted ? "true" : "false") << "},\n  \"image_height\": " << rep.image_height
      << ",\n  \"min_sigma\": " << ov_core::json_number(o.min_sigma)
      << ",\n  \"min_explained\": " << ov_core::json_number(o.min_explained)
-     << ",\n  \"top\": " << (first == rep.candidates.end() ? "null" : ov_core::json_string(first->key))
-     << ",\n  \"candidates\": [";
+     << ",\n  \"top\": " << (first ? ov_core::json_string(first->key) : "null") << ",\n  \"candidates\": [";
   for (size_t c = 0; c < rep.candidates.size(); ++c) {
     const auto &cr = rep.candidates[c];
     js << (c ? "," : "") << "\n    {\"rank\": " << cr.rank << ", \"key\": " << ov_core::json_string(cr.key)
@@ -250,9 +231,38 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
        << "}";
   }
   js << "\n  ]\n}\n";
+  return js.str();
+}
+
+} // namespace
+
+std::string format_ranking(const DiagnoseReport &rep) {
+  std::ostringstream os;
+  os << "rank  candidate         verdict        alone[%]  added[%]   sigma  estimate\n";
+  for (const auto &c : rep.candidates) {
+    os << std::left << std::setw(6) << c.rank << std::setw(18) << c.key << std::setw(15)
+       << (c.explained ? "EXPLAINED" : "not explained") << std::right << std::setw(8)
+       << ov_core::format_fixed(100 * c.explained_alone, 2) << std::setw(10)
+       << ov_core::format_fixed(100 * c.explained_added, 2) << std::setw(8) << ov_core::format_fixed(c.sigma, 1) << "  "
+       << estimates_text(c) << (c.note.empty() ? "" : "  [" + c.note + "]") << "\n";
+  }
+  return os.str();
+}
+
+std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const std::string &out_dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (!std::filesystem::is_directory(out_dir))
+    throw ov_core::DataError(out_dir, "cannot create the output folder");
+  // Plots first, so the report can link them.
+  const PlotList plots = write_plots(rep, out_dir);
+  const std::string md_file = ov_core::join_path(out_dir, "diagnose.md");
   const std::string js_file = ov_core::join_path(out_dir, "diagnose.json");
-  write_file(js_file, js.str());
-  files.insert(files.begin() + 1, js_file);
+  write_file_atomically(md_file, markdown_text(rep, plots));
+  write_file_atomically(js_file, json_text(rep));
+  std::vector<std::string> files = {md_file, js_file};
+  for (const auto &pl : plots)
+    files.push_back(ov_core::join_path(out_dir, pl.second));
   return files;
 }
 
