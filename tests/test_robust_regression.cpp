@@ -37,6 +37,18 @@ double robust_scale(const Eigen::VectorXd &r) {
   return 1.4826 * median(a);
 }
 
+/// Plants r = D·beta (beta over the first columns) plus Gaussian noise of σ `noise`, and sets the robust scale.
+void plant(Design &d, const std::vector<double> &beta, double noise, std::mt19937 &rng) {
+  std::normal_distribution<double> N;
+  for (Eigen::Index i = 0; i < d.r.size(); ++i) {
+    d.r(i) = 0.0;
+    for (size_t c = 0; c < beta.size(); ++c)
+      d.r(i) += beta[c] * d.D(i, static_cast<Eigen::Index>(c));
+    d.r(i) += noise * N(rng);
+  }
+  d.scale = robust_scale(d.r);
+}
+
 } // namespace
 
 TEST(RobustRegression, MedianIsTheUpperMiddleElement) {
@@ -125,11 +137,8 @@ TEST(RobustRegression, ChiSquareSurvivalAndGaussianEquivalentSigma) {
 
 TEST(RobustRegression, StepwiseSelectsThePlantedColumnsOnly) {
   std::mt19937 rng(3);
-  std::normal_distribution<double> N;
   Design d = random_design(500, 4, 4, rng);
-  for (Eigen::Index i = 0; i < d.r.size(); ++i)
-    d.r(i) = 0.5 * d.D(i, 1) + N(rng);
-  d.scale = robust_scale(d.r);
+  plant(d, {0.0, 0.5}, 1.0, rng);
   const std::vector<StepCandidate> cands = {{"a", {0}, ""}, {"b", {1}, ""}, {"c", {2, 3}, ""}};
   std::vector<StepResult> res;
   const auto sel = stepwise(d, cands, StepThresholds{}, res);
@@ -149,11 +158,8 @@ TEST(RobustRegression, StepwiseSelectsThePlantedColumnsOnly) {
 
 TEST(RobustRegression, StepwiseExtensionSupersedesTheCandidateItContains) {
   std::mt19937 rng(4);
-  std::normal_distribution<double> N;
   Design d = random_design(500, 4, 2, rng);
-  for (Eigen::Index i = 0; i < d.r.size(); ++i)
-    d.r(i) = 1.0 * d.D(i, 0) + 1.0 * d.D(i, 1) + N(rng);
-  d.scale = robust_scale(d.r);
+  plant(d, {1.0, 1.0}, 1.0, rng);
   const std::vector<StepCandidate> cands = {{"const", {0}, ""}, {"drift", {0, 1}, ""}};
   std::vector<StepResult> res;
   const auto sel = stepwise(d, cands, StepThresholds{}, res);
@@ -167,9 +173,7 @@ TEST(RobustRegression, StepwiseExtensionSupersedesTheCandidateItContains) {
   EXPECT_NEAR(res[1].explained_added, res[1].explained_alone, 1e-9); // both: columns {0, 1} against none
 
   // Only the constant planted: const selected, drift's own term adds nothing.
-  for (Eigen::Index i = 0; i < d.r.size(); ++i)
-    d.r(i) = 1.0 * d.D(i, 0) + N(rng);
-  d.scale = robust_scale(d.r);
+  plant(d, {1.0}, 1.0, rng);
   const auto sel2 = stepwise(d, cands, StepThresholds{}, res);
   ASSERT_EQ(sel2, std::vector<size_t>({0}));
   EXPECT_FALSE(res[1].selected);
@@ -178,11 +182,8 @@ TEST(RobustRegression, StepwiseExtensionSupersedesTheCandidateItContains) {
 
 TEST(RobustRegression, StepwiseReportsNestedAndSkippedCandidates) {
   std::mt19937 rng(5);
-  std::normal_distribution<double> N;
   Design d = random_design(500, 4, 3, rng);
-  for (Eigen::Index i = 0; i < d.r.size(); ++i)
-    d.r(i) = 1.0 * d.D(i, 0) + N(rng);
-  d.scale = robust_scale(d.r);
+  plant(d, {1.0}, 1.0, rng);
   // "pair" passes through column 0, "one" (column 1 alone) does not: pair is selected and one, whose only column is
   // then in the model, is nested. "later" is skipped and never fitted.
   const std::vector<StepCandidate> cands = {{"pair", {0, 1}, ""}, {"one", {1}, ""}, {"later", {2}, "no data"}};
@@ -199,11 +200,8 @@ TEST(RobustRegression, StepwiseReportsNestedAndSkippedCandidates) {
 
 TEST(RobustRegression, BinnedCurveFollowsTheFittedSlope) {
   std::mt19937 rng(6);
-  std::normal_distribution<double> N;
   Design d = random_design(4000, 1, 2, rng);
-  for (Eigen::Index i = 0; i < d.r.size(); ++i)
-    d.r(i) = 2.0 * d.D(i, 0) - 1.0 * d.D(i, 1) + 0.1 * N(rng);
-  d.scale = robust_scale(d.r);
+  plant(d, {2.0, -1.0}, 0.1, rng);
   const Fit f = fit_cols(d, {1, 0}, 3.0);
   const ov_eval::BinnedCurve cur = binned_curve({0}, d, f, {1, 0}, 8);
   EXPECT_NEAR(cur.slope, 2.0, 0.01);
