@@ -43,10 +43,11 @@ struct DiagnoseOptions {
   double huber_k = 3.0;        ///< Huber threshold in robust σ of the residual components
   int time_bins = 12;          ///< bins of the per-time-bin δt(t) estimate
   int plot_bins = 16;          ///< quantile bins of the residual-vs-variable plots
-  /// false (default): the image velocity of an observation is the central difference of its track's neighbouring
-  /// pixels, which leaves the observation's own pixel out. The logged velocity (a backward difference that includes
-  /// the observation's own noise, as the filter's SIR shift uses it) correlates with the residual through that noise
-  /// and fakes a time offset of about σ²/(Δt·var V): 18 ms on the clean builtin simulation (docs/diagnose.md).
+  /// false (default): the image velocity of an observation is the three-point derivative of its track's predicted
+  /// observations ẑ = z − r, which carry none of the measured pixels' noise. The logged velocity (a backward difference
+  /// that includes the observation's own noise, as the filter's SIR shift uses it) correlates with the residual through
+  /// that noise and fakes a time offset of about σ²/(Δt·var V): 18 ms on the clean builtin simulation
+  /// (docs/diagnose.md).
   bool use_logged_velocity = false;
   double min_velocity_share = 0.5; ///< logged velocity only: below this share of rows with one, time tests are skipped
 };
