@@ -217,7 +217,7 @@ TEST(TrackKLT, SubPixelShiftIsRecoveredWithinATenthOfAPixel) {
         ++common;
         const double err = (uv1 - it->second - Eigen::Vector2d(sx, sy)).norm();
         // Where the LK window hangs over the image border it sees padding, which no shift explains.
-        const double hw = opt.win_size / 2 + 1;
+        const int hw = opt.win_size / 2 + 1; // whole pixels: the half window, rounded down
         const bool inside = uv1.x() >= hw && uv1.y() >= hw && uv1.x() <= kW - 1 - hw && uv1.y() <= kH - 1 - hw;
         if (inside) {
           worst = std::max(worst, err);

@@ -71,12 +71,12 @@ struct StepThresholds {
   double min_sigma = 5.0, min_explained = 0.02, huber_k = 3.0;
 };
 
-/// Forward stepwise selection among `cands` on design d; fills out[c] for each candidate and returns the selected
+/// Forward stepwise selection among `cands` on design d; fills res[c] for each candidate and returns the selected
 /// ones in selection order. Shares are of the loss of the rows a candidate predicts (non-zero in one of its columns).
 /// A candidate that strictly contains a passing one (drift ⊃ constant offset) waits a round and, when selected later,
 /// takes the contained one's place.
 std::vector<size_t> stepwise(const Design &d, const std::vector<StepCandidate> &cands, const StepThresholds &th,
-                             std::vector<StepResult> &out);
+                             std::vector<StepResult> &res);
 
 /// The partial residual of the candidate with columns `cols` (the other effects of `fit` removed), binned in `bins`
 /// quantile bins of its own column (one column) or of its fitted effect (several); labels are left to the caller.
