@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Installs the Debian packages the build needs (skips apt when everything is already there).
+# Installs the Debian packages the build needs, and any given as arguments (skips apt when everything is already there).
 set -euo pipefail
 PKGS=(build-essential cmake ccache libeigen3-dev libopencv-dev libyaml-cpp-dev libboost-program-options-dev
       libgtest-dev python3)
+PKGS+=("$@") # extra packages a script needs (check_format.sh: clang-format)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

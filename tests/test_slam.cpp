@@ -1,5 +1,6 @@
 // SLAM features (ov_msckf_ton/update/updater_slam.h): the landmark measurement Jacobians against finite differences
 // in the state's ⊞ convention, delayed initialisation consistent over Monte-Carlo trials, and a whole run.
+#include "fd_check.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/replay.h"
 #include "ov_core/math/so3.h"
@@ -102,14 +103,9 @@ TEST(SlamJacobians, LandmarkMeasurementMatchesFiniteDifferences) {
     EXPECT_TRUE(slam.linearize(s, ll, cc, f, k, TdObservation::ImagePlane, tracked, out));
     return out.r;
   };
-  Eigen::Matrix<double, 2, 10> H_fd, H;
+  Eigen::Matrix<double, 2, 10> H;
   H << lin.H_clone, lin.H_f, lin.H_td;
-  for (int j = 0; j < 10; ++j) {
-    Eigen::Matrix<double, 10, 1> d = Eigen::Matrix<double, 10, 1>::Zero();
-    const double eps = j == 9 ? 1e-6 : 1e-6;
-    d(j) = eps;
-    H_fd.col(j) = -(residual(d) - residual(-d)) / (2 * eps);
-  }
+  const Eigen::MatrixXd H_fd = -ovtest::numeric_jacobian(residual, Eigen::Matrix<double, 10, 1>::Zero().eval(), 1e-6);
   EXPECT_LT((H - H_fd).cwiseAbs().maxCoeff(), 1e-5 * H.cwiseAbs().maxCoeff()) << "analytic\n"
                                                                               << H << "\nnumeric\n"
                                                                               << H_fd;

@@ -29,7 +29,7 @@ int64_t seconds_field_to_ns(const TextTableReader &r, const std::string &f) {
   while (fp.size() < 9)
     fp += '0';
   const int64_t frac = r.to_int64(fp, "timestamp fraction");
-  return sec < 0 || (ip.size() && ip[0] == '-') ? sec * 1000000000LL - frac : sec * 1000000000LL + frac;
+  return sec < 0 || (!ip.empty() && ip[0] == '-') ? sec * 1000000000LL - frac : sec * 1000000000LL + frac;
 }
 
 Eigen::Quaterniond make_quat(const TextTableReader &r, double w, double x, double y, double z) {
