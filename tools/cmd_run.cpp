@@ -1,4 +1,5 @@
 // `ovton run`: replay a dataset folder through the estimator and write the trajectory.
+#include "ov_core/io/csv.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/types/errors.h"
 #include "ov_eval/metrics.h"
@@ -9,6 +10,7 @@
 
 #include <boost/program_options.hpp>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -21,7 +23,7 @@ namespace ovton {
 
 int cmd_run(const Args &args) {
   po::options_description desc("ovton run: replay a dataset folder through the MSCKF and write its trajectory");
-  std::string config, dataset, mode, format = "csv", init, nees_log;
+  std::string config, dataset, mode, format = "csv", init, nees_log, td_search;
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
   bool quiet = false, no_prefetch = false;
   RunRequest req;
@@ -66,7 +68,12 @@ int cmd_run(const Args &args) {
     ov_msckf_ton::print_vio_options(req.opt, std::cerr);
 
   install_interrupt_handler();
-  const RunResult r = run_dataset(data, req);
+  RunResult r;
+  try {
+    r = run_dataset(data, req);
+  } catch (const ov_core::EstimatorFailure &e) {
+    throw ov_core::EstimatorFailure(e.t_ns(), std::string(e.what()) + "; the rows before it are in " + req.output);
+  }
 
   const auto &c = r.counters;
   const auto &tm = r.times;
@@ -83,6 +90,12 @@ int cmd_run(const Args &args) {
             << c.td_rows_by_source[ov_msckf_ton::kVelocityF2fFvon] << " (" << c.td_features << " features); networks "
             << (tm.frames ? tm.networks / tm.frames : 0.0) << " ms/frame\n";
   std::cout << "initialisation: " << r.init_message << "\n";
+  if (r.td_search)
+    std::cout << "coarse t_d search: " << r.td_search->summary() << "\n";
+  const auto &acc = r.acceptance;
+  if (acc.examined() > 0)
+    std::cout << "update acceptance " << 100.0 * acc.acceptance() << " % of " << acc.examined() << " features ("
+              << acc.gated << " gated, " << acc.failed_triangulation << " failed triangulation)\n";
   if (tm.frames > 0)
     std::cout << "per frame [ms]: image load " << tm.image_load / tm.frames << ", tracking " << tm.tracking / tm.frames
               << ", propagation " << tm.propagation / tm.frames << ", update " << tm.update / tm.frames << "; "

@@ -457,6 +457,7 @@ void VioManager::slam_update(int64_t t_cam_ns, const std::vector<const ov_core::
 
 ov_core::StateSample VioManager::snapshot() const {
   const State &s = *state_;
+  health_.check(s); // no row leaves the filter without it: a diverged estimate is an error, not an answer
   ov_core::StateSample o;
   o.t_ns = s.t_imu_ns;
   o.p = s.imu.p;

@@ -6,6 +6,7 @@
 #include "ov_core/io/velocity_log.h"
 #include "ov_core/track/feature_database.h"
 #include "ov_core/track/track_klt.h"
+#include "ov_msckf_ton/core/filter_health.h"
 #include "ov_msckf_ton/core/vio_options.h"
 #include "ov_msckf_ton/state/propagator.h"
 #include "ov_msckf_ton/state/state.h"
