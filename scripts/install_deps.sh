@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
 # Installs the Debian packages the build needs (skips apt when everything is already there).
+# --sanitize adds clang and its runtime libraries (ASan, UBSan, libFuzzer) for scripts/sanitize.sh and scripts/fuzz.sh.
 set -euo pipefail
 PKGS=(build-essential cmake ccache libeigen3-dev libopencv-dev libyaml-cpp-dev libboost-program-options-dev
       libgtest-dev python3)
+if [ "${1:-}" = "--sanitize" ]; then
+  PKGS+=(clang libclang-rt-14-dev)
+fi
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
