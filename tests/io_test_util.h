@@ -1,5 +1,7 @@
 #pragma once
-// A small valid EuRoC folder and line editing, shared by the reader tests (test_io.cpp, test_io_plausibility.cpp).
+// Small datasets and line editing, shared by the reader and robustness tests (test_io*.cpp, test_cli_robustness.cpp,
+// test_filter_health.cpp, test_td_search.cpp).
+#include "ov_sim/simulator.h"
 #include "test_util.h"
 
 #include <cstdint>
@@ -66,6 +68,17 @@ inline void replace_line(const std::string &file, int line_no, const std::string
   for (int i = 1; std::getline(in, l); ++i)
     out << (i == line_no ? new_line : l) << "\n";
   write_text(file, out.str());
+}
+
+/// Options of a feature-level simulation (no images: written and run in about a second) of the built-in flight with
+/// ov_sim's default +10 ms offset; the caller may change more before ov_sim::write_simulation.
+inline ov_sim::SimOptions feature_sim(const std::string &out_dir, double duration_s, uint64_t seed) {
+  ov_sim::SimOptions o;
+  o.out_dir = out_dir;
+  o.duration_s = duration_s;
+  o.seed = seed;
+  o.features_only = true;
+  return o;
 }
 
 } // namespace ovtest

@@ -127,6 +127,16 @@ TEST(ReaderPlausibility, ImpossibleImuValuesNameFileAndLine) {
   }
 }
 
+TEST(ReaderPlausibility, ImpossibleOffsetsAndFeaturePositionsNameFileAndLine) {
+  TempDir tmp;
+  const std::string root = make_euroc(tmp);
+  write_text(root + "/mav0/td_truth/data.csv", "#timestamp_ns,td_s\n1050000000,0.01\n1100000000,1e300\n");
+  expect_data_error([&] { load_dataset(root); }, "td_truth/data.csv", 3, "offset of 1e300 s");
+  std::filesystem::remove_all(root + "/mav0/td_truth");
+  write_text(root + "/mav0/cam0/features.csv", "1050000000,1,100,200\n1050000000,2,1e6,200\n");
+  expect_data_error([&] { load_dataset(root); }, "cam0/features.csv", 2, "feature far outside the image");
+}
+
 TEST(ReaderPlausibility, StampsThatCannotBeNanosecondsNameFileAndLine) {
   {
     TempDir tmp; // images stamped in ms: 50 "ns" apart at a stated 20 Hz

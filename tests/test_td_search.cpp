@@ -1,6 +1,7 @@
 // The coarse t_d search (ov_msckf_ton/init/td_search.h): finds a constant offset within a few ms anywhere in
 // ±150 ms of the prior on a simulated V1_02 flight and on real EuRoC images shifted by ±100 ms, and says so instead of
 // guessing when the IMU shows no rotation change.
+#include "io_test_util.h"
 #include "ov_core/io/dataset.h"
 #include "ov_msckf_ton/init/td_search.h"
 #include "ov_sim/simulator.h"
@@ -18,15 +19,11 @@ class TdSearchSim : public ::testing::Test {
 protected:
   static void SetUpTestSuite() {
     dir_ = std::make_unique<ovtest::TempDir>();
-    ov_sim::SimOptions o;
-    o.out_dir = (*dir_) / "sim";
+    ov_sim::SimOptions o = ovtest::feature_sim((*dir_) / "sim", 12.0, 11);
     if (ovtest::have_shared_data()) {
       o.gt_file = ovtest::shared_data() + "/euroc_groundtruth/V1_02_medium.txt";
       o.start_s = 5.0;
     }
-    o.duration_s = 12.0;
-    o.seed = 11;
-    o.features_only = true;
     o.td.td0_s = 0.010;
     ov_sim::write_simulation(o);
     data_ = std::make_unique<ov_core::Dataset>(ov_core::load_dataset(o.out_dir));

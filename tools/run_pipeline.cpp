@@ -39,6 +39,8 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   ov_msckf_ton::VioOptions opt = req.opt;
   RunResult res;
   res.td_search = run_td_search(data, opt);
+  if (res.td_search && req.progress) // before the run, so that it is seen even when the run fails
+    std::fprintf(stderr, "coarse t_d search: %s\n", res.td_search->summary().c_str());
   ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
   if (data.has_td_truth())
     vio.set_td_oracle([&data](int64_t t) { return data.td_truth_at(t); });

@@ -256,7 +256,7 @@ void check_overlap(const std::vector<ImageEntry> &images, const std::vector<ImuD
 }
 
 /// cam0/features.csv (`timestamp_ns,feature_id,u,v`, grouped by stamp) attached to the listed images.
-void read_features_csv(const std::string &csv, std::vector<ImageEntry> &images) {
+void read_features_csv(const std::string &csv, const CameraCalib &cam, std::vector<ImageEntry> &images) {
   TextTableReader r(csv, ',');
   std::vector<std::string> f;
   size_t k = 0;
@@ -272,7 +272,12 @@ void read_features_csv(const std::string &csv, std::vector<ImageEntry> &images) 
     const int64_t id = r.to_int64(f[1], "feature id");
     if (id < 0)
       r.fail("negative feature id");
-    per_image[k].push_back({static_cast<size_t>(id), Eigen::Vector2d(r.to_double(f[2], "u"), r.to_double(f[3], "v"))});
+    const Eigen::Vector2d uv(r.to_double(f[2], "u"), r.to_double(f[3], "v"));
+    // Undistorting a point far outside the image diverges (NaN in the filter); a tracker never reports one.
+    if (std::abs(uv.x() - 0.5 * cam.width) > cam.width || std::abs(uv.y() - 0.5 * cam.height) > cam.height)
+      r.fail("feature at (" + f[2] + ", " + f[3] + ") px lies far outside the " + std::to_string(cam.width) + "x" +
+             std::to_string(cam.height) + " image");
+    per_image[k].push_back({static_cast<size_t>(id), uv});
   }
   for (size_t i = 0; i < images.size(); ++i)
     images[i].features = std::make_shared<const std::vector<PointObservation>>(std::move(per_image[i]));
@@ -362,7 +367,7 @@ Dataset load_euroc(const std::string &dir, const LoadOptions &opt) {
   const std::string cam_csv = join_path(mav0, "cam0/data.csv"), imu_csv = join_path(mav0, "imu0/data.csv");
   d.images = read_image_list(cam_csv, join_path(mav0, "cam0/data"), list_opt, d.cam.rate_hz);
   if (!features.empty())
-    read_features_csv(features, d.images);
+    read_features_csv(features, d.cam, d.images);
   d.imu = read_imu_csv(imu_csv, d.imu_calib.rate_hz);
   check_overlap(d.images, d.imu, cam_csv, imu_csv);
   if (auto gt = optional_file(join_path(mav0, "state_groundtruth_estimate0/data.csv")); !gt.empty())

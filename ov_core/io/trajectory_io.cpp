@@ -97,6 +97,8 @@ std::vector<StateSample> read_trajectory(const std::string &file) {
     std::ifstream in(file);
     std::string line;
     while (std::getline(in, line)) {
+      if (line.rfind(kUtf8Bom, 0) == 0)
+        line.erase(0, 3);
       if (line.empty() || line[0] == '#' || line.find_first_not_of(" \t\r") == std::string::npos)
         continue;
       sep = line.find(',') != std::string::npos ? ',' : ' ';
@@ -181,6 +183,8 @@ std::vector<TdSample> read_td_truth(const std::string &file) {
     TdSample s;
     s.t_cam_ns = r.to_int64(f[0], "timestamp [ns]");
     s.td_s = r.to_double(f[1], "td_s");
+    if (std::abs(s.td_s) > 10.0)
+      r.fail("time offset " + f[1] + " s is not a camera-IMU offset (more than 10 s)");
     if (!out.empty() && s.t_cam_ns <= out.back().t_cam_ns)
       r.fail(s.t_cam_ns == out.back().t_cam_ns ? "duplicate timestamp" : "timestamp is not after the previous row");
     out.push_back(s);

@@ -34,7 +34,7 @@ void FilterHealth::on_update(const State &s, const UpdateStats &st) {
   total_.gated += e.tally.gated;
   total_.failed_triangulation += e.tally.failed_triangulation;
   recent_.push_back(e);
-  const double keep_ns = std::max(opt_.window_s, opt_.td_window_s) * 1e9;
+  const double keep_ns = std::max(opt_.window_s, opt_.td_window_s + opt_.td_persist_s) * 1e9 + 1e8;
   while (!recent_.empty() && static_cast<double>(s.t_imu_ns - recent_.front().t_ns) > keep_ns)
     recent_.pop_front();
 }
@@ -103,30 +103,45 @@ void FilterHealth::check_rates(const State &s) const {
   }
 }
 
+FilterHealth::TdStep FilterHealth::td_step(size_t end) const {
+  // A consistent filter's estimate changes between two times by what its covariance lost in between (plus process
+  // noise): the change has variance P(then) − P(now). "Then" is the newest update at least td_window_s older.
+  TdStep r;
+  const Entry &now = recent_[end];
+  const Entry *then = nullptr;
+  for (size_t i = 0; i < end; ++i)
+    if (static_cast<double>(now.t_ns - recent_[i].t_ns) >= opt_.td_window_s * 1e9)
+      then = &recent_[i];
+  if (!then)
+    return r;
+  r.dt = ov_core::ns_to_s(now.t_ns - then->t_ns);
+  r.moved = std::abs(now.td - then->td);
+  r.step = r.moved - opt_.td_rate_allowance * r.dt;
+  r.allowed = std::sqrt(std::max(0.0, then->td_var - now.td_var) + opt_.td_random_walk * opt_.td_random_walk * r.dt);
+  return r;
+}
+
 void FilterHealth::check_td(const State &s) const {
   if (!s.estimates_td() || recent_.size() < 2)
     return;
-  // A consistent filter's estimate changes between two times by what its covariance lost in between (plus process
-  // noise): the change has variance P(then) − P(now). The oldest update at least td_window_s old is "then".
-  const Entry &now = recent_.back();
-  const Entry *then = nullptr;
-  for (const auto &e : recent_)
-    if (static_cast<double>(now.t_ns - e.t_ns) >= opt_.td_window_s * 1e9)
-      then = &e;
-  if (!then)
+  const auto runaway = [&](const TdStep &st) {
+    return st.step > opt_.td_min_step_s && st.step > opt_.td_max_z * std::max(st.allowed, 1e-9);
+  };
+  const TdStep now = td_step(recent_.size() - 1);
+  if (!runaway(now))
     return;
-  const double dt = ov_core::ns_to_s(now.t_ns - then->t_ns);
-  const double step = std::abs(now.td - then->td) - opt_.td_rate_allowance * dt;
-  const double var = std::max(0.0, then->td_var - now.td_var) + opt_.td_random_walk * opt_.td_random_walk * dt;
-  const double z = step / std::sqrt(std::max(var, 1e-18));
-  if (step > opt_.td_min_step_s && z > opt_.td_max_z) {
-    char msg[400];
-    std::snprintf(msg, sizeof msg,
-                  "the time offset is running away: t_d moved %.1f ms in %.1f s where its covariance allowed %.2f ms "
-                  "(%.0f sigma) - a diverging estimate, not a measurement",
-                  std::abs(now.td - then->td) * 1e3, dt, std::sqrt(var) * 1e3, z);
-    throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));
-  }
+  // The same a second earlier: a sustained walk, not the one-off jump of a filter converging from far off.
+  size_t earlier = recent_.size() - 1;
+  while (earlier > 0 && static_cast<double>(recent_.back().t_ns - recent_[earlier].t_ns) < opt_.td_persist_s * 1e9)
+    --earlier;
+  if (!runaway(td_step(earlier)))
+    return;
+  char msg[400];
+  std::snprintf(msg, sizeof msg,
+                "the time offset is running away: t_d moved %.1f ms in %.1f s where its covariance allowed %.2f ms "
+                "(%.0f sigma), and as much the second before - a diverging estimate, not a measurement",
+                now.moved * 1e3, now.dt, now.allowed * 1e3, now.step / std::max(now.allowed, 1e-9));
+  throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));
 }
 
 } // namespace ov_msckf_ton

@@ -7,8 +7,9 @@
 //    second on, while t_d's sigma keeps shrinking; healthy runs keep ~90 %;
 //  - a gate rate far beyond chance: a 95 % chi-square gate rejects 5 % of consistent features;
 //  - t_d running away from its own uncertainty: the image-plane modes on a fast start walked from 10 to 80-98 ms with
-//    sigma 0.2-0.4 ms, moving 8-15 ms in 2 s where their covariance allowed < 0.4 ms (36-117 sigma); a converging run
-//    moves at most a few sigma of the information it gains.
+//    sigma 0.2-0.4 ms, moving 8-15 ms in 2 s where their covariance allowed < 0.4 ms (14-117 sigma, for seconds on
+//    end); sr converging from 50 ms off on rendered V1_02 jumped ~11 sigma in one window (an over-confident but
+//    right estimate), so the step must exceed 15 sigma in two windows a second apart.
 #include "ov_msckf_ton/core/vio_options.h"
 #include "ov_msckf_ton/state/state.h"
 #include "ov_msckf_ton/update/updater_msckf.h"
@@ -27,9 +28,12 @@ struct FilterHealthOptions {
   /// gated / (used + gated): ten times what a 95 % gate rejects by chance; over 60+ features no consistent filter
   /// gets there (binomial tail < 1e-30).
   double max_gate_rate = 0.5;
-  double td_window_s = 2.0;       ///< t_d's change is judged over this lag
-  double td_min_step_s = 2e-3;    ///< changes below this are never a runaway
-  double td_max_z = 10.0;         ///< change / sqrt(variance gained + process noise) above this is one
+  double td_window_s = 2.0;    ///< t_d's change is judged over this lag
+  double td_persist_s = 1.0;   ///< ... in the window ending now and in the one ending this much earlier
+  double td_min_step_s = 2e-3; ///< changes below this are never a runaway
+  /// change / sqrt(variance gained + process noise) above this, in both windows, is one. sr converging from 50 ms off
+  /// reached 11 (a jump, in one window); the runaways 14-117, for seconds.
+  double td_max_z = 15.0;
   double td_random_walk = 0.0;    ///< s/sqrt(s): process noise the change may use
   double td_rate_allowance = 0.0; ///< s/s: drift a mode may impose on the mean (TPN's clamp)
 };
@@ -69,9 +73,15 @@ private:
   };
   void check_rates(const State &s) const;
   void check_td(const State &s) const;
+  /// t_d's change over the td_window_s before recent_[end] beyond the mode's drift allowance, and what its covariance
+  /// and process noise allowed (both 0 when the history is too short).
+  struct TdStep {
+    double step = 0, allowed = 0, moved = 0, dt = 0;
+  };
+  TdStep td_step(size_t end) const;
 
   FilterHealthOptions opt_;
-  std::deque<Entry> recent_; ///< the last max(window_s, td_window_s) seconds of updates
+  std::deque<Entry> recent_; ///< the last max(window_s, td_window_s + td_persist_s) seconds of updates
   UpdateTally total_;
 };
 

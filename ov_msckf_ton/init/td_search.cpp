@@ -146,6 +146,74 @@ double rms_alpha(const std::vector<double> &t_img, size_t b, size_t e, const Gyr
   return n > 0 ? std::sqrt(sum / n) : 0.0;
 }
 
+/// Images [b, e) of the search and their gyro's RMS angular acceleration.
+struct Window {
+  size_t b = 0, e = 0;
+  double rms_alpha = -1;
+};
+
+/// The first window (starts 1 s apart, within max_start_s) whose rotation changes enough to fix the time, else the one
+/// that changes most.
+Window choose_window(const std::vector<double> &t_img, const GyroIntegral &gyro, double prior,
+                     const TdSearchOptions &opt) {
+  Window best;
+  for (double start = 0; start <= opt.max_start_s && start <= t_img.back(); start += 1.0) {
+    Window w;
+    w.b = std::lower_bound(t_img.begin(), t_img.end(), start) - t_img.begin();
+    w.e = std::lower_bound(t_img.begin(), t_img.end(), start + opt.window_s) - t_img.begin();
+    w.rms_alpha = rms_alpha(t_img, w.b, w.e, gyro, prior);
+    if (w.rms_alpha > best.rms_alpha)
+      best = w;
+    if (w.rms_alpha >= opt.min_rms_alpha || w.e >= t_img.size())
+      break;
+  }
+  return best;
+}
+
+/// The images' rotation rate between consecutive frames of the window, in the body frame: KLT tracks (or a
+/// feature-level dataset's observations), a rotation-only fit per pair with 10 or more common features.
+std::vector<PairRate> image_pair_rates(const std::vector<ov_core::ImageEntry> &images, const Window &win,
+                                       const std::vector<double> &t_img, const ov_core::CameraCalib &cam,
+                                       const TdSearchOptions &opt, const TdSearchImageLoader &load) {
+  const ov_core::CameraModel camera(cam);
+  ov_core::TrackKLT tracker(camera, opt.track);
+  const Eigen::Matrix3d R_BC = cam.T_BC.block<3, 3>(0, 0);
+  const double huber_rad = 2.0 / std::max(camera.fu(), camera.fv());
+  std::unordered_map<size_t, Eigen::Vector3d> prev, curr;
+  std::vector<PairRate> pairs;
+  std::vector<Eigen::Vector3d> bear0, bear1;
+  for (size_t i = win.b; i < win.e; ++i) {
+    const auto &e = images[i];
+    curr.clear();
+    if (e.features) {
+      for (const auto &o : *e.features)
+        curr[o.id] = camera.undistort(o.uv).homogeneous().normalized();
+    } else {
+      const cv::Mat img = load ? load(e) : ov_core::load_gray_image(e, cam.width, cam.height);
+      for (const auto &f : tracker.track(e.t_cam_ns, img))
+        curr[f.id] = f.xy.homogeneous().normalized();
+    }
+    if (i > win.b) {
+      bear0.clear();
+      bear1.clear();
+      for (const auto &[id, b1] : curr)
+        if (auto it = prev.find(id); it != prev.end()) {
+          bear0.push_back(it->second);
+          bear1.push_back(b1);
+        }
+      const double dt = t_img[i] - t_img[i - 1];
+      if (bear0.size() >= 10 && dt > 0) {
+        // bear0 ≈ R_{C_{k-1} C_k}·bear1; the body rotation over the interval is R_BC·R·R_CB, so its rate is
+        // R_BC·log(R)/dt.
+        const Eigen::Matrix3d R = fit_rotation(bear0, bear1, huber_rad);
+        pairs.push_back({t_img[i - 1], t_img[i], R_BC * ov_core::so3_log(R) / dt});
+      }
+    }
+    std::swap(prev, curr);
+  }
+  return pairs;
+}
+
 } // namespace
 
 std::string TdSearchResult::summary() const {
@@ -182,70 +250,20 @@ TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const s
   for (size_t i = 0; i < images.size(); ++i)
     t_img[i] = ov_core::ns_to_s(images[i].t_cam_ns - t0);
 
-  // The window: the first one (starts 1 s apart) whose rotation changes enough to fix the time.
-  size_t best_b = 0, best_e = 0;
-  double best_alpha = -1;
-  for (double start = 0; start <= opt.max_start_s && start <= t_img.back(); start += 1.0) {
-    const size_t b = std::lower_bound(t_img.begin(), t_img.end(), start) - t_img.begin();
-    const size_t e = std::lower_bound(t_img.begin(), t_img.end(), start + opt.window_s) - t_img.begin();
-    const double a = rms_alpha(t_img, b, e, gyro, prior_td_s);
-    if (a > best_alpha) {
-      best_alpha = a;
-      best_b = b;
-      best_e = e;
-    }
-    if (a >= opt.min_rms_alpha || e >= images.size())
-      break;
-  }
-  res.rms_alpha = std::max(0.0, best_alpha);
-  if (best_e <= best_b + 2)
+  const Window win = choose_window(t_img, gyro, prior_td_s, opt);
+  res.rms_alpha = std::max(0.0, win.rms_alpha);
+  if (win.e <= win.b + 2)
     return finish("no stretch of images within the IMU log");
-  res.window_begin_s = t_img[best_b];
-  res.window_end_s = t_img[best_e - 1];
-  if (best_alpha < opt.min_rms_alpha) {
+  res.window_begin_s = t_img[win.b];
+  res.window_end_s = t_img[win.e - 1];
+  if (win.rms_alpha < opt.min_rms_alpha) {
     char why[160];
     std::snprintf(why, sizeof why, "too little rotation change (RMS angular acceleration %.2f rad/s^2 < %.2f)",
-                  best_alpha, opt.min_rms_alpha);
+                  win.rms_alpha, opt.min_rms_alpha);
     return finish(why);
   }
 
-  // The images' rotation between consecutive frames, in the body frame.
-  const ov_core::CameraModel camera(cam);
-  ov_core::TrackKLT tracker(camera, opt.track);
-  const Eigen::Matrix3d R_BC = cam.T_BC.block<3, 3>(0, 0);
-  const double huber_rad = 2.0 / std::max(camera.fu(), camera.fv());
-  std::unordered_map<size_t, Eigen::Vector3d> prev, curr;
-  std::vector<PairRate> pairs;
-  std::vector<Eigen::Vector3d> bear0, bear1;
-  for (size_t i = best_b; i < best_e; ++i) {
-    const auto &e = images[i];
-    curr.clear();
-    if (e.features) {
-      for (const auto &o : *e.features)
-        curr[o.id] = camera.undistort(o.uv).homogeneous().normalized();
-    } else {
-      const cv::Mat img = load ? load(e) : ov_core::load_gray_image(e, cam.width, cam.height);
-      for (const auto &f : tracker.track(e.t_cam_ns, img))
-        curr[f.id] = f.xy.homogeneous().normalized();
-    }
-    if (i > best_b) {
-      bear0.clear();
-      bear1.clear();
-      for (const auto &[id, b1] : curr)
-        if (auto it = prev.find(id); it != prev.end()) {
-          bear0.push_back(it->second);
-          bear1.push_back(b1);
-        }
-      const double dt = t_img[i] - t_img[i - 1];
-      if (bear0.size() >= 10 && dt > 0) {
-        // bear0 ≈ R_{C_{k-1} C_k}·bear1; the body rotation over the interval is R_BC·R·R_CB, so its rate is
-        // R_BC·log(R)/dt.
-        const Eigen::Matrix3d R = fit_rotation(bear0, bear1, huber_rad);
-        pairs.push_back({t_img[i - 1], t_img[i], R_BC * ov_core::so3_log(R) / dt});
-      }
-    }
-    std::swap(prev, curr);
-  }
+  std::vector<PairRate> pairs = image_pair_rates(images, win, t_img, cam, opt, load);
   // Every candidate must see the same pairs: keep those the gyro covers over the whole search range.
   pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
                              [&](const PairRate &p) {

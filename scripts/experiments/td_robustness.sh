@@ -5,7 +5,8 @@
 #  - the real moving EuRoC cut (../shared/data/euroc_v1_01_moving) with its stamps moved by +-100 ms
 #    (`ovton perturb --td-model constant`), started at 0 (config/euroc_mav/estimator_config.yaml, --init groundtruth).
 # Every run with the coarse t_d search (the default); sr also without it (--td-search off), which is what diverged.
-# Writes OUT/table.md (the docs/robustness.md table) and OUT/runs.csv; trajectories and logs in OUT/runs/.
+# Writes OUT/summary.md (the docs/robustness.md table), OUT/table.md (every run) and OUT/runs.csv; trajectories and logs
+# in OUT/runs/.
 # Usage: nice -n 10 scripts/experiments/td_robustness.sh [OUT] [DURATION_S]   (needs ../shared/data; ~40 min, 2 cores)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -79,17 +80,5 @@ done
 # The unperturbed cut: EuRoC's own offset, which the ±100 ms truths above leave out.
 one "moving_cut" "$REAL" config/euroc_mav/estimator_config.yaml "--init groundtruth" sr on 0 0
 
-python3 - "$RUNS" "$OUT/table.md" "$COMMIT" "$DUR" <<'PY'
-import csv, sys
-rows = list(csv.DictReader(open(sys.argv[1])))
-out = open(sys.argv[2], "w")
-out.write(f"Made by `scripts/experiments/td_robustness.sh OUT {sys.argv[4]}` at commit {sys.argv[3]}.\n\n")
-out.write("| data | mode | t_d search | true t_d [ms] | start [ms] | exit | search found [ms] | final t̂_d [ms] | "
-          "σ [ms] | within 1 ms after [s] | wall [s] | APE [m] |\n")
-out.write("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
-for r in rows:
-    out.write(f"| {r['dataset']} | {r['mode']} | {r['search']} | {r['td_true_ms']} | {r['td_init_ms']} | {r['exit']} | "
-              f"{r['search_ms']} | {r['final_td_ms']} | {r['final_sigma_ms']} | {r['converged_after_s']} | "
-              f"{r['wall_s']} | {r['ape_m']} |\n")
-PY
-cat "$OUT/table.md"
+python3 scripts/experiments/td_robustness_tables.py "$RUNS" "$OUT" "$COMMIT" "$DUR"
+cat "$OUT/summary.md"
