@@ -14,14 +14,18 @@
 
 namespace ovfuzz {
 
-/// A folder unique to this process (libFuzzer's -jobs/-workers run several), created once.
+/// A folder unique to this process (libFuzzer's -jobs/-workers run several), created once and removed at exit.
 inline const std::filesystem::path &scratch() {
-  static const std::filesystem::path dir = [] {
-    auto p = std::filesystem::temp_directory_path() / ("ovton_fuzz_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(p);
-    return p;
-  }();
-  return dir;
+  struct Dir {
+    std::filesystem::path path = std::filesystem::temp_directory_path() / ("ovton_fuzz_" + std::to_string(::getpid()));
+    Dir() { std::filesystem::create_directories(path); }
+    ~Dir() {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);
+    }
+  };
+  static const Dir dir;
+  return dir.path;
 }
 
 inline std::string write_file(const std::string &rel, const std::string &bytes) {

@@ -17,6 +17,8 @@ if [ ! -f build-asan/CMakeCache.txt ]; then
   cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DOVTON_FUZZ=ON >/dev/null
 fi
 cmake --build build-asan -j"$JOBS" --target "${TARGETS[@]/#/fuzz_}" >/dev/null
+# Each input is written to files before the readers see it: in memory when /dev/shm is there.
+[ -d /dev/shm ] && [ -w /dev/shm ] && export TMPDIR=/dev/shm
 status=0
 for t in "${TARGETS[@]}"; do
   corpus=build-asan/fuzz/corpus/$t findings=build-asan/fuzz/findings/$t
