@@ -95,8 +95,8 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
 
   // One coarse t_d search for every mode that estimates t_d (off keeps its fixed value, oracle reads the truth).
   ov_msckf_ton::VioOptions searched = req.base, unsearched = req.base;
-  searched.td_mode = TdMode::Sr;
-  unsearched.td_search = false;
+  searched.td.mode = TdMode::Sr;
+  unsearched.td.search = false;
   if (const auto s = run_td_search(data, searched)) {
     info.notes.push_back("coarse t_d search (shared by the modes that estimate t_d): " + s->summary());
     if (req.log)
@@ -105,8 +105,9 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
 
   const auto run_one = [&](const std::string &name) {
     RunRequest rr;
-    rr.opt = req.base;
-    ov_msckf_ton::apply_mode_spec(spec_of.at(name), rr.opt);
+    const ov_msckf_ton::ModeSpec &spec = spec_of.at(name);
+    rr.opt = spec.mode == TdMode::Off || spec.mode == TdMode::Oracle ? unsearched : searched;
+    ov_msckf_ton::apply_mode_spec(spec, rr.opt);
     rr.output = (fs::path(req.out_dir) / ("traj_" + name + ".csv")).string();
     rr.max_images = req.max_images;
     rr.progress = false; // parallel bars would overwrite each other; the log has one line per finished mode

@@ -19,18 +19,18 @@ void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov
 
 std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt) {
   using ov_msckf_ton::TdMode;
-  const bool due = opt.td_search && opt.td_mode != TdMode::Off && opt.td_mode != TdMode::Oracle;
-  opt.td_search = false;
+  const bool due = opt.td.search && opt.td.mode != TdMode::Off && opt.td.mode != TdMode::Oracle;
+  opt.td.search = false;
   if (!due)
     return std::nullopt;
   ov_msckf_ton::TdSearchOptions so;
-  so.range_s = opt.td_search_range_s;
+  so.range_s = opt.td.search_range_s;
   so.track = opt.track;
-  const auto r = ov_msckf_ton::search_td(data.images, data.imu, data.cam, opt.td_init_s, so);
+  const auto r = ov_msckf_ton::search_td(data.images, data.imu, data.cam, opt.td.init_s, so);
   if (r.found) {
-    opt.td_init_s = r.td_s;
+    opt.td.init_s = r.td_s;
     // The filter's prior must cover the search's own error.
-    opt.td_sigma_init_s = std::max(opt.td_sigma_init_s, 3 * r.sigma_s);
+    opt.td.sigma_init_s = std::max(opt.td.sigma_init_s, 3 * r.sigma_s);
   }
   return r;
 }
@@ -78,8 +78,14 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   std::unique_ptr<ov_core::ImagePrefetcher> prefetcher;
   if (req.prefetch && !data.images.empty() && !data.images.front().features)
     prefetcher = std::make_unique<ov_core::ImagePrefetcher>(data.images);
-    vio.set_image_source([&prefetcher](const ov_core::ImageEntry &e) { return prefetcher->get(e); });
-  }
+  // An image of the wrong size is reported with its file here, not as a tracker error without one.
+  vio.set_image_source([&prefetcher, &data](const ov_core::ImageEntry &e) {
+    if (!prefetcher)
+      return ov_core::load_gray_image(e, data.cam.width, data.cam.height);
+    cv::Mat img = prefetcher->get(e);
+    ov_core::check_gray_image(img, e, data.cam.width, data.cam.height);
+    return img;
+  });
   ProgressBar bar(req.label.empty() ? "run " + ov_msckf_ton::to_string(opt.td.mode) : req.label, !req.progress);
   const auto t0 = std::chrono::steady_clock::now();
   size_t last_i = 0;

@@ -20,13 +20,11 @@ std::string where(const State &s) {
 } // namespace
 
 FilterHealth::FilterHealth(const VioOptions &o) {
-  opt_.enabled = o.health_checks;
-  opt_.td_random_walk = uses_tpn(o.td_mode) ? o.td_random_walk_tpn : o.td_random_walk;
-  opt_.td_rate_allowance = uses_tpn(o.td_mode) ? o.td_rate_max : 0.0;
+  opt_.enabled = o.health.enabled;
 }
 
-void FilterHealth::on_update(const State &s, const UpdateStats &st) {
-  Entry e{s.t_imu_ns, {}, s.td, s.estimates_td() ? s.P(s.td_index, s.td_index) : 0.0};
+void FilterHealth::on_update(int64_t t_ns, const UpdateStats &st) {
+  Tally e{t_ns, {}};
   e.tally.used = st.features_used;
   e.tally.gated = st.gated_chi2;
   e.tally.failed_triangulation = st.rejected_triangulation;
@@ -34,17 +32,22 @@ void FilterHealth::on_update(const State &s, const UpdateStats &st) {
   total_.gated += e.tally.gated;
   total_.failed_triangulation += e.tally.failed_triangulation;
   recent_.push_back(e);
-  const double keep_ns = std::max(opt_.window_s, opt_.td_window_s + opt_.td_persist_s) * 1e9 + 1e8;
-  while (!recent_.empty() && static_cast<double>(s.t_imu_ns - recent_.front().t_ns) > keep_ns)
+  while (!recent_.empty() && static_cast<double>(t_ns - recent_.front().t_ns) > opt_.window_s * 1e9)
     recent_.pop_front();
+}
+
+void FilterHealth::on_td_update(int64_t t_ns, double td_prior, double var_prior, double td_post, double var_post) {
+  if (first_correction_ns_ < 0)
+    first_correction_ns_ = t_ns;
+  corrections_.push_back({t_ns, td_post - td_prior, std::max(0.0, var_prior - var_post)});
+  const double keep_ns = (opt_.td_window_s + opt_.td_persist_s) * 1e9;
+  while (!corrections_.empty() && static_cast<double>(t_ns - corrections_.front().t_ns) > keep_ns)
+    corrections_.pop_front();
 }
 
 UpdateTally FilterHealth::window() const {
   UpdateTally w;
-  const int64_t newest = recent_.empty() ? 0 : recent_.back().t_ns;
   for (const auto &e : recent_) {
-    if (static_cast<double>(newest - e.t_ns) > opt_.window_s * 1e9)
-      continue;
     w.used += e.tally.used;
     w.gated += e.tally.gated;
     w.failed_triangulation += e.tally.failed_triangulation;
@@ -103,44 +106,37 @@ void FilterHealth::check_rates(const State &s) const {
   }
 }
 
-FilterHealth::TdStep FilterHealth::td_step(size_t end) const {
-  // A consistent filter's estimate changes between two times by what its covariance lost in between (plus process
-  // noise): the change has variance P(then) − P(now). "Then" is the newest update at least td_window_s older.
-  TdStep r;
-  const Entry &now = recent_[end];
-  const Entry *then = nullptr;
-  for (size_t i = 0; i < end; ++i)
-    if (static_cast<double>(now.t_ns - recent_[i].t_ns) >= opt_.td_window_s * 1e9)
-      then = &recent_[i];
-  if (!then)
-    return r;
-  r.dt = ov_core::ns_to_s(now.t_ns - then->t_ns);
-  r.moved = std::abs(now.td - then->td);
-  r.step = r.moved - opt_.td_rate_allowance * r.dt;
-  r.allowed = std::sqrt(std::max(0.0, then->td_var - now.td_var) + opt_.td_random_walk * opt_.td_random_walk * r.dt);
+FilterHealth::TdSum FilterHealth::td_sum(int64_t end_ns) const {
+  TdSum r;
+  const int64_t begin_ns = end_ns - static_cast<int64_t>(opt_.td_window_s * 1e9);
+  r.covered = first_correction_ns_ >= 0 && first_correction_ns_ <= begin_ns;
+  for (const auto &c : corrections_)
+    if (c.t_ns > begin_ns && c.t_ns <= end_ns) {
+      r.moved += c.delta;
+      r.allowed_var += c.var_drop;
+    }
   return r;
 }
 
 void FilterHealth::check_td(const State &s) const {
-  if (!s.estimates_td() || recent_.size() < 2)
+  if (!s.estimates_td() || corrections_.empty())
     return;
-  const auto runaway = [&](const TdStep &st) {
-    return st.step > opt_.td_min_step_s && st.step > opt_.td_max_z * std::max(st.allowed, 1e-9);
+  const auto runaway = [&](const TdSum &t) {
+    const double moved = std::abs(t.moved);
+    return t.covered && moved > opt_.td_min_step_s && moved > opt_.td_max_z * std::sqrt(t.allowed_var);
   };
-  const TdStep now = td_step(recent_.size() - 1);
-  if (!runaway(now))
-    return;
+  const int64_t now_ns = corrections_.back().t_ns;
+  const TdSum now = td_sum(now_ns);
   // The same a second earlier: a sustained walk, not the one-off jump of a filter converging from far off.
-  size_t earlier = recent_.size() - 1;
-  while (earlier > 0 && static_cast<double>(recent_.back().t_ns - recent_[earlier].t_ns) < opt_.td_persist_s * 1e9)
-    --earlier;
-  if (!runaway(td_step(earlier)))
+  if (!runaway(now) || !runaway(td_sum(now_ns - static_cast<int64_t>(opt_.td_persist_s * 1e9))))
     return;
   char msg[400];
   std::snprintf(msg, sizeof msg,
-                "the time offset is running away: t_d moved %.1f ms in %.1f s where its covariance allowed %.2f ms "
-                "(%.0f sigma), and as much the second before - a diverging estimate, not a measurement",
-                now.moved * 1e3, now.dt, now.allowed * 1e3, now.step / std::max(now.allowed, 1e-9));
+                "the time offset is running away: the updates moved t_d by %.1f ms in %.1f s where the information "
+                "they added allowed %.2f ms (%.0f sigma), and as much the second before - a diverging estimate, not "
+                "a measurement",
+                now.moved * 1e3, opt_.td_window_s, std::sqrt(now.allowed_var) * 1e3,
+                std::abs(now.moved) / std::max(std::sqrt(now.allowed_var), 1e-12));
   throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));
 }
 

@@ -6,10 +6,13 @@
 //    fewer than 5 % of the features its updates examine (triangulation fails, the gate rejects), from the first
 //    second on, while t_d's sigma keeps shrinking; healthy runs keep ~90 %;
 //  - a gate rate far beyond chance: a 95 % chi-square gate rejects 5 % of consistent features;
-//  - t_d running away from its own uncertainty: the image-plane modes on a fast start walked from 10 to 80-98 ms with
-//    sigma 0.2-0.4 ms, moving 8-15 ms in 2 s where their covariance allowed < 0.4 ms (14-117 sigma, for seconds on
-//    end); sr converging from 50 ms off on rendered V1_02 jumped ~11 sigma in one window (an over-confident but
-//    right estimate), so the step must exceed 15 sigma in two windows a second apart.
+//  - t_d running away from its own uncertainty. In a consistent filter the corrections the updates make to t_d are
+//    martingale increments: their sum over a stretch has the variance those updates took off t_d's covariance. The
+//    paper's image-plane modes on a fast start walked from 10 to 80-98 ms with sigma 0.2-0.4 ms, moving 8-15 ms in
+//    2 s where their updates allowed < 0.4 ms (14-117 sigma, for seconds on end); sr converging from 50 ms off on a
+//    rendered V1_02 flight jumped ~11 sigma in one window (over-confident, but right), so the sum must exceed 15 sigma
+//    in two windows a second apart. What the t_d model does between updates (TPN's drive, the drift state, process
+//    noise) is not an update's correction and does not count.
 #include "ov_msckf_ton/core/vio_options.h"
 #include "ov_msckf_ton/state/state.h"
 #include "ov_msckf_ton/update/updater_msckf.h"
@@ -21,21 +24,17 @@
 namespace ov_msckf_ton {
 
 struct FilterHealthOptions {
-  bool enabled = true;          ///< false: only count (VioOptions::health_checks)
+  bool enabled = true;          ///< false: only count (VioOptions::health)
   double window_s = 3.0;        ///< acceptance and gate rate are judged over the updates of this last stretch
   int min_features = 60;        ///< features examined in the window before a rate is judged (fewer say little)
   double min_acceptance = 0.25; ///< used / examined (triangulation failures included)
   /// gated / (used + gated): ten times what a 95 % gate rejects by chance; over 60+ features no consistent filter
   /// gets there (binomial tail < 1e-30).
   double max_gate_rate = 0.5;
-  double td_window_s = 2.0;    ///< t_d's change is judged over this lag
-  double td_persist_s = 1.0;   ///< ... in the window ending now and in the one ending this much earlier
-  double td_min_step_s = 2e-3; ///< changes below this are never a runaway
-  /// change / sqrt(variance gained + process noise) above this, in both windows, is one. sr converging from 50 ms off
-  /// reached 11 (a jump, in one window); the runaways 14-117, for seconds.
-  double td_max_z = 15.0;
-  double td_random_walk = 0.0;    ///< s/sqrt(s): process noise the change may use
-  double td_rate_allowance = 0.0; ///< s/s: drift a mode may impose on the mean (TPN's clamp)
+  double td_window_s = 2.0;    ///< t_d's corrections are summed over this stretch
+  double td_persist_s = 1.0;   ///< ... ending now and ending this much earlier
+  double td_min_step_s = 2e-3; ///< sums below this are never a runaway
+  double td_max_z = 15.0;      ///< |sum| / sqrt(variance the updates took off) above this, in both windows, is one
 };
 
 /// Counts of one stretch of updates.
@@ -49,14 +48,16 @@ struct UpdateTally {
 class FilterHealth {
 public:
   explicit FilterHealth(const FilterHealthOptions &opt = {}) : opt_(opt) {}
-  /// Thresholds as above, process noise and drift allowance of the options' mode, enabled by health_checks.
+  /// The thresholds above, enabled by the options' health.enabled.
   explicit FilterHealth(const VioOptions &opt);
 
-  /// After each MSCKF update at the state's time, with the state after it.
-  void on_update(const State &s, const UpdateStats &st);
+  /// After each MSCKF update, at the state's IMU-clock time.
+  void on_update(int64_t t_ns, const UpdateStats &st);
+  /// After each EKF update (MSCKF, SLAM): t_d's mean and variance before and after it.
+  void on_td_update(int64_t t_ns, double td_prior, double var_prior, double td_post, double var_post);
   /// Before a state is handed out. Throws ov_core::EstimatorFailure saying what went wrong when the state or its
-  /// covariance is not finite, the last window's acceptance collapsed or its gate rate is far beyond chance, or t_d
-  /// moved far more than its covariance allows.
+  /// covariance is not finite, the last window's acceptance collapsed or its gate rate is far beyond chance, or the
+  /// updates moved t_d far more than they allowed.
   void check(const State &s) const;
 
   const UpdateTally &total() const { return total_; }
@@ -66,22 +67,27 @@ public:
   static std::string nonfinite_part(const State &s);
 
 private:
-  struct Entry {
-    int64_t t_ns;
-    UpdateTally tally;
-    double td, td_var;
+  /// Corrections to t_d over the td_window_s ending at end_ns: their sum and the variance the updates took off.
+  struct TdSum {
+    double moved = 0, allowed_var = 0;
+    bool covered = false; ///< the history reaches back over the whole window
   };
+  TdSum td_sum(int64_t end_ns) const;
   void check_rates(const State &s) const;
   void check_td(const State &s) const;
-  /// t_d's change over the td_window_s before recent_[end] beyond the mode's drift allowance, and what its covariance
-  /// and process noise allowed (both 0 when the history is too short).
-  struct TdStep {
-    double step = 0, allowed = 0, moved = 0, dt = 0;
-  };
-  TdStep td_step(size_t end) const;
 
+  struct Tally {
+    int64_t t_ns;
+    UpdateTally tally;
+  };
+  struct TdCorrection {
+    int64_t t_ns;
+    double delta, var_drop;
+  };
   FilterHealthOptions opt_;
-  std::deque<Entry> recent_; ///< the last max(window_s, td_window_s + td_persist_s) seconds of updates
+  std::deque<Tally> recent_;             ///< the last window_s seconds of MSCKF updates
+  std::deque<TdCorrection> corrections_; ///< the last td_window_s + td_persist_s seconds of t_d corrections
+  int64_t first_correction_ns_ = -1;
   UpdateTally total_;
 };
 

@@ -90,6 +90,8 @@ public:
   const TdModel &td_model() const { return *td_model_; }
   /// TPN driver (process tpn: modes tpn, ton), nullptr otherwise.
   const TpnDriver *tpn() const;
+  /// Update acceptance so far; every state handed out has passed its check (filter_health.h).
+  const FilterHealth &health() const { return health_; }
 
 private:
   void process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time_point t_start);
@@ -142,6 +144,7 @@ private:
   std::map<int64_t, Eigen::Vector3d> clone_rates_; ///< body rate at each clone, for the residual log
   StageTimes times_;
   VioCounters counters_;
+  FilterHealth health_;
 };
 
 } // namespace ov_msckf_ton

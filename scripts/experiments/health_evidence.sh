@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The measurements behind FilterHealth's thresholds (docs/robustness.md): healthy and diverged runs watched to their end
-# (health_checks: false, td_search: false), per second the features accepted / gated / failing triangulation (from the
+# (--health-checks off --td-search off), per second the features accepted / gated / failing triangulation (from the
 # residual log's status column), and the largest 2-s step of t̂_d (> 2 ms) in units of what its covariance allowed.
 # Usage: nice -n 10 scripts/experiments/health_evidence.sh [OUT] [RENDERED_FOLDER]
 #   RENDERED_FOLDER: a rendered V1_02 flight (as td_robustness.sh makes: simulate --gt V1_02_medium.txt --start-s 5
@@ -17,13 +17,11 @@ V102=${2:-$OUT/data_V1_02_medium}
   --duration-s 25 --td0-ms 10 --seed 1 -q
 FEAT="$OUT/data_builtin_features"
 [ -d "$FEAT/mav0" ] || "$BIN" simulate --out "$FEAT" --builtin --duration-s 8 --features-only --seed 11 --td0-ms 10 -q
-for base in sim euroc_mav; do
-  { cat config/$base/estimator_config.yaml; printf 'health_checks: false\ntd_search: false\n'; } >"$OUT/$base.yaml"
-done
 
 # label folder config mode td_init_ms [extra]
 one() {
-  "$BIN" run --dataset "$2" --config "$OUT/$3.yaml" --td-mode "$4" --td-init-ms "$5" ${6:-} \
+  "$BIN" run --dataset "$2" --config "config/$3/estimator_config.yaml" --health-checks off --td-search off \
+    --td-mode "$4" --td-init-ms "$5" ${6:-} \
     --output "$OUT/$1.csv" --residual-log "$OUT/$1_res.csv" -q >"$OUT/$1.log" 2>&1 || echo "$1: exit $?" >>"$OUT/$1.log"
 }
 one v102_sr_10 "$V102" sim sr 10
