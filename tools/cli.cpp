@@ -1,4 +1,5 @@
 #include "tools/cli.h"
+#include "ov_core/types/errors.h"
 
 #include <iostream>
 
@@ -13,6 +14,12 @@ bool parse_command_line(const Args &args, const boost::program_options::options_
   }
   boost::program_options::notify(vm);
   return true;
+}
+
+bool parse_on_off(const std::string &value, const char *option) {
+  if (value != "on" && value != "off")
+    throw ov_core::UsageError(std::string(option) + " must be on or off, not '" + value + "'");
+  return value == "on";
 }
 
 } // namespace ovton

@@ -3,6 +3,7 @@
 #include "tools/commands.h"
 
 #include <boost/program_options.hpp>
+#include <string>
 
 namespace ovton {
 
@@ -10,5 +11,8 @@ namespace ovton {
 /// Missing required options and malformed values throw boost::program_options::error (main() reports them).
 bool parse_command_line(const Args &args, const boost::program_options::options_description &desc,
                         boost::program_options::variables_map &vm);
+
+/// "on" -> true, "off" -> false; anything else is a UsageError naming the option.
+bool parse_on_off(const std::string &value, const char *option);
 
 } // namespace ovton

@@ -1,4 +1,5 @@
 // `ovton compare`: run one dataset under several time-offset modes and write the paper's tables and figures.
+#include "ov_core/io/csv.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/types/errors.h"
 #include "ov_eval/metrics.h"
@@ -77,6 +78,12 @@ int cmd_compare(const Args &args) {
   std::error_code ec;
   req.info.working_dir = std::filesystem::current_path(ec).string();
   req.log = &std::cerr;
+
+  // The results folder is checked before the dataset is loaded and any mode runs.
+  std::filesystem::create_directories(req.out_dir, ec);
+  if (ec)
+    throw ov_core::DataError(req.out_dir, "cannot create the results folder: " + ec.message());
+  ov_core::require_writable((std::filesystem::path(req.out_dir) / "results.md").string());
 
   const ov_core::Dataset data = ov_core::load_dataset(dataset);
   apply_dataset_defaults(data, false, req.base);

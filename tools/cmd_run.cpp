@@ -1,4 +1,5 @@
 // `ovton run`: replay a dataset folder through the estimator and write the trajectory.
+#include "ov_core/io/csv.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/types/errors.h"
 #include "ov_eval/metrics.h"
@@ -9,6 +10,7 @@
 
 #include <boost/program_options.hpp>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -21,7 +23,7 @@ namespace ovton {
 
 int cmd_run(const Args &args) {
   po::options_description desc("ovton run: replay a dataset folder through the MSCKF and write its trajectory");
-  std::string config, dataset, mode, format = "csv", init, nees_log;
+  std::string config, dataset, mode, format = "csv", init, nees_log, td_search, health;
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
   bool quiet = false, no_prefetch = false;
   RunRequest req;
@@ -38,6 +40,11 @@ int cmd_run(const Args &args) {
        "write each observation's image velocity by every rule and network here (for `ovton velocities`)") //
       ("init", po::value(&init), "static|groundtruth (overrides the config)")                             //
       ("td-init-ms", po::value(&td_init_ms), "initial / fixed t_d [ms] (overrides the config)")           //
+      ("td-search", po::value(&td_search),
+       "on|off: coarse t_d search around the initial t_d before the filter starts (overrides time_offset.search; "
+       "default on)") //
+      ("health-checks", po::value(&health),
+       "on|off: stop a run whose estimate has diverged, exit 4 (overrides health.enabled; default on)") //
       ("nees-log", po::value(&nees_log), "with --init groundtruth: write per-frame NEES (t_ns,ori,pos,td) here")(
           "max-images", po::value(&req.max_images), "stop after this many images") //
       ("no-prefetch", po::bool_switch(&no_prefetch),
@@ -57,8 +64,26 @@ int cmd_run(const Args &args) {
     ov_msckf_ton::apply_mode_spec(ov_msckf_ton::parse_mode_spec(mode), req.opt);
   if (!init.empty())
     req.opt.init.mode = ov_msckf_ton::parse_init_mode(init);
-  if (!std::isnan(td_init_ms))
+  if (!std::isnan(td_init_ms)) {
+    if (!(std::abs(td_init_ms) <= 10000))
+      throw ov_core::UsageError("--td-init-ms must be a number within +-10000 ms");
     req.opt.td.init_s = td_init_ms * 1e-3;
+  }
+  if (!td_search.empty())
+    req.opt.td.search = parse_on_off(td_search, "--td-search");
+  if (!health.empty())
+    req.opt.health.enabled = parse_on_off(health, "--health-checks");
+  // Every output is checked before the run: a typo should not cost a whole run.
+  std::vector<std::string> outputs = {req.output};
+  for (const auto *o : {&req.residual_log, &req.velocity_log, &nees_log})
+    if (!o->empty())
+      outputs.push_back(*o);
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    ov_core::require_writable(outputs[i]);
+    for (size_t j = 0; j < i; ++j)
+      if (std::filesystem::weakly_canonical(outputs[i]) == std::filesystem::weakly_canonical(outputs[j]))
+        throw ov_core::UsageError("two outputs are the same file: " + outputs[i]);
+  }
 
   const ov_core::Dataset data = ov_core::load_dataset(dataset);
   apply_dataset_defaults(data, !std::isnan(td_init_ms), req.opt);
@@ -66,7 +91,12 @@ int cmd_run(const Args &args) {
     ov_msckf_ton::print_vio_options(req.opt, std::cerr);
 
   install_interrupt_handler();
-  const RunResult r = run_dataset(data, req);
+  RunResult r;
+  try {
+    r = run_dataset(data, req);
+  } catch (const ov_core::EstimatorFailure &e) {
+    throw ov_core::EstimatorFailure(e.t_ns(), std::string(e.what()) + "; the rows before it are in " + req.output);
+  }
 
   const auto &c = r.counters;
   const auto &tm = r.times;
@@ -83,6 +113,12 @@ int cmd_run(const Args &args) {
             << c.td_rows_by_source[ov_msckf_ton::kVelocityF2fFvon] << " (" << c.td_features << " features); networks "
             << (tm.frames ? tm.networks / tm.frames : 0.0) << " ms/frame\n";
   std::cout << "initialisation: " << r.init_message << "\n";
+  if (r.td_search)
+    std::cout << "coarse t_d search: " << r.td_search->summary() << "\n";
+  const auto &acc = r.acceptance;
+  if (acc.examined() > 0)
+    std::cout << "update acceptance " << 100.0 * acc.acceptance() << " % of " << acc.examined() << " features ("
+              << acc.gated << " gated, " << acc.failed_triangulation << " failed triangulation)\n";
   if (tm.frames > 0)
     std::cout << "per frame [ms]: image load " << tm.image_load / tm.frames << ", tracking " << tm.tracking / tm.frames
               << ", propagation " << tm.propagation / tm.frames << ", update " << tm.update / tm.frames << "; "

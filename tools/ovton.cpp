@@ -1,4 +1,5 @@
-// ovton: the command-line front of ov_msckf_ton. Only this file turns exceptions into exit codes.
+// ovton: the command-line front of ov_msckf_ton. Only this file turns exceptions into exit codes: 2 usage, 3 data
+// (file and line), 4 a diverged estimate (filter_health.h), 130 interrupted; 1 anything else.
 #include "ov_core/types/errors.h"
 #include "tools/commands.h"
 
@@ -59,6 +60,9 @@ int main(int argc, char **argv) {
   } catch (const ov_core::DataError &e) {
     std::cerr << "ovton " << name << ": data error: " << e.what() << "\n";
     return 3;
+  } catch (const ov_core::EstimatorFailure &e) {
+    std::cerr << "ovton " << name << ": estimate failed: " << e.what() << "\n";
+    return 4;
   } catch (const ov_core::UsageError &e) {
     std::cerr << "ovton " << name << ": " << e.what() << "\n";
     return 2;

@@ -1,5 +1,7 @@
 #pragma once
 // Sensor messages. Every stamp is int64 nanoseconds; the clock is in the name (see ARCHITECTURE.md).
+#include "ov_core/types/time.h"
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -55,12 +57,5 @@ struct TdSample {
   int64_t t_cam_ns = 0;
   double td_s = 0.0;
 };
-
-inline double ns_to_s(int64_t ns) {
-  return static_cast<double>(ns) * 1e-9;
-}
-inline int64_t s_to_ns(double s) {
-  return static_cast<int64_t>(s >= 0 ? s * 1e9 + 0.5 : s * 1e9 - 0.5);
-}
 
 } // namespace ov_core

@@ -74,7 +74,7 @@ FvonProviderOptions fvon_options(const TonOptions &o) {
 VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, const ov_core::ImuCalib &imu)
     : opt_(opt), camera_(cam), tracker_(camera_, opt.track), propagator_(noise_from(imu, opt), opt.imu.gravity_mag),
       updater_(cam, updater_options(opt)), slam_(cam, slam_options(opt), updater_),
-      state_(std::make_unique<State>(estimates_td(opt.td.mode))) {
+      state_(std::make_unique<State>(estimates_td(opt.td.mode))), health_(opt) {
   validate_vio_options(opt_);
   state_->td = opt.td.init_s;
   // The calibration as the filter holds it; a variable (and a column in the updates) only where it is estimated.
@@ -341,6 +341,7 @@ template <typename UpdateFn> void VioManager::td_tracked_update(UpdateFn &&fn) {
   const double td0 = state_->td, v0 = state_->td_variance();
   fn();
   td_model_->after_update(td0, v0, state_->td, state_->td_variance());
+  health_.on_td_update(state_->t_imu_ns, td0, v0, state_->td, state_->td_variance());
 }
 
 void VioManager::finish_image(int64_t t_cam_ns) {
@@ -440,6 +441,7 @@ void VioManager::msckf_update(const std::vector<const ov_core::Feature *> &feats
   td_tracked_update(
       [&] { st = updater_.update(s, feats, td_observation(opt_.td.mode), velocities, log_ ? &records : nullptr); });
   ++counters_.updates;
+  health_.on_update(s.t_imu_ns, st);
   counters_.features_used += st.features_used;
   counters_.features_gated += st.gated_chi2;
   counters_.features_rejected += st.rejected_triangulation;
@@ -489,6 +491,7 @@ void VioManager::slam_update(int64_t t_cam_ns, const std::vector<const ov_core::
 
 ov_core::StateSample VioManager::snapshot() const {
   const State &s = *state_;
+  health_.check(s); // no row leaves the filter without it: a diverged estimate is an error, not an answer
   ov_core::StateSample o;
   o.t_ns = s.t_imu_ns;
   o.p = s.imu.p;

@@ -6,6 +6,7 @@
 #include "ov_core/io/velocity_log.h"
 #include "ov_core/track/feature_database.h"
 #include "ov_core/track/track_klt.h"
+#include "ov_msckf_ton/core/filter_health.h"
 #include "ov_msckf_ton/core/vio_options.h"
 #include "ov_msckf_ton/state/propagator.h"
 #include "ov_msckf_ton/state/state.h"
@@ -89,6 +90,8 @@ public:
   const TdModel &td_model() const { return *td_model_; }
   /// TPN driver (process tpn: modes tpn, ton), nullptr otherwise.
   const TpnDriver *tpn() const;
+  /// Update acceptance so far; every state handed out has passed its check (filter_health.h).
+  const FilterHealth &health() const { return health_; }
 
 private:
   void process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time_point t_start);
@@ -143,6 +146,7 @@ private:
   std::map<int64_t, Eigen::Vector3d> clone_rates_; ///< body rate at each clone, for the residual log
   StageTimes times_;
   VioCounters counters_;
+  FilterHealth health_;
 };
 
 } // namespace ov_msckf_ton

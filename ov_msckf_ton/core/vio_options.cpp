@@ -1,4 +1,5 @@
 #include "ov_msckf_ton/core/vio_options.h"
+#include "ov_core/io/yaml_file.h"
 #include "ov_core/types/errors.h"
 
 #include <yaml-cpp/yaml.h>
@@ -117,6 +118,8 @@ std::vector<Field> fields(VioOptions &o) {
       field(T, "adaptive_noise", td.adaptive_noise),
       enum_field<SirVelocity>(T, "sir_velocity", td.sir_velocity, parser(kSirVelocity), namer(kSirVelocity)),
       enum_field<FirstVelocity>(T, "first_velocity", td.first_velocity, parser(kFirstVelocity), namer(kFirstVelocity)),
+      field(T, "search", td.search),
+      field(T, "search_range_s", td.search_range_s),
       field(N, "fvon_max_labels", ton.fvon_max_labels),
       field(N, "fvon_min_f2f_labels", ton.fvon_min_f2f_labels),
       field(N, "fvon_gate_px_s", ton.fvon_gate_px_s),
@@ -179,6 +182,7 @@ std::vector<Field> fields(VioOptions &o) {
       field(S, "sigma_vel", in.sigma_vel),
       field(S, "sigma_bg", in.sigma_bg),
       field(S, "sigma_ba", in.sigma_ba),
+      field("health", "enabled", o.health.enabled),
   };
 }
 
@@ -236,9 +240,14 @@ void validate_vio_options(const VioOptions &o) {
   require(std::isfinite(c.readout_s) && std::abs(c.readout_s) < 0.1, "calibration.readout_s must be in (-0.1, 0.1) s");
   require(o.zupt.max_disparity_px >= 0 && o.zupt.sigma_v > 0, "zupt.max_disparity_px >= 0 and zupt.sigma_v > 0");
   require(o.imu.noise_multiplier > 0, "imu.noise_multiplier must be > 0");
+  // Physical ranges: gravity 0 would let the accel bias absorb 9.8 m/s^2.
   require(o.imu.gravity_mag > 0, "imu.gravity_mag must be > 0");
+  require(o.imu.gravity_mag <= 100, "imu.gravity_mag must be <= 100 m/s^2");
+  require(std::abs(td.init_s) <= 10, "time_offset.init_s must be within +-10 s");
+  require(td.search_range_s > 0 && td.search_range_s <= 1, "time_offset.search_range_s must be in (0, 1]");
   const auto &i = o.init;
   require(i.window_s > 0, "init.window_s must be > 0");
+  require(i.window_s <= 60, "init.window_s must be <= 60 s");
   require(i.max_accel_std > 0 && i.max_gyro_std > 0, "init.max_accel_std and init.max_gyro_std must be > 0");
   require(i.sigma_rollpitch > 0 && i.sigma_yaw > 0 && i.sigma_pos > 0 && i.sigma_vel > 0 && i.sigma_bg > 0 &&
               i.sigma_ba > 0,
@@ -267,7 +276,7 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
   const std::vector<Field> table = fields(o);
   std::set<std::string> sections_seen;
   for (const auto &sec : root) {
-    const std::string section = sec.first.as<std::string>();
+    const std::string section = ov_core::yaml_as<std::string>(sec.first, file, "section name");
     if (!sections_seen.insert(section).second)
       throw ov_core::DataError(file, line_of(sec.first), "duplicate section '" + section + "'");
     bool known = false;
@@ -277,12 +286,12 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
       throw ov_core::DataError(
           file, line_of(sec.first),
           "unknown section '" + section +
-              "' (expected time_offset, ton, update, slam, calibration, zupt, tracker, imu or init)");
+              "' (expected time_offset, ton, update, slam, calibration, zupt, tracker, imu, init or health)");
     if (!sec.second.IsMap())
       throw ov_core::DataError(file, line_of(sec.first), "section '" + section + "' must be a mapping of keys");
     std::set<std::string> keys_seen;
     for (const auto &kv : sec.second) {
-      const std::string key = kv.first.as<std::string>();
+      const std::string key = ov_core::yaml_as<std::string>(kv.first, file, "key");
       if (!keys_seen.insert(key).second)
         throw ov_core::DataError(file, line_of(kv.first), "duplicate key '" + section + "." + key + "'");
       const Field *match = nullptr;

@@ -45,6 +45,11 @@ struct TimeOffsetOptions {
   /// start.
   SirVelocity sir_velocity = SirVelocity::Central;
   FirstVelocity first_velocity = FirstVelocity::Next;
+  /// Before the filter starts, in the modes that estimate t_d: search init_s ± search_range_s with the images' rotation
+  /// rate against the gyro (init/td_search.h) and start from what it finds. Started 100+ ms off, the filter diverges
+  /// (docs/robustness.md); within a few ms it converges in about a second.
+  bool search = true;
+  double search_range_s = 0.2;
 };
 
 /// The paper's networks (Table I), trained online. Epochs are per training call, i.e. per frame; lower them to
@@ -133,6 +138,12 @@ struct InitOptions {
   double sigma_bg = 0.005, sigma_ba = 0.05;
 };
 
+/// Stop the run (ov_core::EstimatorFailure) when the estimate has evidently diverged (core/filter_health.h). Off only
+/// to watch a divergence to its end; a non-finite state stops the run either way.
+struct HealthOptions {
+  bool enabled = true;
+};
+
 struct VioOptions {
   TimeOffsetOptions td;
   TonOptions ton;
@@ -143,6 +154,7 @@ struct VioOptions {
   ov_core::TrackKLTOptions track; ///< YAML section `tracker`
   ImuOptions imu;
   InitOptions init;
+  HealthOptions health;
   std::string source; ///< file the options came from, "" for defaults
 };
 
