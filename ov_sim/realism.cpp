@@ -1,5 +1,6 @@
 #include "ov_sim/realism.h"
 #include "ov_core/types/errors.h"
+#include "ov_sim/imu_errors.h"
 #include "ov_sim/simulator.h"
 
 namespace ov_sim {
@@ -19,6 +20,7 @@ void apply_realism(const std::string &preset, SimOptions &opt) {
   opt.scene.light_ambient = defaults.scene.light_ambient;
   opt.render = defaults.render;
   opt.camera_effects = defaults.camera_effects;
+  opt.imu_errors = defaults.imu_errors;
   if (preset == "clean") {
     opt.realism = preset;
     return;
@@ -29,6 +31,7 @@ void apply_realism(const std::string &preset, SimOptions &opt) {
   opt.scene.texture = TextureStyle::Room;
   CameraEffectsOptions &c = opt.camera_effects;
   c.enabled = true;
+  opt.imu_errors = euroc_v1_01_imu_errors();
   if (preset == "harsh") {
     opt.scene.texture_density *= 0.6;
     c.scene_exposure_s *= 2.5; // a darker room: auto-exposure opens up to its limit, then gains

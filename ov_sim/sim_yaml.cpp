@@ -31,6 +31,34 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::Key << "noise" << YAML::Value << opt.imu_noise;
   e << YAML::Key << "bias_walk" << YAML::Value << opt.imu_bias_walk;
   e << YAML::Key << "gyro_scale_error" << YAML::Value << opt.gyro_scale; // planted: the gyro reads (1 + s)·ω
+  {
+    const ImuErrorModel &m = opt.imu_errors;
+    e << YAML::Key << "errors" << YAML::Value << YAML::BeginMap;
+    e << YAML::Key << "enabled" << YAML::Value << (m.enabled && opt.imu_from.empty());
+    if (m.enabled && opt.imu_from.empty()) {
+      const auto vec = [&](const char *key, const Eigen::Vector3d &v) {
+        e << YAML::Key << key << YAML::Value << YAML::Flow << std::vector<double>{v.x(), v.y(), v.z()};
+      };
+      const Eigen::Matrix3d &S = m.gyro_scale_misalignment;
+      e << YAML::Key << "gyro_scale_misalignment" << YAML::Value << YAML::Flow
+        << std::vector<double>{S(0, 0), S(0, 1), S(0, 2), S(1, 0), S(1, 1), S(1, 2), S(2, 0), S(2, 1), S(2, 2)};
+      vec("gyro_bias0", m.gyro_bias0);
+      vec("accel_bias0", m.accel_bias0);
+      e << YAML::Key << "flight_spectrum" << YAML::Value << YAML::BeginSeq;
+      for (const NoiseBand &b : m.flight_spectrum) {
+        e << YAML::Flow << YAML::BeginMap;
+        e << YAML::Key << "band_hz" << YAML::Value << YAML::Flow << std::vector<double>{b.low_hz, b.high_hz};
+        vec("gyro", b.gyro);
+        vec("accel", b.accel);
+        e << YAML::EndMap;
+      }
+      e << YAML::EndSeq;
+      e << YAML::Key << "ground_gyro_ratio" << YAML::Value << m.ground_gyro_ratio;
+      e << YAML::Key << "ground_accel_ratio" << YAML::Value << m.ground_accel_ratio;
+      e << YAML::Key << "flight_speed_mps" << YAML::Value << m.flight_speed_mps;
+    }
+    e << YAML::EndMap;
+  }
   e << YAML::Key << "gravity_W" << YAML::Value << YAML::Flow << std::vector<double>{0.0, 0.0, -9.81};
   e << YAML::EndMap;
   e << YAML::Key << "camera" << YAML::Value << YAML::BeginMap;

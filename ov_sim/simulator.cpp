@@ -21,7 +21,7 @@ namespace ov_sim {
 namespace {
 
 // Independent random streams per component: changing e.g. the scene never changes the IMU noise.
-enum Stream : uint64_t { kImu = 1, kTd = 2, kScene = 3, kFeatures = 4, kRenderNoise = 5 };
+enum Stream : uint64_t { kImu = 1, kTd = 2, kScene = 3, kFeatures = 4, kRenderNoise = 5, kImuErrors = 6 };
 
 std::ofstream open_out(const fs::path &p) {
   fs::create_directories(p.parent_path());
@@ -185,6 +185,10 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   io.gyro_scale = opt.gyro_scale;
   io.seed = derive_seed(opt.seed, kImu);
   ImuSynthResult imu = synthesize_imu(*traj, io);
+  if (opt.imu_errors.enabled && opt.imu_from.empty())
+    add_imu_errors(*traj, opt.imu_errors, opt.imu_noise ? opt.imu.gyro_noise_density : 0.0,
+                   opt.imu_noise ? opt.imu.accel_noise_density : 0.0, derive_seed(opt.seed, kImuErrors), imu.imu,
+                   imu.truth);
   if (!opt.imu_from.empty()) {
     ov_core::LoadOptions lo;
     lo.check_images_exist = false;

@@ -3,6 +3,7 @@
 #include "ov_core/cam/camera_calib.h"
 #include "ov_sim/camera_effects.h"
 #include "ov_sim/feature_sim.h"
+#include "ov_sim/imu_errors.h"
 #include "ov_sim/imu_synth.h"
 #include "ov_sim/renderer.h"
 #include "ov_sim/scene.h"
@@ -28,8 +29,9 @@ struct SimOptions {
   std::string cam_source = "builtin EuRoC cam0", imu_source = "builtin EuRoC imu0 (ADIS16448)";
   bool imu_noise = true;
   bool imu_bias_walk = true;
-  std::string imu_from; ///< semi-real: copy imu0/data.csv of this folder instead of synthesising
-  TdModelOptions td;    ///< its seed is derived from `seed`
+  std::string imu_from;     ///< semi-real: copy imu0/data.csv of this folder instead of synthesising
+  ImuErrorModel imu_errors; ///< synthetic IMU: errors beyond the datasheet (imu_errors.h); off by default
+  TdModelOptions td;        ///< its seed is derived from `seed`
   /// Rolling shutter: image row v (distorted pixel row, continuous) is exposed at the frame's IMU-clock instant
   /// + v / height · readout_s; the stamp (and td_truth) belongs to row 0. 0: global shutter.
   double readout_s = 0.0;

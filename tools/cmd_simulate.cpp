@@ -1,6 +1,8 @@
 // `ovton simulate`: synthetic EuRoC-format folder with a known camera-IMU time offset (see docs/simulate.md).
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/trajectory_io.h"
 #include "ov_core/types/errors.h"
+#include "ov_sim/imu_match.h"
 #include "ov_sim/realism.h"
 #include "ov_sim/simulator.h"
 #include "tools/cli.h"
@@ -10,6 +12,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
 
@@ -114,13 +117,35 @@ int cmd_simulate(const Args &args) {
       ("imu-yaml", po::value(&imu_yaml), "EuRoC imu0/sensor.yaml to use (default: built-in ADIS16448)")       //
       ("pixel-noise", po::value(&o.features.pixel_noise)->default_value(1.0), "features-only: noise [px]")    //
       ("max-tracks", po::value(&o.features.max_tracks)->default_value(200), "features-only: live tracks")     //
-      ("benchmark", "measure render speed (one core) and disk size per minute; --out optional")               //
-      ("benchmark-frames", po::value(&bench_frames)->default_value(100), "frames rendered by --benchmark")    //
-      ("force", "replace OUT/mav0 if it exists")                                                              //
+      ("match-imu", "measure the real IMU log of --imu-from against --gt (noise, biases, scale, the ground truth's "
+                    "time shift and frame rotation) and print it; no folder is written")                   //
+      ("benchmark", "measure render speed (one core) and disk size per minute; --out optional")            //
+      ("benchmark-frames", po::value(&bench_frames)->default_value(100), "frames rendered by --benchmark") //
+      ("force", "replace OUT/mav0 if it exists")                                                           //
       ("quiet,q", "no progress output");
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
+  if (vm.count("match-imu")) {
+    if (gt.empty() || o.imu_from.empty())
+      throw ov_core::UsageError("--match-imu needs --gt and --imu-from (a real log and its ground truth)");
+    ov_core::LoadOptions lo;
+    lo.check_images_exist = false;
+    const ov_core::Dataset real = ov_core::load_dataset(o.imu_from, lo);
+    ov_sim::ImuMatchOptions mo;
+    mo.knot_dt_s = o.knot_dt_s;
+    const std::string yaml = "imu_log: " + o.imu_from + "\nground_truth: " + gt + "\n" +
+                             ov_sim::imu_match_yaml(ov_sim::match_imu(real.imu, ov_core::read_trajectory(gt), mo));
+    std::cout << yaml;
+    if (!out.empty()) {
+      fs::create_directories(out);
+      std::ofstream f(fs::path(out) / "imu_match.yaml");
+      f << yaml;
+      if (!f)
+        throw ov_core::DataError((fs::path(out) / "imu_match.yaml").string(), "cannot write");
+    }
+    return 0;
+  }
   const bool bench = vm.count("benchmark") > 0;
   if (out.empty() && !bench)
     throw ov_core::UsageError("--out is required");
