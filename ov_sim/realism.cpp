@@ -13,10 +13,6 @@ void apply_realism(const std::string &preset, SimOptions &opt) {
   // Every preset starts from the clean defaults, so applying one never inherits another's settings.
   const SimOptions defaults;
   opt.scene.texture = defaults.scene.texture;
-  opt.scene.texture_density = defaults.scene.texture_density;
-  opt.scene.texture_grain = defaults.scene.texture_grain;
-  opt.scene.texture_weave = defaults.scene.texture_weave;
-  opt.scene.texture_stain = defaults.scene.texture_stain;
   opt.scene.light_ambient = defaults.scene.light_ambient;
   opt.render = defaults.render;
   opt.camera_effects = defaults.camera_effects;
@@ -28,12 +24,12 @@ void apply_realism(const std::string &preset, SimOptions &opt) {
   if (preset != "euroc" && preset != "harsh")
     throw ov_core::UsageError("unknown realism preset '" + preset + "' (clean, euroc or harsh)");
   // euroc: tuned on ../shared/data/euroc_v1_01_moving (docs/simulate.md has the table and the command).
-  opt.scene.texture = TextureStyle::Room;
+  opt.scene.texture.style = TextureStyle::Room;
   CameraEffectsOptions &c = opt.camera_effects;
   c.enabled = true;
   opt.imu_errors = euroc_v1_01_imu_errors();
   if (preset == "harsh") {
-    opt.scene.texture_density *= 0.6;
+    opt.scene.texture.density *= 0.6;
     c.scene_exposure_s *= 2.5; // a darker room: auto-exposure opens up to its limit, then gains
     c.ae_max_exposure_s = 0.02;
     c.read_noise_e *= 2.0;

@@ -74,12 +74,13 @@ Scene Scene::around_path(const std::vector<Eigen::Vector3d> &path, const SceneOp
 
 Scene::Scene(const AlignedBox &room, const std::vector<AlignedBox> &boxes, const SceneOptions &opt)
     : room_(room), boxes_(boxes), opt_(opt) {
-  if (!(opt.texel_m > 0) || !(opt.feature_min_m > 0) || !(opt.feature_max_m >= opt.feature_min_m))
+  const TextureOptions &t = opt.texture;
+  if (!(t.texel_m > 0) || !(t.feature_min_m > 0) || !(t.feature_max_m >= t.feature_min_m))
     throw ov_core::UsageError("scene: texel and feature sizes must be positive and ordered");
-  if (!(opt.texture_density >= 0 && opt.texture_density <= 1) || !(opt.texture_grain >= 0) ||
-      !(opt.texture_stain >= 0 && opt.texture_stain < 1) || !(opt.light_ambient > 0 && opt.light_ambient <= 1))
+  if (!(t.density >= 0 && t.density <= 1) || !(t.grain >= 0) || !(t.weave >= 0) || !(t.stain >= 0 && t.stain < 1) ||
+      !(opt.light_ambient > 0 && opt.light_ambient <= 1))
     throw ov_core::UsageError("scene: texture density in [0, 1], grain >= 0, stain in [0, 1), ambient in (0, 1]");
-  if (opt.texture == TextureStyle::Room)
+  if (t.style == TextureStyle::Room)
     place_lamps();
   for (int b = -1; b < static_cast<int>(boxes_.size()); ++b) {
     const AlignedBox &box = b < 0 ? room_ : boxes_[b];
@@ -101,16 +102,16 @@ void Scene::add_face(const AlignedBox &b, int axis, bool positive, uint64_t seed
   s.size_v = b.hi(s.axis_v) - b.lo(s.axis_v);
   Rng rng(seed);
   s.shade = static_cast<float>(rng.uniform(0.75, 1.0));
-  const int w = std::max(2, static_cast<int>(std::ceil(s.size_u / opt_.texel_m)));
-  const int h = std::max(2, static_cast<int>(std::ceil(s.size_v / opt_.texel_m)));
+  const int w = std::max(2, static_cast<int>(std::ceil(s.size_u / opt_.texture.texel_m)));
+  const int h = std::max(2, static_cast<int>(std::ceil(s.size_v / opt_.texture.texel_m)));
   // Box bottoms rest on the floor and are never seen: keep them tiny.
   const bool hidden = (&b != &room_) && axis == 2 && !positive;
   if (hidden)
     s.mips.push_back(cv::Mat(2, 2, CV_8U, cv::Scalar(128)));
-  else if (opt_.texture == TextureStyle::Blotches)
-    s.mips.push_back(make_blotch_texture(w, h, texture_options(), rng));
+  else if (opt_.texture.style == TextureStyle::Blotches)
+    s.mips.push_back(make_blotch_texture(w, h, opt_.texture, rng));
   else
-    s.mips.push_back(make_room_texture(w, h, face_kind(b, axis, positive), texture_options(), rng));
+    s.mips.push_back(make_room_texture(w, h, face_kind(b, axis, positive), opt_.texture, rng));
   if (!lamps_.empty() && !hidden) {
     // The face's normal towards the viewer: room faces look inwards, box faces outwards.
     Eigen::Vector3d n = Eigen::Vector3d::Zero();
@@ -120,20 +121,6 @@ void Scene::add_face(const AlignedBox &b, int axis, bool positive, uint64_t seed
   }
   build_mips(s);
   surfaces_.push_back(std::move(s));
-}
-
-TextureOptions Scene::texture_options() const {
-  TextureOptions t;
-  t.style = opt_.texture;
-  t.texel_m = opt_.texel_m;
-  t.feature_min_m = opt_.feature_min_m;
-  t.feature_max_m = opt_.feature_max_m;
-  t.density = opt_.texture_density;
-  t.grain = opt_.texture_grain;
-  t.weave = opt_.texture_weave;
-  t.stain = opt_.texture_stain;
-  t.crops = opt_.texture_crops;
-  return t;
 }
 
 FaceKind Scene::face_kind(const AlignedBox &b, int axis, bool positive) const {
@@ -205,17 +192,18 @@ void Scene::bake_lighting(Surface &s, const Eigen::Vector3d &normal) const {
       grid.at<float>(j, i) =
           static_cast<float>(illumination(surface_point_of(s, (i - 0.5) * cell, (j - 0.5) * cell), normal));
   cv::Mat light, f;
-  cv::resize(grid, light,
-             cv::Size(static_cast<int>(gw * cell / opt_.texel_m), static_cast<int>(gh * cell / opt_.texel_m)), 0, 0,
-             cv::INTER_LINEAR);
-  const int off = static_cast<int>(0.5 * cell / opt_.texel_m);
+  cv::resize(
+      grid, light,
+      cv::Size(static_cast<int>(gw * cell / opt_.texture.texel_m), static_cast<int>(gh * cell / opt_.texture.texel_m)),
+      0, 0, cv::INTER_LINEAR);
+  const int off = static_cast<int>(0.5 * cell / opt_.texture.texel_m);
   tex.convertTo(f, CV_32F, kLitScale);
   f = f.mul(light(cv::Rect(off, off, tex.cols, tex.rows)));
   // Lamps on the ceiling are bright panels (they saturate when the camera looks up, and auto-exposure reacts).
   if (s.axis == 2 && normal.z() < 0)
     for (const Lamp &l : lamps_) {
       const double u = l.position(s.axis_u) - s.origin(s.axis_u), v = l.position(s.axis_v) - s.origin(s.axis_v);
-      const auto px = [&](double m) { return static_cast<int>(std::lround(m / opt_.texel_m)); };
+      const auto px = [&](double m) { return static_cast<int>(std::lround(m / opt_.texture.texel_m)); };
       cv::rectangle(f, cv::Point(px(u - 0.3), px(v - 0.15)), cv::Point(px(u + 0.3), px(v + 0.15)), cv::Scalar(255),
                     cv::FILLED);
     }
@@ -293,9 +281,9 @@ Eigen::Vector3d surface_point_of(const Surface &s, double u, double v) {
 Eigen::Vector3d Scene::plant_marker(int surface, double u, double v, double radius_m) {
   Surface &s = surfaces_.at(surface);
   const int shift = 8; // sub-texel centre, so the marker sits exactly where asked
-  const double x = u / opt_.texel_m - 0.5, y = v / opt_.texel_m - 0.5;
+  const double x = u / opt_.texture.texel_m - 0.5, y = v / opt_.texture.texel_m - 0.5;
   const cv::Point c(static_cast<int>(std::lround(x * (1 << shift))), static_cast<int>(std::lround(y * (1 << shift))));
-  const auto r = [&](double m) { return static_cast<int>(std::lround(m / opt_.texel_m * (1 << shift))); };
+  const auto r = [&](double m) { return static_cast<int>(std::lround(m / opt_.texture.texel_m * (1 << shift))); };
   cv::circle(s.mips[0], c, r(2.0 * radius_m), cv::Scalar(255), cv::FILLED, cv::LINE_AA, shift);
   cv::circle(s.mips[0], c, r(radius_m), cv::Scalar(0), cv::FILLED, cv::LINE_AA, shift);
   build_mips(s);

@@ -18,18 +18,10 @@ struct SceneOptions {
   double min_height_m = 3.0;
   int num_boxes = 10;           ///< objects for parallax (fewer if they do not fit beside the path)
   double box_clearance_m = 0.8; ///< minimum distance between any box and the path
-  double texel_m = 0.005;       ///< finest texture detail; EuRoC cam0 at 1 m sees 2.2 mm per pixel
-  double feature_min_m = 0.015; ///< smallest painted rectangle; largest is feature_max_m
-  double feature_max_m = 0.6;
-  /// Blotches: today's clean texture, evenly lit. Room: plain surfaces with textured patches (texture.h), lit by
-  /// ceiling lamps (brightness baked into the textures: a diffuse scene looks the same from every side).
-  TextureStyle texture = TextureStyle::Blotches;
-  double texture_density = 0.3; ///< Room: share of each room face covered by textured patches
-  double texture_grain = 2.0;   ///< Room: grain of plain surfaces [grey levels per texel]
-  double texture_weave = 1.5;   ///< Room: the ~2 cm weave of plain surfaces, relative to the grain
-  double texture_stain = 0.04;  ///< Room: soft large-scale variation of plain surfaces (relative)
-  double light_ambient = 0.5;   ///< Room: share of the mean illumination that is ambient (reaches every face)
-  std::shared_ptr<const std::vector<cv::Mat>> texture_crops; ///< Room: posters cut from these images when set
+  /// Blotches: the clean texture, evenly lit. Room: plain surfaces with textured patches (texture.h), lit by ceiling
+  /// lamps (brightness baked into the textures: a diffuse scene looks the same from every side).
+  TextureOptions texture;
+  double light_ambient = 0.5; ///< Room: share of the mean illumination that is ambient (reaches every face)
   uint64_t seed = 0;
 };
 
@@ -70,7 +62,7 @@ public:
   const AlignedBox &room() const { return room_; }
   const std::vector<AlignedBox> &boxes() const { return boxes_; }
   const std::vector<Surface> &surfaces() const { return surfaces_; }
-  double texel_m() const { return opt_.texel_m; }
+  double texel_m() const { return opt_.texture.texel_m; }
   const SceneOptions &options() const { return opt_; }
   const std::vector<Lamp> &lamps() const { return lamps_; }
 
@@ -91,7 +83,6 @@ public:
 
 private:
   void add_face(const AlignedBox &b, int axis, bool positive, uint64_t seed);
-  TextureOptions texture_options() const;
   FaceKind face_kind(const AlignedBox &b, int axis, bool positive) const;
   void place_lamps();
   void bake_lighting(Surface &s, const Eigen::Vector3d &normal) const;

@@ -88,16 +88,16 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::Key << "margin_above_m" << YAML::Value << opt.scene.margin_above_m;
   e << YAML::Key << "num_boxes" << YAML::Value << opt.scene.num_boxes;
   e << YAML::Key << "box_clearance_m" << YAML::Value << opt.scene.box_clearance_m;
-  e << YAML::Key << "texel_m" << YAML::Value << opt.scene.texel_m;
-  e << YAML::Key << "feature_min_m" << YAML::Value << opt.scene.feature_min_m;
-  e << YAML::Key << "feature_max_m" << YAML::Value << opt.scene.feature_max_m;
+  e << YAML::Key << "texel_m" << YAML::Value << opt.scene.texture.texel_m;
+  e << YAML::Key << "feature_min_m" << YAML::Value << opt.scene.texture.feature_min_m;
+  e << YAML::Key << "feature_max_m" << YAML::Value << opt.scene.texture.feature_max_m;
   e << YAML::Key << "render_noise_sigma" << YAML::Value << opt.render.noise_sigma;
-  e << YAML::Key << "texture" << YAML::Value << to_string(opt.scene.texture);
-  if (opt.scene.texture == TextureStyle::Room) {
-    e << YAML::Key << "texture_density" << YAML::Value << opt.scene.texture_density;
-    e << YAML::Key << "texture_grain" << YAML::Value << opt.scene.texture_grain;
-    e << YAML::Key << "texture_weave" << YAML::Value << opt.scene.texture_weave;
-    e << YAML::Key << "texture_stain" << YAML::Value << opt.scene.texture_stain;
+  e << YAML::Key << "texture" << YAML::Value << to_string(opt.scene.texture.style);
+  if (opt.scene.texture.style == TextureStyle::Room) {
+    e << YAML::Key << "texture_density" << YAML::Value << opt.scene.texture.density;
+    e << YAML::Key << "texture_grain" << YAML::Value << opt.scene.texture.grain;
+    e << YAML::Key << "texture_weave" << YAML::Value << opt.scene.texture.weave;
+    e << YAML::Key << "texture_stain" << YAML::Value << opt.scene.texture.stain;
     e << YAML::Key << "texture_from" << YAML::Value << (opt.texture_from.empty() ? "procedural" : opt.texture_from);
     e << YAML::Key << "light_ambient" << YAML::Value << opt.scene.light_ambient;
   }

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -36,6 +37,13 @@ void write_text(const fs::path &p, const std::string &text) {
   f << text;
   if (!f)
     throw ov_core::DataError(p.string(), "write failed");
+}
+
+/// CPU time of the calling thread [s] (the renderer runs on one thread: its cost on one core, whatever the load).
+double thread_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 /// Longest exposure a frame can get: the shutter is open for half of it after the frame's instant.
@@ -143,8 +151,8 @@ Scene make_scene(const Trajectory &traj, const SimOptions &opt) {
     path.push_back(traj.sample(t).p_W);
   SceneOptions so = opt.scene;
   so.seed = derive_seed(opt.seed, kScene);
-  if (!opt.texture_from.empty() && !so.texture_crops)
-    so.texture_crops = std::make_shared<const std::vector<cv::Mat>>(load_texture_crops(opt.texture_from));
+  if (!opt.texture_from.empty() && !so.texture.crops)
+    so.texture.crops = std::make_shared<const std::vector<cv::Mat>>(load_texture_crops(opt.texture_from));
   return Scene::around_path(path, so);
 }
 
@@ -296,6 +304,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     const FramePose pose = frame_pose(*traj, opt, fr.t_imu_ns);
     if (render) {
       const auto r0 = std::chrono::steady_clock::now();
+      const double c0 = thread_cpu_seconds();
       if (effects) {
         const Exposure ex = effects->next_exposure();
         const int n = render_exposed(*renderer, *effects, *traj, opt, fr.t_imu_ns, k, acc, img);
@@ -310,6 +319,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
         ++rep.n_renderings;
       }
       rep.render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+      rep.render_cpu_seconds += thread_cpu_seconds() - c0;
       const fs::path file = mav0 / "cam0" / "data" / name;
       if (!cv::imwrite(file.string(), img, png_params))
         throw ov_core::DataError(file.string(), "cannot write image");

@@ -57,8 +57,9 @@ struct SimOptions {
 
 struct SimReport {
   size_t n_imu = 0, n_images = 0, n_observations = 0;
-  size_t n_renderings = 0;     ///< sub-frame renderings (more than n_images when motion blur needs them)
-  double render_seconds = 0.0; ///< time spent rendering (excluding PNG encoding and disk)
+  size_t n_renderings = 0;         ///< sub-frame renderings (more than n_images when motion blur needs them)
+  double render_seconds = 0.0;     ///< wall time spent rendering (excluding PNG encoding and disk)
+  double render_cpu_seconds = 0.0; ///< CPU time of the rendering thread: one core's cost, whatever the load
   double total_seconds = 0.0;
   std::string trajectory;
 };

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 namespace ov_sim {
@@ -26,10 +27,10 @@ struct TextureOptions {
   double texel_m = 0.005;       ///< finest texture detail; EuRoC cam0 at 1 m sees 2.2 mm per pixel
   double feature_min_m = 0.015; ///< Blotches: smallest painted rectangle; largest is feature_max_m
   double feature_max_m = 0.6;
-  double density = 0.25; ///< Room: share of each face covered by textured patches [0, 1]
-  double grain = 2.0;    ///< Room: grey-level sigma of the paint/fabric grain of plain surfaces, per texel
-  double weave = 1.5;    ///< Room: the ~2 cm weave's sigma relative to `grain`
-  double stain = 0.04;   ///< Room: relative amplitude of soft large-scale variation of plain surfaces
+  double density = 0.3; ///< Room: share of each room face covered by textured patches [0, 1]
+  double grain = 2.0;   ///< Room: grey-level sigma of the paint/fabric grain of plain surfaces, per texel
+  double weave = 1.5;   ///< Room: the ~2 cm weave's sigma relative to `grain`
+  double stain = 0.04;  ///< Room: relative amplitude of soft large-scale variation of plain surfaces
   /// Room: when set, posters are crops of these 8-bit grey images (e.g. real EuRoC frames) instead of procedural
   /// print. Shared, read-only.
   std::shared_ptr<const std::vector<cv::Mat>> crops;

@@ -8,6 +8,7 @@
 #include "tools/cli.h"
 #include "tools/commands.h"
 
+#include <algorithm>
 #include <boost/program_options.hpp>
 #include <chrono>
 #include <cstdio>
@@ -175,7 +176,7 @@ int cmd_simulate(const Args &args) {
       }
     };
     if (vm.count("texture")) {
-      o.scene.texture = ov_sim::parse_texture_style(texture);
+      o.scene.texture.style = ov_sim::parse_texture_style(texture);
       modified = true;
     }
     const auto scene_option = [&](const char *name, double &field) {
@@ -184,9 +185,9 @@ int cmd_simulate(const Args &args) {
         modified = true;
       }
     };
-    scene_option("texture-density", o.scene.texture_density);
-    scene_option("texture-grain", o.scene.texture_grain);
-    scene_option("texture-weave", o.scene.texture_weave);
+    scene_option("texture-density", o.scene.texture.density);
+    scene_option("texture-grain", o.scene.texture.grain);
+    scene_option("texture-weave", o.scene.texture.weave);
     if (vm.count("exposure-ms")) {
       need_effects("exposure-ms");
       c.exposure_s = exposure_ms * 1e-3;
@@ -201,7 +202,7 @@ int cmd_simulate(const Args &args) {
     camera_option("full-well-e", c.full_well_e);
     camera_option("read-noise-e", c.read_noise_e);
     camera_option("flicker", c.flicker_amplitude);
-    if (!o.texture_from.empty() && o.scene.texture != ov_sim::TextureStyle::Room)
+    if (!o.texture_from.empty() && o.scene.texture.style != ov_sim::TextureStyle::Room)
       throw ov_core::UsageError("--texture-from needs the room texture (--realism euroc, or --texture room)");
     if (modified || !o.texture_from.empty())
       o.realism += " (modified)";
@@ -246,9 +247,12 @@ int cmd_simulate(const Args &args) {
   const auto sizes = sizes_by_part(fs::path(o.out_dir) / "mav0");
   const double minutes = o.duration_s / 60.0;
   uintmax_t total = 0;
-  std::printf("render      %zu frames %dx%d in %.2f s: %.1f frames/s on one core (%.1f x real time at %.0f Hz)\n",
-              rep.n_images, o.cam.width, o.cam.height, rep.render_seconds, rep.n_images / rep.render_seconds,
-              rep.n_images / rep.render_seconds / o.cam.rate_hz, o.cam.rate_hz);
+  std::printf("render      %zu frames %dx%d (%s, %.1f renderings per frame for motion blur): %.2f s CPU, %.1f "
+              "frames/s on one core (%.1f x real time at %.0f Hz); wall %.2f s, %.1f frames/s at this machine's load\n",
+              rep.n_images, o.cam.width, o.cam.height, o.realism.c_str(),
+              static_cast<double>(rep.n_renderings) / std::max<size_t>(1, rep.n_images), rep.render_cpu_seconds,
+              rep.n_images / rep.render_cpu_seconds, rep.n_images / rep.render_cpu_seconds / o.cam.rate_hz,
+              o.cam.rate_hz, rep.render_seconds, rep.n_images / rep.render_seconds);
   std::printf("end to end  %.2f s including scene build, IMU, PNG encoding and disk (%.1f frames/s)\n",
               rep.total_seconds, rep.n_images / rep.total_seconds);
   std::printf("disk per minute of data:\n");
