@@ -28,8 +28,8 @@ RealRun run_sr_on_shifted_cut(double td_ms) {
   const ov_core::Dataset d = ov_core::load_dataset(po.out_dir);
   ov_msckf_ton::VioOptions opt =
       ov_msckf_ton::load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
-  opt.td_mode = ov_msckf_ton::TdMode::Sr;
-  opt.init_mode = ov_msckf_ton::InitMode::GroundTruth;
+  opt.td.mode = ov_msckf_ton::TdMode::Sr;
+  opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
   ov_msckf_ton::VioManager vio(opt, d.cam, d.imu_calib);
   vio.set_groundtruth(d.groundtruth);
   std::vector<ov_core::StateSample> traj;
