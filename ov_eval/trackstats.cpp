@@ -311,7 +311,7 @@ void save_trackstats_plot(const TrackStatsResult &r, const std::string &title, c
   std::iota(xs.begin(), xs.end(), 0.0);
   Plot p3 = panel("track lengths (" + std::to_string(r.track_lengths.size()) + " tracks)", "length [frames]", "tracks");
   p3.add(Series("lengths", xs, bins));
-  Plot p4 = panel("plain pixels (Sobel below threshold)", "time [s]", "share [%]");
+  Plot p4 = panel("plain pixels (low Sobel)", "time [s]", "share [%]");
   p4.add(Series("low gradient", t, low));
   cv::Mat top, bottom, all;
   cv::hconcat(p1.render(), p2.render(), top);
