@@ -1,5 +1,6 @@
-// `ovton info --dataset DIR`: load and validate a dataset folder, print what it holds.
+// `ovton info --dataset DIR|BAG`: load and validate a dataset folder or ROS bag, print what it holds.
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/rosbag_reader.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 
@@ -12,14 +13,18 @@ namespace po = boost::program_options;
 namespace ovton {
 
 int cmd_info(const Args &args) {
-  po::options_description desc("ovton info: load a dataset folder (EuRoC or SCube), validate it, summarise it");
+  po::options_description desc(
+      "ovton info: load a dataset folder (EuRoC or SCube) or ROS bag, validate it, summarise it");
   std::string dir;
-  desc.add_options()("help,h", "this help")("dataset,d", po::value(&dir)->required(), "dataset folder");
+  desc.add_options()("help,h", "this help")("dataset,d", po::value(&dir)->required(),
+                                            "dataset folder or ROS bag (.bag)");
+  ov_core::BagOptions bag_opt;
+  add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
 
-  const ov_core::Dataset d = ov_core::load_dataset(dir);
+  const ov_core::Dataset d = ov_core::load_recording(dir, bag_opt);
   const double t0 = ov_core::ns_to_s(d.images.front().t_cam_ns), t1 = ov_core::ns_to_s(d.images.back().t_cam_ns);
   std::cout << std::fixed << std::setprecision(3);
   std::cout << "dataset      " << d.root << " (" << d.kind << ")\n"
@@ -40,6 +45,8 @@ int cmd_info(const Args &args) {
             << "\n"
             << "td_truth     " << (d.has_td_truth() ? std::to_string(d.td_truth.size()) + " rows" : std::string("none"))
             << "\n";
+  if (!d.notes.empty())
+    std::cout << "read         " << d.notes << "\n";
   return 0;
 }
 
