@@ -1,6 +1,8 @@
 #include "ov_core/io/kalibr_writer.h"
 #include "ov_core/types/errors.h"
 
+#include <Eigen/LU>
+
 #include <cstdio>
 #include <fstream>
 #include <sstream>
