@@ -3,8 +3,9 @@
 # --sanitize adds clang and its runtime libraries (ASan, UBSan, libFuzzer) for scripts/sanitize.sh and scripts/fuzz.sh;
 # other arguments are extra packages a script needs (check_format.sh: clang-format).
 set -euo pipefail
+# librosbag-storage-dev + libsensor-msgs-dev: ROS 1 bags read and written without ROS (Debian's rosbag storage library).
 PKGS=(build-essential cmake ccache libeigen3-dev libopencv-dev libyaml-cpp-dev libboost-program-options-dev
-      libgtest-dev python3)
+      libgtest-dev python3 librosbag-storage-dev libsensor-msgs-dev)
 for a in "$@"; do
   if [ "$a" = "--sanitize" ]; then
     PKGS+=(clang libclang-rt-14-dev)

@@ -22,4 +22,15 @@ bool parse_on_off(const std::string &value, const char *option) {
   return value == "on";
 }
 
+void add_bag_options(boost::program_options::options_description &desc, ov_core::BagOptions &opt) {
+  desc.add_options()("cam-topic", boost::program_options::value(&opt.cam_topic),
+                     "ROS bag: sensor_msgs/Image topic (default: the only one, the calibration's rostopic, or "
+                     "/cam0/image_raw)") //
+      ("imu-topic", boost::program_options::value(&opt.imu_topic),
+       "ROS bag: sensor_msgs/Imu topic (default: the only one, the calibration's rostopic, or /imu0)") //
+      ("calib", boost::program_options::value(&opt.calib)->multitoken(),
+       "ROS bag: Kalibr camchain and imu YAML, or an EuRoC folder (default: found beside the bag: BAG/ folder, "
+       "camchain-imucam-BAG.yaml + imu-BAG.yaml, camchain-imucam.yaml + imu.yaml)");
+}
+
 } // namespace ovton

@@ -1,6 +1,7 @@
 // `ovton benchmark`: per-frame cost by stage, throughput as a multiple of real time, and resident memory over a run,
 // for one or more time-offset modes replayed one after another in this process (see docs/benchmarks.md).
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/rosbag_reader.h"
 #include "ov_core/io/text_format.h"
 #include "ov_core/types/errors.h"
 #include "ov_sim/simulator.h"
@@ -250,17 +251,20 @@ int cmd_benchmark(const Args &args) {
   bool quiet = false;
   RunRequest req;
   desc.add_options()("help,h", "this help")                                                                       //
-      ("dataset,d", po::value(&dataset), "dataset folder (EuRoC or SCube)")                                       //
+      ("dataset,d", po::value(&dataset), "dataset folder (EuRoC or SCube) or ROS bag (.bag)")                     //
       ("generate", po::value(&generate_dir), "without --dataset: render a built-in flight here and benchmark it") //
       ("generate-seconds", po::value(&gen_seconds), "length of the --generate flight [s] (default 30)")           //
       ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")                      //
       ("modes,m", po::value(&modes_str), "comma-separated td modes, run in this order (default sr)")              //
-      ("init", po::value(&init), "static|groundtruth (overrides the config; groundtruth with --generate)")        //
-      ("max-images", po::value(&req.max_images), "stop each mode after this many images")                         //
-      ("json", po::value(&json), "also write the numbers as JSON")                                                //
+      ("init", po::value(&init),
+       "static|groundtruth|auto|dynamic (overrides the config; groundtruth with --generate)") //
+      ("max-images", po::value(&req.max_images), "stop each mode after this many images")     //
+      ("json", po::value(&json), "also write the numbers as JSON")                            //
       ("prefetch", po::bool_switch(&req.prefetch),
        "decode the next images on a second thread (as `ovton run` does); `load` is then the wait for one") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bars");
+  ov_core::BagOptions bag_opt;
+  add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
@@ -270,9 +274,9 @@ int cmd_benchmark(const Args &args) {
     throw ov_core::UsageError("--dataset and --generate are exclusive");
   if (!(gen_seconds > 0))
     throw ov_core::UsageError("--generate-seconds must be positive");
-  if (!init.empty() && init != "static" && init != "groundtruth")
-    throw ov_core::UsageError("--init must be static or groundtruth");
-  std::vector<std::string> modes; // fail before any work on a typo
+  if (!init.empty())
+    ov_msckf_ton::parse_init_mode(init); // fail before any work on a typo
+  std::vector<std::string> modes;        // fail before any work on a typo
   for (const auto &spec : parse_compare_modes(modes_str))
     modes.push_back(spec.name);
 
@@ -291,7 +295,7 @@ int cmd_benchmark(const Args &args) {
   // One thread, so that the numbers say what one core does and modes do not compete with each other.
   cv::setNumThreads(0);
 
-  const ov_core::Dataset data = ov_core::load_dataset(dataset);
+  const ov_core::Dataset data = ov_core::load_recording(dataset, bag_opt);
   apply_dataset_defaults(data, false, req.opt);
   const std::string load_start = loadavg();
   std::cout << "dataset " << dataset << ": " << data.images.size() << " images " << data.cam.width << "x"

@@ -1,7 +1,9 @@
 // `ovton run`: replay a dataset folder through the estimator and write the trajectory.
 #include "ov_core/io/csv.h"
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/rosbag_reader.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/init_check.h"
 #include "ov_eval/metrics.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
@@ -27,9 +29,9 @@ int cmd_run(const Args &args) {
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
   bool quiet = false, no_prefetch = false;
   RunRequest req;
-  desc.add_options()("help,h", "this help")                                                  //
-      ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)") //
-      ("dataset,d", po::value(&dataset)->required(), "dataset folder (EuRoC or SCube)")      //
+  desc.add_options()("help,h", "this help")                                                               //
+      ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")              //
+      ("dataset,d", po::value(&dataset)->required(), "dataset folder (EuRoC or SCube) or ROS bag (.bag)") //
       ("td-mode,m", po::value(&mode),
        "off|sr|sir|fvon|tpn|ton|oracle|drift, optionally +PROCESS (constant|random_walk|drift|tpn), e.g. "
        "sr+random_walk (overrides the config)")                                                           //
@@ -38,8 +40,9 @@ int cmd_run(const Args &args) {
       ("residual-log", po::value(&req.residual_log), "write every feature residual of every update here") //
       ("velocity-log", po::value(&req.velocity_log),
        "write each observation's image velocity by every rule and network here (for `ovton velocities`)") //
-      ("init", po::value(&init), "static|groundtruth (overrides the config)")                             //
-      ("td-init-ms", po::value(&td_init_ms), "initial / fixed t_d [ms] (overrides the config)")           //
+      ("init", po::value(&init),
+       "static|groundtruth|auto|dynamic (overrides the config; auto: static when still, dynamic when moving)") //
+      ("td-init-ms", po::value(&td_init_ms), "initial / fixed t_d [ms] (overrides the config)")                //
       ("td-search", po::value(&td_search),
        "on|off: coarse t_d search around the initial t_d before the filter starts (overrides time_offset.search; "
        "default on)") //
@@ -50,6 +53,8 @@ int cmd_run(const Args &args) {
       ("no-prefetch", po::bool_switch(&no_prefetch),
        "decode images on the filter's thread (default: the next ones on a second thread, same results)") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bar, no option listing");
+  ov_core::BagOptions bag_opt;
+  add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
@@ -85,7 +90,7 @@ int cmd_run(const Args &args) {
         throw ov_core::UsageError("two outputs are the same file: " + outputs[i]);
   }
 
-  const ov_core::Dataset data = ov_core::load_dataset(dataset);
+  const ov_core::Dataset data = ov_core::load_recording(dataset, bag_opt);
   apply_dataset_defaults(data, !std::isnan(td_init_ms), req.opt);
   if (!quiet)
     ov_msckf_ton::print_vio_options(req.opt, std::cerr);
@@ -119,6 +124,13 @@ int cmd_run(const Args &args) {
   if (acc.examined() > 0)
     std::cout << "update acceptance " << 100.0 * acc.acceptance() << " % of " << acc.examined() << " features ("
               << acc.gated << " gated, " << acc.failed_triangulation << " failed triangulation)\n";
+  if (req.opt.init.mode != ov_msckf_ton::InitMode::GroundTruth && !r.traj.empty() && !data.images.empty()) {
+    const auto ic = ov_eval::check_initialisation(r.traj.front(), data.groundtruth, data.images.front().t_cam_ns);
+    if (ic.ok)
+      std::cout << "initialisation vs ground truth: after " << ic.data_s << " s of images, roll/pitch error "
+                << ic.tilt_err_deg << " deg, velocity error " << ic.vel_err_m_s << " m/s (true speed " << ic.speed_m_s
+                << " m/s)\n";
+  }
   if (tm.frames > 0)
     std::cout << "per frame [ms]: image load " << tm.image_load / tm.frames << ", tracking " << tm.tracking / tm.frames
               << ", propagation " << tm.propagation / tm.frames << ", update " << tm.update / tm.frames << "; "

@@ -22,6 +22,7 @@ const std::map<std::string, Command> &commands() {
       {"info", {ovton::cmd_info, "load a dataset folder, validate it and print what it holds"}},
       {"eval", {ovton::cmd_eval, "APE/ARE/RPE/TPE/CIT of a trajectory against ground truth"}},
       {"simulate", {ovton::cmd_simulate, "write a synthetic EuRoC-format folder with a known time offset"}},
+      {"export", {ovton::cmd_export, "write a dataset folder as a ROS 1 bag (with Kalibr calibration files)"}},
       {"perturb", {ovton::cmd_perturb, "rewrite a real folder's image stamps with a time-offset model"}},
       {"benchmark", {ovton::cmd_benchmark, "per-frame cost by stage, x real time and memory, mode by mode"}},
       {"diagnose", {ovton::cmd_diagnose, "rank candidate effects behind the residuals of `run --residual-log`"}},

@@ -99,6 +99,8 @@ DistortionModel parse_distortion(const std::string &s, const std::string &file) 
     return DistortionModel::RadTan;
   if (s == "equidistant" || s == "fisheye")
     return DistortionModel::Equidistant;
+  if (s == "none") // Kalibr's undistorted pinhole: radtan with zero coefficients
+    return DistortionModel::RadTan;
   throw DataError(file, "unknown distortion model '" + s + "' (expected radial-tangential or equidistant)");
 }
 
@@ -338,6 +340,53 @@ ImuCalib load_euroc_imu_yaml(const std::string &file) {
   return c;
 }
 
+KalibrCamera load_kalibr_camchain(const std::string &chain_file, const std::string &cam_name) {
+  const YAML::Node chain = load_yaml_file(chain_file);
+  const YAML::Node c0 = get_map(chain, chain_file, cam_name);
+  KalibrCamera k;
+  CameraCalib &c = k.cam;
+  const std::string model = c0["camera_model"] ? get<std::string>(c0, chain_file, "camera_model") : "pinhole";
+  if (model != "pinhole")
+    throw DataError(chain_file, "unsupported camera_model '" + model + "' (only pinhole, with radtan or equidistant)");
+  c.intrinsics = get_vec<4>(c0, chain_file, "intrinsics");
+  c.distortion = parse_distortion(get<std::string>(c0, chain_file, "distortion_model"), chain_file);
+  // Kalibr writes no coefficients for distortion_model none.
+  if (c0["distortion_coeffs"] || get<std::string>(c0, chain_file, "distortion_model") != "none")
+    c.dist_coeffs = get_vec<4>(c0, chain_file, "distortion_coeffs");
+  const auto res = get<std::vector<int>>(c0, chain_file, "resolution");
+  if (res.size() != 2)
+    throw DataError(chain_file, "'resolution' must be [width, height]");
+  c.width = res[0];
+  c.height = res[1];
+  c.rate_hz = c0["rate_hz"] ? get_finite(c0, chain_file, "rate_hz") : 20.0;
+  // Kalibr writes T_cam_imu (IMU-frame points into the camera frame), so T_BC is its inverse; OpenVINS-style chains
+  // write T_imu_cam = T_BC itself.
+  if (c0["T_cam_imu"])
+    c.T_BC = get_transform(c0, chain_file, "T_cam_imu").inverse();
+  else if (c0["T_imu_cam"])
+    c.T_BC = get_transform(c0, chain_file, "T_imu_cam");
+  else
+    throw DataError(chain_file, "missing key 'T_cam_imu' (or 'T_imu_cam') in '" + cam_name + "'");
+  check_camera(c, chain_file);
+  if (c0["timeshift_cam_imu"])
+    k.timeshift_cam_imu_s =
+        get_in_range(c0, chain_file, "timeshift_cam_imu", -10.0, 10.0, "a camera-IMU time shift in s");
+  if (c0["rostopic"])
+    k.rostopic = get<std::string>(c0, chain_file, "rostopic");
+  return k;
+}
+
+KalibrImu load_kalibr_imu(const std::string &imu_file) {
+  const YAML::Node imu = load_yaml_file(imu_file);
+  const YAML::Node i0 = imu["imu0"] ? get_map(imu, imu_file, "imu0") : imu;
+  KalibrImu k;
+  // The same plausibility checks as an EuRoC sensor.yaml (noise densities > 0, a rate a real IMU has).
+  k.imu = read_imu_calib(i0, imu_file, "update_rate");
+  if (i0["rostopic"])
+    k.rostopic = get<std::string>(i0, imu_file, "rostopic");
+  return k;
+}
+
 double Dataset::td_truth_at(int64_t t_cam_ns) const {
   if (td_truth.empty())
     throw UsageError("dataset " + root + " has no td_truth/data.csv");
@@ -385,19 +434,10 @@ Dataset load_scube(const std::string &dir, const LoadOptions &opt) {
   d.root = dir;
   d.kind = "scube";
 
-  // Kalibr camchain: T_cam_imu maps IMU-frame points into the camera frame, so T_BC is its inverse.
-  const std::string chain_file = join_path(dir, "camchain-imucam.yaml");
-  const YAML::Node c0 = get_map(load_yaml_file(chain_file), chain_file, "cam0");
-  read_camera_common(c0, chain_file, "distortion_coeffs", d.cam);
-  const Eigen::Matrix4d T_CI = get_transform(c0, chain_file, "T_cam_imu");
-  d.cam.T_BC = T_CI.inverse();
-  check_camera(d.cam, chain_file);
-  if (c0["timeshift_cam_imu"])
-    d.td_prior_s = get_in_range(c0, chain_file, "timeshift_cam_imu", -10.0, 10.0, "a camera-IMU time shift in s");
-
-  const std::string imu_file = join_path(dir, "imu.yaml");
-  const YAML::Node imu = load_yaml_file(imu_file);
-  d.imu_calib = read_imu_calib(imu["imu0"] ? get_map(imu, imu_file, "imu0") : imu, imu_file, "update_rate");
+  const KalibrCamera kc = load_kalibr_camchain(join_path(dir, "camchain-imucam.yaml"));
+  d.cam = kc.cam;
+  d.td_prior_s = kc.timeshift_cam_imu_s;
+  d.imu_calib = load_kalibr_imu(join_path(dir, "imu.yaml")).imu;
 
   const std::string cam_csv = join_path(dir, "cam0/data.csv"), imu_csv = join_path(dir, "imu0/data.csv");
   d.images = read_image_list(cam_csv, join_path(dir, "cam0/data"), opt, d.cam.rate_hz);

@@ -1,4 +1,5 @@
 #include "ov_core/io/image_io.h"
+#include "ov_core/io/image_store.h"
 #include "ov_core/types/errors.h"
 
 #include <opencv2/imgcodecs.hpp>
@@ -17,7 +18,8 @@ void check_gray_image(const cv::Mat &img, const ImageEntry &e, int width, int he
 }
 
 cv::Mat load_gray_image(const ImageEntry &e, int width, int height) {
-  cv::Mat img = cv::imread(e.path, cv::IMREAD_GRAYSCALE);
+  // Through the image store: a bag's images live in the bag, a folder's in PNG files.
+  cv::Mat img = load_image(e);
   check_gray_image(img, e, width, height);
   return img;
 }

@@ -2,10 +2,9 @@
 #include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
 #include "ov_core/types/state_interpolation.h"
-#include "ov_msckf_ton/core/static_init.h"
 #include "ov_msckf_ton/state/state_helper.h"
 
-#include <opencv2/imgcodecs.hpp>
+#include "ov_core/io/image_store.h"
 
 #include <algorithm>
 #include <chrono>
@@ -69,6 +68,32 @@ FvonProviderOptions fvon_options(const TonOptions &o) {
   return f;
 }
 
+InertialInitOptions inertial_init_options(const VioOptions &o) {
+  const InitOptions &i = o.init;
+  InertialInitOptions r;
+  r.allow_static = i.mode != InitMode::Dynamic;
+  r.allow_dynamic = i.mode == InitMode::Auto || i.mode == InitMode::Dynamic;
+  r.static_window_s = i.window_s;
+  r.max_accel_std = i.max_accel_std;
+  r.max_gyro_std = i.max_gyro_std;
+  r.still_window_s = i.still_window_s;
+  r.still_max_disparity_px = i.still_max_disparity_px;
+  r.sigma_yaw = i.sigma_yaw;
+  r.sigma_pos = i.sigma_pos;
+  DynamicInitOptions &d = r.dynamic;
+  d.window_s = i.dyn_window_s;
+  d.min_features = i.dyn_min_features;
+  d.max_features = i.dyn_max_features;
+  d.min_observations = i.dyn_min_observations;
+  d.min_disparity_px = i.dyn_min_disparity_px;
+  d.sigma_px = o.update.sigma_px;
+  d.max_rms_px = i.dyn_max_rms_px;
+  d.max_sigma_rollpitch_deg = i.dyn_max_sigma_rollpitch_deg;
+  d.max_sigma_vel = i.dyn_max_sigma_vel;
+  d.sigma_inflation = i.dyn_sigma_inflation;
+  return r;
+}
+
 } // namespace
 
 VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, const ov_core::ImuCalib &imu)
@@ -83,6 +108,9 @@ VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, c
   c.p_BC = cam.T_BC.topRightCorner<3, 1>();
   c.intrinsics << cam.intrinsics, cam.dist_coeffs;
   c.readout_s = opt.calibration.readout_s;
+  if (opt.init.mode != InitMode::GroundTruth)
+    inertial_init_ = std::make_unique<InertialInitializer>(
+        inertial_init_options(opt), cam.T_BC, 0.5 * (cam.intrinsics(0) + cam.intrinsics(1)), opt.imu.gravity_mag);
   if (uses_fvon(opt.td.mode))
     fvon_ = std::make_unique<FvonVelocityProvider>(cam, fvon_options(opt.ton));
   td_model_ = make_td_model(opt_, [this](int64_t t_cam_ns) {
@@ -165,8 +193,8 @@ void VioManager::on_imu(const ov_core::ImuData &m) {
   propagator_.feed_imu(m);
   if (!initialized_) {
     init_imu_.push_back(m);
-    while (init_imu_.size() > 2 &&
-           init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns > ov_core::s_to_ns(opt_.init.window_s + 1.0))
+    while (init_imu_.size() > 2 && init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns >
+                                       ov_core::s_to_ns(std::max(opt_.init.window_s, opt_.init.dyn_window_s) + 1.0))
       init_imu_.pop_front();
   }
 }
@@ -177,17 +205,30 @@ void VioManager::on_image(const ov_core::ImageEntry &e) {
     return;
   }
   const auto t0 = Clock::now();
-  cv::Mat gray = image_source_ ? image_source_(e) : cv::imread(e.path, cv::IMREAD_GRAYSCALE);
+  cv::Mat gray = image_source_ ? image_source_(e) : ov_core::load_image(e);
   if (gray.empty())
     throw ov_core::DataError(e.path, "unreadable image (listed for stamp " + std::to_string(e.t_cam_ns) + ")");
   times_.image_load += ms_since(t0);
   process_image(e.t_cam_ns, gray);
 }
 
+InitFrame VioManager::init_frame(int64_t t_cam_ns, int64_t t_imu_ns) const {
+  InitFrame f;
+  f.t_cam_ns = t_cam_ns;
+  f.t_imu_ns = t_imu_ns;
+  std::vector<const ov_core::Feature *> seen;
+  db_.features_observed_at(t_cam_ns, seen);
+  for (const auto *feat : seen)
+    if (const auto *o = feat->at(t_cam_ns))
+      f.obs.emplace_back(feat->id, o->xy);
+  return f;
+}
+
 bool VioManager::try_initialize(int64_t t_cam_ns) {
   const int64_t t_imu = t_cam_ns + ov_core::s_to_ns(td_for_image_s(t_cam_ns));
   State &s = *state_;
   const InitOptions &io = opt_.init;
+  std::optional<Eigen::Matrix<double, ImuState::kSize, ImuState::kSize>> P_imu; // a dynamic initialisation's own
   if (io.mode == InitMode::GroundTruth) {
     ov_core::StateSample g;
     if (!ov_core::interpolate_state(gt_, t_imu, g)) {
@@ -201,17 +242,18 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
     s.imu.ba = g.ba;
     init_msg_ = "initialised from ground truth";
   } else {
-    const StaticInitResult r = static_initialize(init_imu_, t_imu, io.window_s, io.max_accel_std, io.max_gyro_std);
-    if (!r.ok) {
-      init_msg_ = r.why;
+    std::optional<InitSolution> r = inertial_init_->try_initialize(init_frame(t_cam_ns, t_imu), init_imu_);
+    if (!r) {
+      init_msg_ = inertial_init_->why();
       return false;
     }
-    s.imu.R = r.R_WB;
-    s.imu.p.setZero();
-    s.imu.v.setZero();
-    s.imu.bg = r.bg;
-    s.imu.ba = r.ba;
-    init_msg_ = "static initialisation (accel std " + std::to_string(r.accel_std) + " m/s^2)";
+    s.imu.R = r->R_WB;
+    s.imu.p = r->p;
+    s.imu.v = r->v;
+    s.imu.bg = r->bg;
+    s.imu.ba = r->ba;
+    P_imu = r->P;
+    init_msg_ = r->message;
   }
   s.t_imu_ns = t_imu;
   s.imu.set_fej();
@@ -223,6 +265,8 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
   s.P.diagonal().segment<3>(ImuState::kVel).setConstant(sq(io.sigma_vel));
   s.P.diagonal().segment<3>(ImuState::kBg).setConstant(sq(io.sigma_bg));
   s.P.diagonal().segment<3>(ImuState::kBa).setConstant(sq(io.sigma_ba));
+  if (P_imu)
+    s.P.topLeftCorner<ImuState::kSize, ImuState::kSize>() = *P_imu;
   if (s.estimates_td()) {
     s.P(s.td_index, s.td_index) = sq(opt_.td.sigma_init_s);
     td_model_->initialize(s);

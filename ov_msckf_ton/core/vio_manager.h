@@ -8,6 +8,7 @@
 #include "ov_core/track/track_klt.h"
 #include "ov_msckf_ton/core/filter_health.h"
 #include "ov_msckf_ton/core/vio_options.h"
+#include "ov_msckf_ton/init/inertial_init.h"
 #include "ov_msckf_ton/state/propagator.h"
 #include "ov_msckf_ton/state/state.h"
 #include "ov_msckf_ton/td/td_model.h"
@@ -63,8 +64,8 @@ public:
   /// Per observation of every feature an update uses, each rule's and network's image velocity (for
   /// `ovton velocities`). In modes fvon/ton it makes FVON predict with both networks (on a copy; same trajectory).
   void set_velocity_log(ov_core::VelocityLogWriter *log);
-  /// Where on_image gets its decoded image (e.g. an ov_core::ImagePrefetcher); default cv::imread of the entry's path.
-  /// An empty image is reported as unreadable, naming the file.
+  /// Where on_image gets its decoded image (e.g. an ov_core::ImagePrefetcher); default ov_core::load_image (the file,
+  /// or the bag message). An empty image is reported as unreadable, naming the file.
   using ImageSource = std::function<cv::Mat(const ov_core::ImageEntry &)>;
   void set_image_source(ImageSource src) { image_source_ = std::move(src); }
 
@@ -98,6 +99,8 @@ private:
   bool try_initialize(int64_t t_cam_ns);
   /// The calibration variables the options ask for, with their priors (at initialisation, before any clone).
   void add_calibration_variables();
+  /// The features the tracker has in this image, for the initialiser (it keeps its own window of them).
+  InitFrame init_frame(int64_t t_cam_ns, int64_t t_imu_ns) const;
   void update_and_marginalize(int64_t t_cam_ns);
   /// The velocities every update of this image uses: the configured rule for tracked observations, FVON's
   /// predictions (fvon/ton) and the next observation's for first ones (first_velocity next).
@@ -126,6 +129,7 @@ private:
   UpdaterSLAM slam_;
   std::unique_ptr<State> state_;
   std::deque<ov_core::ImuData> init_imu_;
+  std::unique_ptr<InertialInitializer> inertial_init_; ///< every initialisation but ground truth
 
   std::function<double(int64_t)> td_oracle_;
   std::vector<ov_core::StateSample> gt_;

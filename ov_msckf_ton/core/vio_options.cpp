@@ -183,6 +183,17 @@ std::vector<Field> fields(VioOptions &o) {
       field(S, "sigma_bg", in.sigma_bg),
       field(S, "sigma_ba", in.sigma_ba),
       field("health", "enabled", o.health.enabled),
+      field(S, "still_window_s", in.still_window_s),
+      field(S, "still_max_disparity_px", in.still_max_disparity_px),
+      field(S, "dyn_window_s", in.dyn_window_s),
+      field(S, "dyn_min_features", in.dyn_min_features),
+      field(S, "dyn_max_features", in.dyn_max_features),
+      field(S, "dyn_min_observations", in.dyn_min_observations),
+      field(S, "dyn_min_disparity_px", in.dyn_min_disparity_px),
+      field(S, "dyn_max_rms_px", in.dyn_max_rms_px),
+      field(S, "dyn_max_sigma_rollpitch_deg", in.dyn_max_sigma_rollpitch_deg),
+      field(S, "dyn_max_sigma_vel", in.dyn_max_sigma_vel),
+      field(S, "dyn_sigma_inflation", in.dyn_sigma_inflation),
   };
 }
 
@@ -193,16 +204,22 @@ void require(bool ok, const std::string &what) {
 
 } // namespace
 
+namespace {
+const std::vector<std::pair<const char *, InitMode>> kInitModes = {{"static", InitMode::Static},
+                                                                   {"groundtruth", InitMode::GroundTruth},
+                                                                   {"auto", InitMode::Auto},
+                                                                   {"dynamic", InitMode::Dynamic}};
+} // namespace
+
 std::string to_string(InitMode m) {
-  return m == InitMode::Static ? "static" : "groundtruth";
+  return namer(kInitModes)(m);
 }
 
 InitMode parse_init_mode(const std::string &s) {
-  if (s == "static")
-    return InitMode::Static;
-  if (s == "groundtruth")
-    return InitMode::GroundTruth;
-  throw ov_core::UsageError("unknown initialisation '" + s + "' (expected static or groundtruth)");
+  for (const auto &[name, m] : kInitModes)
+    if (s == name)
+      return m;
+  throw ov_core::UsageError("unknown initialisation '" + s + "' (expected static, groundtruth, auto or dynamic)");
 }
 
 void apply_mode_spec(const ModeSpec &spec, VioOptions &o) {
@@ -252,6 +269,13 @@ void validate_vio_options(const VioOptions &o) {
   require(i.sigma_rollpitch > 0 && i.sigma_yaw > 0 && i.sigma_pos > 0 && i.sigma_vel > 0 && i.sigma_bg > 0 &&
               i.sigma_ba > 0,
           "init sigmas must be > 0");
+  require(i.still_window_s > 0 && i.still_max_disparity_px > 0 && i.dyn_window_s > 0,
+          "init.still_window_s, still_max_disparity_px and dyn_window_s must be > 0");
+  require(i.dyn_min_features >= 3 && i.dyn_max_features >= i.dyn_min_features && i.dyn_min_observations >= 2,
+          "init.dyn_min_features >= 3, dyn_max_features >= dyn_min_features, dyn_min_observations >= 2");
+  require(i.dyn_min_disparity_px >= 0 && i.dyn_max_rms_px > 0 && i.dyn_max_sigma_rollpitch_deg > 0 &&
+              i.dyn_max_sigma_vel > 0 && i.dyn_sigma_inflation > 0,
+          "init.dyn_* thresholds must be > 0");
   const auto &t = o.track;
   require(t.num_features > 0 && t.grid_x > 0 && t.grid_y > 0, "tracker.num_features, grid_x and grid_y must be > 0");
   require(t.win_size >= 3 && t.pyr_levels >= 0 && t.min_px_dist >= 0 && t.ransac_px > 0,

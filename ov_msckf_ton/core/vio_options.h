@@ -10,7 +10,9 @@
 
 namespace ov_msckf_ton {
 
-enum class InitMode { Static, GroundTruth };
+/// Static: from a still start. GroundTruth: from the dataset's truth (simulations). Dynamic: from a moving start
+/// (init/dynamic_init.h). Auto: static when the images are still, dynamic when they move (init/inertial_init.h).
+enum class InitMode { Static, GroundTruth, Auto, Dynamic };
 /// Image-plane velocity of tracked observations: Backward is the paper's eq. 2 (previous observation); Central
 /// leaves the observation's own noise out (CentralVelocityProvider; not the paper's SIR).
 enum class SirVelocity { Backward, Central };
@@ -136,6 +138,14 @@ struct InitOptions {
   double max_gyro_std = 0.1;  ///< rad/s (EuRoC idle: ~0.04)
   double sigma_rollpitch = 0.01, sigma_yaw = 1e-4, sigma_pos = 1e-4, sigma_vel = 0.01;
   double sigma_bg = 0.005, sigma_ba = 0.05;
+  /// auto: the images are still when their median feature motion over still_window_s stays below this [px].
+  double still_window_s = 0.3, still_max_disparity_px = 2.0;
+  /// Dynamic initialisation (init/dynamic_init.h): window, features, motion needed, and the quality it must reach.
+  double dyn_window_s = 1.0;
+  int dyn_min_features = 15, dyn_max_features = 60, dyn_min_observations = 5;
+  double dyn_min_disparity_px = 8.0, dyn_max_rms_px = 1.5;
+  double dyn_max_sigma_rollpitch_deg = 0.5, dyn_max_sigma_vel = 0.04;
+  double dyn_sigma_inflation = 2.0; ///< the covariance handed to the filter, in sigmas above the fit's
 };
 
 /// Stop the run (ov_core::EstimatorFailure) when the estimate has evidently diverged (core/filter_health.h). Off only
@@ -170,6 +180,6 @@ void print_vio_options(const VioOptions &o, std::ostream &os);
 void validate_vio_options(const VioOptions &o);
 
 std::string to_string(InitMode m);
-InitMode parse_init_mode(const std::string &s); ///< static | groundtruth; throws ov_core::UsageError
+InitMode parse_init_mode(const std::string &s); ///< static | groundtruth | auto | dynamic; throws UsageError
 
 } // namespace ov_msckf_ton
