@@ -14,6 +14,7 @@
 #include "ov_msckf_ton/update/updater_msckf.h"
 #include "ov_sim/euroc_calib.h"
 #include "ov_sim/simulator.h"
+#include "sim_fixture.h"
 #include "test_util.h"
 
 #include <random>
@@ -191,19 +192,8 @@ TEST(CalibrationRun, EveryCalibrationOnStaysConsistentOnCleanData) {
   // A feature-level flight whose calibration is exactly what the dataset says: with every calibration estimated,
   // the pose stays consistent and no calibration wanders beyond its sigma.
   ovtest::TempDir tmp;
-  ov_sim::SimOptions so;
-  so.out_dir = tmp / "sim";
-  so.duration_s = 12.0;
-  so.seed = 6;
-  so.agility = 1.0;
-  so.features_only = true;
-  so.features.pixel_noise = 0.5;
-  ov_sim::write_simulation(so);
-  const ov_core::Dataset data = ov_core::load_dataset(so.out_dir);
-  VioOptions opt;
-  opt.td.mode = TdMode::Sr;
-  opt.init.mode = InitMode::GroundTruth;
-  opt.update.sigma_px = 0.5;
+  const ov_core::Dataset data = ovtest::feature_flight(tmp / "sim", 12.0, 6, 0.5, 1.0);
+  VioOptions opt = ovtest::gt_run_options(TdMode::Sr, 0.5);
   opt.calibration.extrinsics = opt.calibration.intrinsics = opt.calibration.readout = true;
   opt.calibration.imu_intrinsics = true;
   VioManager vio(opt, data.cam, data.imu_calib);

@@ -10,6 +10,7 @@
 #include "ov_msckf_ton/update/updater_slam.h"
 #include "ov_sim/euroc_calib.h"
 #include "ov_sim/simulator.h"
+#include "sim_fixture.h"
 #include "test_util.h"
 
 #include <random>
@@ -147,18 +148,8 @@ TEST(SlamInit, DelayedInitialisationIsConsistentOverMonteCarloTrials) {
 
 TEST(SlamRun, LandmarksEnterLeaveAndKeepTheFilterConsistent) {
   ovtest::TempDir tmp;
-  ov_sim::SimOptions so;
-  so.out_dir = tmp / "sim";
-  so.duration_s = 10.0;
-  so.seed = 4;
-  so.features_only = true;
-  so.features.pixel_noise = 0.5;
-  ov_sim::write_simulation(so);
-  const ov_core::Dataset data = ov_core::load_dataset(so.out_dir);
-  VioOptions opt;
-  opt.td.mode = TdMode::Sr;
-  opt.init.mode = InitMode::GroundTruth;
-  opt.update.sigma_px = 0.5;
+  const ov_core::Dataset data = ovtest::feature_flight(tmp / "sim", 10.0, 4, 0.5);
+  VioOptions opt = ovtest::gt_run_options(TdMode::Sr, 0.5);
   opt.slam.max_features = 50;
   VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);

@@ -5,6 +5,7 @@
 #include "ov_eval/velocity_truth.h"
 #include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_sim/simulator.h"
+#include "sim_fixture.h"
 #include "test_util.h"
 
 #include <cmath>
@@ -59,17 +60,8 @@ TEST(VelocityTruth, NoiseFreeTracksScoreNearZeroAndNetworksAreScored) {
   // A noise-free feature-level flight: eq. 2 and `next` differ from the true instantaneous velocity only by half a
   // frame of image acceleration; FVON (mode fvon) predicts with both networks for every new feature.
   ovtest::TempDir tmp;
-  ov_sim::SimOptions so;
-  so.out_dir = tmp / "sim";
-  so.duration_s = 6.0;
-  so.seed = 3;
-  so.features_only = true;
-  so.features.pixel_noise = 0.0;
-  ov_sim::write_simulation(so);
-  const ov_core::Dataset data = ov_core::load_dataset(so.out_dir);
-  VioOptions opt;
-  opt.td.mode = TdMode::Fvon;
-  opt.init.mode = InitMode::GroundTruth;
+  const ov_core::Dataset data = ovtest::feature_flight(tmp / "sim", 6.0, 3, 0.0);
+  VioOptions opt = ovtest::gt_run_options(TdMode::Fvon, VioOptions().update.sigma_px);
   opt.ton.its_epochs = 100;
   opt.ton.f2f_epochs = 150;
   VioManager vio(opt, data.cam, data.imu_calib);

@@ -50,8 +50,9 @@ public:
 
   cv::Mat load(const ImageEntry &e) const override {
     std::lock_guard<std::mutex> lock(mutex_);
-    const auto &[m, index] = messages.at(e.store_index);
-    const std::string where = message_label(index, topic_);
+    // Not a structured binding: C++17 lambdas cannot capture one (clang refuses it).
+    const rosbag::MessageInstance &m = messages.at(e.store_index).first;
+    const std::string where = message_label(messages.at(e.store_index).second, topic_);
     const auto img = with_bag_errors(file_, where, [&] { return m.instantiate<sensor_msgs::Image>(); });
     if (!img)
       throw DataError(file_, where + ": not a sensor_msgs/Image");

@@ -4,10 +4,11 @@
 #     seed 1): every mode with config/sim/estimator_config.yaml (defaults) and config/paper/estimator_config.yaml.
 #  2. The worked case's faster drift (0.5 ms/s) on feature-level data (1 px): tpn / ton / drift / sr+random_walk with
 #     both configs — TPN's overshoot and t_d NEES.
+#  4. Cost: `ovton benchmark` of sir and ton (twice each, alternating) on the folder of (1), one thread.
 #  3. FVON's velocities against the truth (`ovton run --velocity-log`, `ovton velocities`): the rendered folder of
 #     (1) and the real moving EuRoC cut (stamps shifted +20 ms), networks as shipped and as in the paper.
 # Usage: scripts/experiments/ton_defaults.sh [OUT]   (~1.5 h on 2 idle cores; needs ../shared/data)
-#   OVTON_BIN overrides the binary. Writes OUT/summary.md.
+#   OVTON_BIN overrides the binary; PARTS=23 runs parts 2 and 3 only (part 1 is the slow one). Writes OUT/summary.md.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 OUT=${1:-results/ton_defaults}
@@ -25,10 +26,12 @@ D1="$OUT/v103_drift"
 [ -f "$D1/sim.yaml" ] || "$BIN" simulate --gt "$GT/V1_03_difficult.txt" --start-s 5 --duration-s 40 --td-model drift \
   --td0-ms 10 --td-bias-ms-per-s 0.1 --td-noise-ms-per-sqrt-s 0.1 --seed 1 --out "$D1" --force -q >/dev/null
 MODES=sr,sr+random_walk,drift,sir,fvon,tpn,ton,oracle
+PARTS=${PARTS:-1234}
 for cfg in sim paper; do
+  [[ $PARTS == *1* ]] || break
   C=$SIM; [ $cfg = paper ] && C=$PAPER
   [ -f "$OUT/cmp_v103_$cfg/results.csv" ] || "$BIN" compare --dataset "$D1" --modes "$MODES" --config "$C" \
-    --out "$OUT/cmp_v103_$cfg" --jobs 2 >/dev/null 2>&1
+    --out "$OUT/cmp_v103_$cfg" --jobs 2 >/dev/null 2>&1 || true # a failed mode is a row of the table
 done
 
 # 2. the worked case's drift, feature level (1 px)
@@ -37,10 +40,11 @@ D2="$OUT/wc_features"
   --td0-ms 10 --td-bias-ms-per-s 0.5 --td-noise-ms-per-sqrt-s 0.1 --seed 1 --features-only --out "$D2" --force -q \
   >/dev/null
 for cfg in sim paper; do
+  [[ $PARTS == *2* ]] || break
   C=$SIM; [ $cfg = paper ] && C=$PAPER
   sed 's/sigma_px: 0.5/sigma_px: 1.0/' "$C" >"$OUT/wc_$cfg.yaml" # feature-level folders carry 1 px of noise
   [ -f "$OUT/cmp_wc_$cfg/results.csv" ] || "$BIN" compare --dataset "$D2" --modes sr,sr+random_walk,drift,tpn,ton,oracle \
-    --config "$OUT/wc_$cfg.yaml" --out "$OUT/cmp_wc_$cfg" --jobs 2 >/dev/null 2>&1
+    --config "$OUT/wc_$cfg.yaml" --out "$OUT/cmp_wc_$cfg" --jobs 2 >/dev/null 2>&1 || true
 done
 
 # 3. FVON against the truth
@@ -52,6 +56,7 @@ printf 'init:\n  mode: groundtruth\n' >"$OUT/real_default.yaml"
 printf 'init:\n  mode: groundtruth\nton:\n  its_residual: false\n  tpn_residual: false\n  f2f_inverse_depth: false\n  plateau_epochs: 0\n' \
   >"$OUT/real_paper.yaml"
 for cfg in sim paper; do
+  [[ $PARTS == *3* ]] || break
   C=$SIM; [ $cfg = paper ] && C=$PAPER
   [ -f "$OUT/vel_v103_$cfg.md" ] || {
     "$BIN" run --dataset "$D1" --config "$C" --td-mode ton --output "$OUT/vel_v103_$cfg.csv" \
@@ -66,19 +71,29 @@ for cfg in sim paper; do
   }
 done
 
+# 4. cost of the networks: CPU time per frame, sir against ton (alternating, so that load changes hit both)
+if [[ $PARTS == *4* ]] && [ ! -f "$OUT/bench.md" ]; then
+  "$BIN" benchmark --dataset "$D1" --config "$SIM" --modes sir,ton,sir,ton --json "$OUT/bench.json" -q \
+    >"$OUT/bench.md" 2>"$OUT/bench.log"
+fi
+
 {
   echo "# TON defaults vs the paper's choices (scripts/experiments/ton_defaults.sh, commit $(git rev-parse --short HEAD))"
   for name in v103 wc; do
     for cfg in sim paper; do
       echo; echo "## $name, config $cfg"; echo
-      sed -n '/^| mode/,/^$/p' "$OUT/cmp_${name}_$cfg/results.md"
+      if [ -f "$OUT/cmp_${name}_$cfg/results.md" ]; then sed -n '/^| mode/,/^$/p' "$OUT/cmp_${name}_$cfg/results.md"; fi
     done
   done
   for v in v103 real; do
     for cfg in sim paper; do
       echo; echo "## FVON velocities, $v, networks $cfg"; echo
-      cat "$OUT/vel_${v}_$cfg.md"
+      if [ -f "$OUT/vel_${v}_$cfg.md" ]; then cat "$OUT/vel_${v}_$cfg.md"; fi
     done
   done
+  if [ -f "$OUT/bench.md" ]; then
+    echo; echo "## Cost (ovton benchmark, sir and ton alternating)"; echo
+    cat "$OUT/bench.md"
+  fi
 } >"$OUT/summary.md"
 cat "$OUT/summary.md"
