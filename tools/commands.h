@@ -17,5 +17,6 @@ int cmd_compare(const Args &args);
 int cmd_benchmark(const Args &args);
 int cmd_diagnose(const Args &args);
 int cmd_velocities(const Args &args);
+int cmd_track(const Args &args);
 
 } // namespace ovton
