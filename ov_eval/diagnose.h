@@ -7,8 +7,10 @@
 // (significance of its coefficients with standard errors clustered by feature track, and share of loss explained);
 // if it passes, it joins the model and the remaining candidates are tested for what they add beyond it. Nested
 // candidates (offset drift contains a constant offset) are thereby credited only with what their extra terms add.
-// docs/diagnose.md gives each model, its sign convention and the thresholds.
+// docs/diagnose.md gives each model, its sign convention and the thresholds. The stages live in ov_eval/diagnose/
+// (tracks, residual_design, rate_design, candidates, regression, selection, report_writer); diagnose.cpp lists them.
 #include "ov_core/cam/camera_calib.h"
+#include "ov_core/io/residual_log_schema.h"
 #include "ov_core/types/sensor_data.h"
 
 #include <cstdint>
@@ -17,32 +19,11 @@
 
 namespace ov_eval {
 
-/// One row of the residual log (ov_msckf_ton/update/residual_log.h writes it; read here by header name).
-struct ResidualLogRow {
-  long line = 0; ///< 1-based line in the file, for messages
-  uint64_t update_id = 0, feature_id = 0;
-  int64_t t_cam_ns = 0;
-  int obs_index = 0, track_length = 0;
-  double res_u_px = 0, res_v_px = 0; ///< NaN only for triangulation failures
-  double u_px = 0, v_px = 0, x_norm = 0, y_norm = 0, radius_norm = 0;
-  double vel_u_px_s = 0, vel_v_px_s = 0;
-  int vel_source = 0;
-  double w_x = 0, w_y = 0, w_z = 0;
-  int w_valid = 0;
-  double td_s = 0;
-  double depth_m = 0; ///< z of the triangulated point in this camera; NaN (or a log without the column) if unknown
-  int status = 0;     ///< 0 accepted, 1 chi-square gated, 2 triangulation failed
-};
-
-struct ResidualLog {
-  std::string file;
-  std::vector<ResidualLogRow> rows;
-};
-
-/// Reads a residual log. Columns are found by header name (extra columns are ignored, so the writer may append).
-/// Throws DataError with file:line for a missing file, a missing header or required column, a short row, a value
-/// that is not a number, or a NaN where the row's status says a number must be.
-ResidualLog load_residual_log(const std::string &file);
+/// The residual log as `ovton run --residual-log` writes it: its schema is shared with the writer
+/// (ov_core/io/residual_log_schema.h), read by header name, with file:line errors.
+using ov_core::load_residual_log;
+using ov_core::ResidualLog;
+using ov_core::ResidualLogRow;
 
 struct DiagnoseOptions {
   int image_height = 0;                  ///< rows of the image; 0: the largest v_px in the log
@@ -62,10 +43,11 @@ struct DiagnoseOptions {
   double huber_k = 3.0;        ///< Huber threshold in robust σ of the residual components
   int time_bins = 12;          ///< bins of the per-time-bin δt(t) estimate
   int plot_bins = 16;          ///< quantile bins of the residual-vs-variable plots
-  /// false (default): the image velocity of an observation is the central difference of its track's neighbouring
-  /// pixels, which leaves the observation's own pixel out. The logged velocity (a backward difference that includes
-  /// the observation's own noise, as the filter's SIR shift uses it) correlates with the residual through that noise
-  /// and fakes a time offset of about σ²/(Δt·var V): 18 ms on the clean builtin simulation (docs/diagnose.md).
+  /// false (default): the image velocity of an observation is the three-point derivative of its track's predicted
+  /// observations ẑ = z − r, which carry none of the measured pixels' noise. The logged velocity (a backward difference
+  /// that includes the observation's own noise, as the filter's SIR shift uses it) correlates with the residual through
+  /// that noise and fakes a time offset of about σ²/(Δt·var V): 18 ms on the clean builtin simulation
+  /// (docs/diagnose.md).
   bool use_logged_velocity = false;
   double min_velocity_share = 0.5; ///< logged velocity only: below this share of rows with one, time tests are skipped
 };

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <utility>
 
 namespace ov_eval {
 namespace {
@@ -167,7 +168,7 @@ Plot &Plot::add(Series series) {
 }
 
 Plot &Plot::add_hline(double y, const std::string &label, std::optional<cv::Scalar> color) {
-  return add_line(0.0, y, label, color);
+  return add_line(0.0, y, label, std::move(color));
 }
 
 Plot &Plot::add_line(double slope, double intercept, const std::string &label, std::optional<cv::Scalar> color) {

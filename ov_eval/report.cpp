@@ -24,24 +24,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-/// Writes beside the target and renames, so that a reader (or an interrupted run) never leaves half a file.
-void write_file_atomically(const std::string &file, const std::string &text) {
-  const std::string tmp = file + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out)
-      throw ov_core::DataError(file, "cannot open for writing");
-    out << text;
-    out.flush();
-    if (!out)
-      throw ov_core::DataError(file, "write failed");
-  }
-  std::error_code ec;
-  fs::rename(tmp, file, ec);
-  if (ec)
-    throw ov_core::DataError(file, "cannot move " + tmp + " into place: " + ec.message());
-}
-
 std::string csv_field(const std::string &s) {
   if (s.find_first_of(",\"\n") == std::string::npos)
     return s;
@@ -101,6 +83,23 @@ std::string utc_now() {
 }
 
 } // namespace
+
+void write_file_atomically(const std::string &file, const std::string &text) {
+  const std::string tmp = file + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out)
+      throw ov_core::DataError(file, "cannot open for writing");
+    out << text;
+    out.flush();
+    if (!out)
+      throw ov_core::DataError(file, "write failed");
+  }
+  std::error_code ec;
+  fs::rename(tmp, file, ec);
+  if (ec)
+    throw ov_core::DataError(file, "cannot move " + tmp + " into place: " + ec.message());
+}
 
 ReportRow::ReportRow()
     : ape_rmse_m(kNaN), are_deg(kNaN), tpe_rmse_mm(kNaN), final_td_ms(kNaN), td_sigma_ms(kNaN), runtime_s(kNaN),

@@ -13,6 +13,10 @@
 
 namespace ov_eval {
 
+/// Writes `text` beside `file` and renames it into place, so that a reader (or an interrupted run) never sees half a
+/// file. Throws DataError when it cannot be written.
+void write_file_atomically(const std::string &file, const std::string &text);
+
 /// The outcome of one run under one named configuration (a time-offset mode in `compare`).
 struct RunRecord {
   std::string name;

@@ -1,5 +1,7 @@
 #include "ov_sim/renderer.h"
+#include "ov_sim/hash_noise.h"
 
+#include "ov_core/types/errors.h"
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -18,15 +20,6 @@ inline float fast_log2(float x) {
   float m;
   std::memcpy(&m, &i, 4);
   return e + ((-1.0f / 3.0f) * m + 2.0f) * m - 2.0f / 3.0f;
-}
-
-inline uint32_t hash32(uint64_t x) {
-  x ^= x >> 33;
-  x *= 0xff51afd7ed558ccdULL;
-  x ^= x >> 33;
-  x *= 0xc4ceb9fe1a85ec53ULL;
-  x ^= x >> 33;
-  return static_cast<uint32_t>(x);
 }
 
 struct Level {
@@ -92,8 +85,40 @@ void Renderer::render(const FramePose &pose, uint64_t noise_seed, cv::Mat &out) 
   }
 }
 
+void Renderer::accumulate(const FramePose &pose, float weight, cv::Mat &acc) const {
+  if (acc.rows != cam_.height() || acc.cols != cam_.width() || acc.type() != CV_32F)
+    throw ov_core::UsageError("renderer: the accumulator must be a CV_32F image of the camera's size");
+  const auto sink = [&acc, weight](int u, int v, float val) { acc.ptr<float>(v)[u] += weight * val; };
+  if (!pose.at_row) {
+    cast_rows(pose.R_WC, pose.p_WC, 0, cam_.height(), sink);
+    return;
+  }
+  Eigen::Matrix3d R_WC;
+  Eigen::Vector3d p_WC;
+  for (int v = 0; v < cam_.height(); ++v) {
+    pose.at_row(static_cast<double>(v), R_WC, p_WC);
+    cast_rows(R_WC, p_WC, v, v + 1, sink);
+  }
+}
+
 void Renderer::render_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, int v_begin, int v_end,
                            uint64_t noise_seed, cv::Mat &out) const {
+  // (U1 + U2 - 65535) for U uniform on [0, 65535] has sigma 65536 / sqrt(6).
+  const float noise_scale = static_cast<float>(opt_.noise_sigma * std::sqrt(6.0) / 65536.0);
+  const int w = cam_.width();
+  cast_rows(R_WC, p_WC, v_begin, v_end, [&](int u, int v, float val) {
+    if (noise_scale > 0.0f) {
+      // Sum of two uniforms (triangular, sigma as requested): cheap, deterministic per pixel and frame.
+      const uint32_t hh = hash32(noise_key(noise_seed, static_cast<uint64_t>(v) * w + u));
+      val += noise_scale * (static_cast<float>(hh & 0xFFFF) + static_cast<float>(hh >> 16) - 65535.0f);
+    }
+    out.ptr<uint8_t>(v)[u] = static_cast<uint8_t>(std::clamp(val + 0.5f, 0.0f, 255.0f));
+  });
+}
+
+template <typename Sink>
+void Renderer::cast_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, int v_begin, int v_end,
+                         Sink &&sink) const {
   const int w = cam_.width();
   const auto &surfs = scene_.surfaces();
   const auto &boxes = scene_.boxes();
@@ -168,12 +193,9 @@ void Renderer::render_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p
   const float log2_texel = static_cast<float>(std::log2(scene_.texel_m()));
   const float inv_texel = static_cast<float>(1.0 / scene_.texel_m());
   const float lod_bias = static_cast<float>(opt_.lod_bias);
-  // (U1 + U2 - 65535) for U uniform on [0, 65535] has sigma 65536 / sqrt(6).
-  const float noise_scale = static_cast<float>(opt_.noise_sigma * std::sqrt(6.0) / 65536.0);
   const float inf = std::numeric_limits<float>::infinity();
 
   for (int v = v_begin; v < v_end; ++v) {
-    uint8_t *row = out.ptr<uint8_t>(v);
     for (int u = 0; u < w; ++u) {
       const Ray &ray = rays_[static_cast<size_t>(v) * w + u];
       const float d[3] = {R(0, 0) * ray.x + R(0, 1) * ray.y + R(0, 2) * ray.z,
@@ -231,12 +253,7 @@ void Renderer::render_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p
       if (fl > 0.0f)
         val += fl * (bilinear(levels[face * kMaxLevels + l1], x0 * sc1, y0 * sc1) - val);
       val *= S.shade;
-      if (noise_scale > 0.0f) {
-        // Sum of two uniforms (triangular, sigma as requested): cheap, deterministic per pixel and frame.
-        const uint32_t hh = hash32(noise_seed * 0x9E3779B97F4A7C15ULL + static_cast<uint64_t>(v) * w + u);
-        val += noise_scale * (static_cast<float>(hh & 0xFFFF) + static_cast<float>(hh >> 16) - 65535.0f);
-      }
-      row[u] = static_cast<uint8_t>(std::clamp(val + 0.5f, 0.0f, 255.0f));
+      sink(u, v, val);
     }
   }
 }

@@ -26,10 +26,18 @@ public:
   /// Same with a rolling shutter when pose.at_row is set: pixel row v is drawn from the pose at_row(v).
   void render(const FramePose &pose, uint64_t noise_seed, cv::Mat &out) const;
 
+  /// Adds weight x the view's radiance to `acc` (CV_32F, the camera's size): the grey level the scene shows before
+  /// any camera effect (texture x face shade, no noise, no rounding). Summing sub-frame poses with weights 1/N
+  /// integrates the scene over an exposure (motion blur, camera_effects.h).
+  void accumulate(const FramePose &pose, float weight, cv::Mat &acc) const;
+
 private:
   /// Rows [v_begin, v_end) of the view from (R_WC, p_WC); `out` already has the camera's size.
   void render_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, int v_begin, int v_end,
                    uint64_t noise_seed, cv::Mat &out) const;
+  /// The ray caster: calls sink(u, v, value) for every pixel of rows [v_begin, v_end) seen from (R_WC, p_WC).
+  template <typename Sink>
+  void cast_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, int v_begin, int v_end, Sink &&sink) const;
   struct Ray {
     float x, y, z;  ///< unit ray in the camera frame
     float xn, yn;   ///< undistorted normalised coordinates (x/z, y/z), for box culling

@@ -16,43 +16,8 @@ double point_box_distance(const Eigen::Vector3d &p, const AlignedBox &b) {
   return d.norm();
 }
 
-/// Procedural texture: layers of randomly placed rectangles and discs, one layer per size octave, each added
-/// as a +/- offset so that coarse structure survives under fine detail. After mip filtering, whatever the
-/// viewing distance, some octave is near the pixel scale and gives KLT sharp corners with 15-95 grey-level contrast.
-cv::Mat make_texture(int w, int h, const SceneOptions &opt, Rng &rng) {
-  cv::Mat acc(h, w, CV_16S, cv::Scalar(128));
-  cv::Mat layer(h, w, CV_16S);
-  const double area_texels = static_cast<double>(w) * h;
-  const double s_min = opt.feature_min_m / opt.texel_m, s_max = opt.feature_max_m / opt.texel_m;
-  const int n_oct = std::max(1, static_cast<int>(std::ceil(std::log(s_max / s_min) / std::log(1.6))));
-  for (int o = n_oct - 1; o >= 0; --o) {
-    const double s = s_min * std::pow(s_max / s_min, n_oct > 1 ? static_cast<double>(o) / (n_oct - 1) : 0.0);
-    const double coverage = 0.3;
-    const int count = static_cast<int>(coverage * area_texels / (s * s * 1.5)) + 1;
-    const double rel = n_oct > 1 ? static_cast<double>(o) / (n_oct - 1) : 1.0; // 0 finest .. 1 coarsest
-    // Coarse octaves get more contrast (as in natural images): KLT's coarse pyramid levels see only them, and
-    // with equal contrast per octave new corners locked onto wrong minima under 20-30 px motion.
-    const double amp = 15.0 + 80.0 * rel;
-    layer.setTo(0);
-    for (int i = 0; i < count; ++i) {
-      const double cx = rng.uniform(-s, w + s), cy = rng.uniform(-s, h + s);
-      const short val = static_cast<short>((rng.uniform() < 0.5 ? -1 : 1) * amp * rng.uniform(0.6, 1.0));
-      if (rng.uniform() < 0.75) {
-        const double sx = s * rng.uniform(0.6, 1.6), sy = s * rng.uniform(0.6, 1.6);
-        cv::rectangle(layer, cv::Point(static_cast<int>(cx - sx / 2), static_cast<int>(cy - sy / 2)),
-                      cv::Point(static_cast<int>(cx + sx / 2), static_cast<int>(cy + sy / 2)), cv::Scalar(val),
-                      cv::FILLED);
-      } else {
-        cv::circle(layer, cv::Point(static_cast<int>(cx), static_cast<int>(cy)),
-                   std::max(1, static_cast<int>(s * rng.uniform(0.3, 0.7))), cv::Scalar(val), cv::FILLED);
-      }
-    }
-    acc += layer;
-  }
-  cv::Mat tex;
-  acc.convertTo(tex, CV_8U); // saturates
-  return tex;
-}
+/// Lit textures keep headroom below 255 for the brighter spots (illumination is 1 on average, up to ~2 under a lamp).
+constexpr double kLitScale = 0.7;
 
 } // namespace
 
@@ -109,8 +74,14 @@ Scene Scene::around_path(const std::vector<Eigen::Vector3d> &path, const SceneOp
 
 Scene::Scene(const AlignedBox &room, const std::vector<AlignedBox> &boxes, const SceneOptions &opt)
     : room_(room), boxes_(boxes), opt_(opt) {
-  if (!(opt.texel_m > 0) || !(opt.feature_min_m > 0) || !(opt.feature_max_m >= opt.feature_min_m))
+  const TextureOptions &t = opt.texture;
+  if (!(t.texel_m > 0) || !(t.feature_min_m > 0) || !(t.feature_max_m >= t.feature_min_m))
     throw ov_core::UsageError("scene: texel and feature sizes must be positive and ordered");
+  if (!(t.density >= 0 && t.density <= 1) || !(t.grain >= 0) || !(t.weave >= 0) || !(t.stain >= 0 && t.stain < 1) ||
+      !(opt.light_ambient > 0 && opt.light_ambient <= 1))
+    throw ov_core::UsageError("scene: texture density in [0, 1], grain >= 0, stain in [0, 1), ambient in (0, 1]");
+  if (t.style == TextureStyle::Room)
+    place_lamps();
   for (int b = -1; b < static_cast<int>(boxes_.size()); ++b) {
     const AlignedBox &box = b < 0 ? room_ : boxes_[b];
     for (int a = 0; a < 3; ++a)
@@ -131,13 +102,112 @@ void Scene::add_face(const AlignedBox &b, int axis, bool positive, uint64_t seed
   s.size_v = b.hi(s.axis_v) - b.lo(s.axis_v);
   Rng rng(seed);
   s.shade = static_cast<float>(rng.uniform(0.75, 1.0));
-  const int w = std::max(2, static_cast<int>(std::ceil(s.size_u / opt_.texel_m)));
-  const int h = std::max(2, static_cast<int>(std::ceil(s.size_v / opt_.texel_m)));
+  const int w = std::max(2, static_cast<int>(std::ceil(s.size_u / opt_.texture.texel_m)));
+  const int h = std::max(2, static_cast<int>(std::ceil(s.size_v / opt_.texture.texel_m)));
   // Box bottoms rest on the floor and are never seen: keep them tiny.
   const bool hidden = (&b != &room_) && axis == 2 && !positive;
-  s.mips.push_back(hidden ? cv::Mat(2, 2, CV_8U, cv::Scalar(128)) : make_texture(w, h, opt_, rng));
+  if (hidden)
+    s.mips.push_back(cv::Mat(2, 2, CV_8U, cv::Scalar(128)));
+  else if (opt_.texture.style == TextureStyle::Blotches)
+    s.mips.push_back(make_blotch_texture(w, h, opt_.texture, rng));
+  else
+    s.mips.push_back(make_room_texture(w, h, face_kind(b, axis, positive), opt_.texture, rng));
+  if (!lamps_.empty() && !hidden) {
+    // The face's normal towards the viewer: room faces look inwards, box faces outwards.
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    const bool inward = &b == &room_;
+    n(axis) = (positive != inward) ? 1.0 : -1.0;
+    bake_lighting(s, n);
+  }
   build_mips(s);
   surfaces_.push_back(std::move(s));
+}
+
+FaceKind Scene::face_kind(const AlignedBox &b, int axis, bool positive) const {
+  if (&b != &room_)
+    return FaceKind::Object;
+  if (axis == 2)
+    return positive ? FaceKind::Ceiling : FaceKind::Floor;
+  return FaceKind::Wall;
+}
+
+void Scene::place_lamps() {
+  Rng rng(derive_seed(opt_.seed, 200));
+  const Eigen::Vector3d size = room_.hi - room_.lo;
+  const int n = std::clamp(static_cast<int>(std::lround(size.x() * size.y() / 10.0)), 2, 12);
+  for (int i = 0; i < n; ++i) {
+    Lamp l;
+    l.position = Eigen::Vector3d(rng.uniform(room_.lo.x() + 0.5, room_.hi.x() - 0.5),
+                                 rng.uniform(room_.lo.y() + 0.5, room_.hi.y() - 0.5), room_.hi.z() - 0.01);
+    lamps_.push_back(l);
+  }
+  // The lamps' gain makes the mean illumination over floor and walls 1 (sampled on a coarse grid).
+  lamp_gain_ = 1.0;
+  double sum = 0.0;
+  int count = 0;
+  for (int a = 0; a < 3; ++a)
+    for (int side = 0; side < 2; ++side) {
+      if (a == 2 && side == 1)
+        continue; // the ceiling is lit by the ambient share only
+      const int au = (a + 1) % 3, av = (a + 2) % 3;
+      Eigen::Vector3d n = Eigen::Vector3d::Zero();
+      n(a) = side ? -1.0 : 1.0; // room faces look inwards
+      for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 10; ++j) {
+          Eigen::Vector3d p = room_.lo;
+          p(a) = side ? room_.hi(a) : room_.lo(a);
+          p(au) += (i + 0.5) / 10.0 * size(au);
+          p(av) += (j + 0.5) / 10.0 * size(av);
+          sum += (illumination(p, n) - opt_.light_ambient);
+          ++count;
+        }
+    }
+  lamp_gain_ = sum > 0 ? (1.0 - opt_.light_ambient) * count / sum : 0.0;
+}
+
+double Scene::illumination(const Eigen::Vector3d &p, const Eigen::Vector3d &n) const {
+  if (lamps_.empty())
+    return 1.0;
+  double e = 0.0;
+  for (const Lamp &l : lamps_) {
+    const Eigen::Vector3d d = l.position - p;
+    const double r = d.norm();
+    if (r < 1e-6)
+      continue;
+    const double cos_lamp = std::max(0.0, d.z() / r), cos_face = std::max(0.0, n.dot(d) / r);
+    e += cos_lamp * cos_face / (r * r + 1.0); // a broad fitting, not a point: no hot spots under it
+  }
+  return opt_.light_ambient + lamp_gain_ * e;
+}
+
+void Scene::bake_lighting(Surface &s, const Eigen::Vector3d &normal) const {
+  // Illumination varies over tens of centimetres: evaluate it every 0.1 m and interpolate.
+  cv::Mat &tex = s.mips[0];
+  const double cell = 0.1;
+  const int gw = static_cast<int>(std::ceil(s.size_u / cell)) + 2,
+            gh = static_cast<int>(std::ceil(s.size_v / cell)) + 2;
+  cv::Mat grid(gh, gw, CV_32F);
+  for (int j = 0; j < gh; ++j)
+    for (int i = 0; i < gw; ++i)
+      grid.at<float>(j, i) =
+          static_cast<float>(illumination(surface_point_of(s, (i - 0.5) * cell, (j - 0.5) * cell), normal));
+  cv::Mat light, f;
+  cv::resize(
+      grid, light,
+      cv::Size(static_cast<int>(gw * cell / opt_.texture.texel_m), static_cast<int>(gh * cell / opt_.texture.texel_m)),
+      0, 0, cv::INTER_LINEAR);
+  const int off = static_cast<int>(0.5 * cell / opt_.texture.texel_m);
+  tex.convertTo(f, CV_32F, kLitScale);
+  f = f.mul(light(cv::Rect(off, off, tex.cols, tex.rows)));
+  // Lamps on the ceiling are bright panels (they saturate when the camera looks up, and auto-exposure reacts).
+  if (s.axis == 2 && normal.z() < 0)
+    for (const Lamp &l : lamps_) {
+      const double u = l.position(s.axis_u) - s.origin(s.axis_u), v = l.position(s.axis_v) - s.origin(s.axis_v);
+      const auto px = [&](double m) { return static_cast<int>(std::lround(m / opt_.texture.texel_m)); };
+      cv::rectangle(f, cv::Point(px(u - 0.3), px(v - 0.15)), cv::Point(px(u + 0.3), px(v + 0.15)), cv::Scalar(255),
+                    cv::FILLED);
+    }
+  f.convertTo(tex, CV_8U);
 }
 
 void Scene::build_mips(Surface &s) {
@@ -198,7 +268,10 @@ bool Scene::raycast(const Eigen::Vector3d &o, const Eigen::Vector3d &d, RayHit &
 }
 
 Eigen::Vector3d Scene::surface_point(int surface, double u, double v) const {
-  const Surface &s = surfaces_.at(surface);
+  return surface_point_of(surfaces_.at(surface), u, v);
+}
+
+Eigen::Vector3d surface_point_of(const Surface &s, double u, double v) {
   Eigen::Vector3d p = s.origin;
   p(s.axis_u) += u;
   p(s.axis_v) += v;
@@ -208,9 +281,9 @@ Eigen::Vector3d Scene::surface_point(int surface, double u, double v) const {
 Eigen::Vector3d Scene::plant_marker(int surface, double u, double v, double radius_m) {
   Surface &s = surfaces_.at(surface);
   const int shift = 8; // sub-texel centre, so the marker sits exactly where asked
-  const double x = u / opt_.texel_m - 0.5, y = v / opt_.texel_m - 0.5;
+  const double x = u / opt_.texture.texel_m - 0.5, y = v / opt_.texture.texel_m - 0.5;
   const cv::Point c(static_cast<int>(std::lround(x * (1 << shift))), static_cast<int>(std::lround(y * (1 << shift))));
-  const auto r = [&](double m) { return static_cast<int>(std::lround(m / opt_.texel_m * (1 << shift))); };
+  const auto r = [&](double m) { return static_cast<int>(std::lround(m / opt_.texture.texel_m * (1 << shift))); };
   cv::circle(s.mips[0], c, r(2.0 * radius_m), cv::Scalar(255), cv::FILLED, cv::LINE_AA, shift);
   cv::circle(s.mips[0], c, r(radius_m), cv::Scalar(0), cv::FILLED, cv::LINE_AA, shift);
   build_mips(s);

@@ -1,8 +1,10 @@
 #pragma once
 // Textured box world for rendering and feature simulation: a room (interior faces) plus boxes standing on
 // its floor. Every face is a Surface carrying its own procedural texture with a mip pyramid.
+#include "ov_sim/texture.h"
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -16,10 +18,16 @@ struct SceneOptions {
   double min_height_m = 3.0;
   int num_boxes = 10;           ///< objects for parallax (fewer if they do not fit beside the path)
   double box_clearance_m = 0.8; ///< minimum distance between any box and the path
-  double texel_m = 0.005;       ///< finest texture detail; EuRoC cam0 at 1 m sees 2.2 mm per pixel
-  double feature_min_m = 0.015; ///< smallest painted rectangle; largest is feature_max_m
-  double feature_max_m = 0.6;
+  /// Blotches: the clean texture, evenly lit. Room: plain surfaces with textured patches (texture.h), lit by ceiling
+  /// lamps (brightness baked into the textures: a diffuse scene looks the same from every side).
+  TextureOptions texture;
+  double light_ambient = 0.5; ///< Room: share of the mean illumination that is ambient (reaches every face)
   uint64_t seed = 0;
+};
+
+/// A ceiling lamp (Room style): a downward Lambertian emitter.
+struct Lamp {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
 };
 
 /// An axis-aligned face: points origin + u * e_u + v * e_v, (u, v) in [0, size_u] x [0, size_v].
@@ -31,6 +39,9 @@ struct Surface {
   float shade = 1.0f;        ///< per-face brightness, so faces meeting at an edge differ
   std::vector<cv::Mat> mips; ///< CV_8U; level 0 texel = texel_m; level l from cv::pyrDown
 };
+
+/// The world point at (u, v) of a face.
+Eigen::Vector3d surface_point_of(const Surface &s, double u, double v);
 
 struct AlignedBox {
   Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();
@@ -51,8 +62,13 @@ public:
   const AlignedBox &room() const { return room_; }
   const std::vector<AlignedBox> &boxes() const { return boxes_; }
   const std::vector<Surface> &surfaces() const { return surfaces_; }
-  double texel_m() const { return opt_.texel_m; }
+  double texel_m() const { return opt_.texture.texel_m; }
   const SceneOptions &options() const { return opt_; }
+  const std::vector<Lamp> &lamps() const { return lamps_; }
+
+  /// Illumination of a point on a face with unit normal n (facing the viewer), relative to the room's mean
+  /// (Room style; 1 everywhere for Blotches).
+  double illumination(const Eigen::Vector3d &p, const Eigen::Vector3d &n) const;
 
   /// Surface index of face (2 * axis + (positive side ? 1 : 0)) of the room (box = -1) or of box `box`.
   static int face_index(int box, int axis, bool positive) { return 6 * (box + 1) + 2 * axis + (positive ? 1 : 0); }
@@ -67,8 +83,13 @@ public:
 
 private:
   void add_face(const AlignedBox &b, int axis, bool positive, uint64_t seed);
+  FaceKind face_kind(const AlignedBox &b, int axis, bool positive) const;
+  void place_lamps();
+  void bake_lighting(Surface &s, const Eigen::Vector3d &normal) const;
   static void build_mips(Surface &s);
   AlignedBox room_;
+  std::vector<Lamp> lamps_;
+  double lamp_gain_ = 0.0; ///< scales the lamps' sum so that the room's mean illumination is 1
   std::vector<AlignedBox> boxes_;
   std::vector<Surface> surfaces_;
   SceneOptions opt_;

@@ -4,15 +4,16 @@
 #include "ov_core/types/errors.h"
 #include "ov_sim/euroc_calib.h"
 #include "ov_sim/random.h"
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
-#include <yaml-cpp/yaml.h>
 
 namespace fs = std::filesystem;
 
@@ -21,7 +22,7 @@ namespace ov_sim {
 namespace {
 
 // Independent random streams per component: changing e.g. the scene never changes the IMU noise.
-enum Stream : uint64_t { kImu = 1, kTd = 2, kScene = 3, kFeatures = 4, kRenderNoise = 5 };
+enum Stream : uint64_t { kImu = 1, kTd = 2, kScene = 3, kFeatures = 4, kRenderNoise = 5, kImuErrors = 6 };
 
 std::ofstream open_out(const fs::path &p) {
   fs::create_directories(p.parent_path());
@@ -38,18 +39,63 @@ void write_text(const fs::path &p, const std::string &text) {
     throw ov_core::DataError(p.string(), "write failed");
 }
 
+/// CPU time of the calling thread [s] (the renderer runs on one thread: its cost on one core, whatever the load).
+double thread_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+/// Longest exposure a frame can get: the shutter is open for half of it after the frame's instant.
+double max_exposure_s(const SimOptions &opt) {
+  const CameraEffectsOptions &c = opt.camera_effects;
+  if (!c.enabled)
+    return 0.0;
+  return c.auto_exposure ? c.ae_max_exposure_s : c.exposure_s;
+}
+
 std::vector<int64_t> image_times(const Trajectory &traj, const SimOptions &opt) {
   const double rate = opt.cam.rate_hz > 0 ? opt.cam.rate_hz : 20.0;
   const int64_t first = traj.t_begin_ns() + ov_core::s_to_ns(opt.first_image_s);
+  const int64_t half_exposure = ov_core::s_to_ns(max_exposure_s(opt) / 2);
+  if (first - half_exposure < traj.t_begin_ns())
+    throw ov_core::UsageError("the first image's exposure would start before the trajectory");
   std::vector<int64_t> t;
   for (int64_t k = 0;; ++k) {
     const int64_t tk = first + std::llround(k * 1e9 / rate);
-    if (tk + ov_core::s_to_ns(opt.readout_s) >
-        traj.t_end_ns()) // a rolling shutter's last row, too, lies on the trajectory
+    // A rolling shutter's last row, and the end of every exposure, too, lie on the trajectory.
+    if (tk + ov_core::s_to_ns(opt.readout_s) + half_exposure > traj.t_end_ns())
       break;
     t.push_back(tk);
   }
   return t;
+}
+
+/// How far the image moves between two poses of the camera [px]: the rotation angle at the focal length, plus the
+/// translation seen at 1 m (a conservative room-scale depth for sampling the exposure finely enough).
+double image_motion_px(const FramePose &a, const FramePose &b, double focal_px) {
+  const Eigen::AngleAxisd d(a.R_WC.transpose() * b.R_WC);
+  return focal_px * (std::abs(d.angle()) + (b.p_WC - a.p_WC).norm() / 1.0);
+}
+
+/// One image through the camera effects: the scene integrated over the exposure along sub-frame poses (motion
+/// blur), then developed (PSF, vignetting, noise, auto-exposure, 8 bits). t_mid_ns is the exposure's middle.
+int render_exposed(const Renderer &renderer, CameraEffects &effects, const Trajectory &traj, const SimOptions &opt,
+                   int64_t t_mid_ns, uint64_t frame_index, cv::Mat &acc, cv::Mat &img) {
+  const double T = effects.next_exposure().exposure_s;
+  const int64_t half = ov_core::s_to_ns(T / 2);
+  const double motion = image_motion_px(frame_pose(traj, opt, t_mid_ns - half), frame_pose(traj, opt, t_mid_ns + half),
+                                        std::max(opt.cam.intrinsics(0), opt.cam.intrinsics(1)));
+  const int n = effects.blur_samples(motion);
+  acc.create(opt.cam.height, opt.cam.width, CV_32F);
+  acc.setTo(0.0f);
+  for (int j = 0; j < n; ++j) {
+    // Sample j at the centre of the j-th of n equal slices of the exposure.
+    const int64_t t = t_mid_ns + std::llround(((j + 0.5) / n - 0.5) * T * 1e9);
+    renderer.accumulate(frame_pose(traj, opt, t), 1.0f / static_cast<float>(n), acc);
+  }
+  effects.develop(acc, t_mid_ns, opt.readout_s, frame_index, img);
+  return n;
 }
 
 } // namespace
@@ -105,80 +151,9 @@ Scene make_scene(const Trajectory &traj, const SimOptions &opt) {
     path.push_back(traj.sample(t).p_W);
   SceneOptions so = opt.scene;
   so.seed = derive_seed(opt.seed, kScene);
+  if (!opt.texture_from.empty() && !so.texture.crops)
+    so.texture.crops = std::make_shared<const std::vector<cv::Mat>>(load_texture_crops(opt.texture_from));
   return Scene::around_path(path, so);
-}
-
-std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
-  YAML::Emitter e;
-  e.SetDoublePrecision(15); // 0.1 prints as 0.1, and every value still reads back unchanged
-  e << YAML::BeginMap;
-  e << YAML::Key << "generator" << YAML::Value << "ovton simulate";
-  e << YAML::Key << "seed" << YAML::Value << opt.seed;
-  e << YAML::Key << "trajectory" << YAML::Value << YAML::BeginMap;
-  e << YAML::Key << "source" << YAML::Value << traj.describe();
-  e << YAML::Key << "start_s" << YAML::Value << opt.start_s;
-  e << YAML::Key << "duration_s" << YAML::Value << opt.duration_s;
-  e << YAML::Key << "knot_dt_s" << YAML::Value << opt.knot_dt_s;
-  e << YAML::Key << "t_begin_ns" << YAML::Value << traj.t_begin_ns();
-  e << YAML::Key << "t_end_ns" << YAML::Value << traj.t_end_ns();
-  e << YAML::EndMap;
-  e << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
-  e << YAML::Key << "source" << YAML::Value << (opt.imu_from.empty() ? "synthetic" : "real:" + opt.imu_from);
-  e << YAML::Key << "calibration" << YAML::Value << opt.imu_source;
-  e << YAML::Key << "rate_hz" << YAML::Value << opt.imu.rate_hz;
-  e << YAML::Key << "gyroscope_noise_density" << YAML::Value << opt.imu.gyro_noise_density;
-  e << YAML::Key << "gyroscope_random_walk" << YAML::Value << opt.imu.gyro_random_walk;
-  e << YAML::Key << "accelerometer_noise_density" << YAML::Value << opt.imu.accel_noise_density;
-  e << YAML::Key << "accelerometer_random_walk" << YAML::Value << opt.imu.accel_random_walk;
-  e << YAML::Key << "noise" << YAML::Value << opt.imu_noise;
-  e << YAML::Key << "bias_walk" << YAML::Value << opt.imu_bias_walk;
-  e << YAML::Key << "gyro_scale_error" << YAML::Value << opt.gyro_scale; // planted: the gyro reads (1 + s)·ω
-  e << YAML::Key << "gravity_W" << YAML::Value << YAML::Flow << std::vector<double>{0.0, 0.0, -9.81};
-  e << YAML::EndMap;
-  e << YAML::Key << "camera" << YAML::Value << YAML::BeginMap;
-  e << YAML::Key << "calibration" << YAML::Value << opt.cam_source;
-  e << YAML::Key << "rate_hz" << YAML::Value << opt.cam.rate_hz;
-  e << YAML::Key << "first_image_s" << YAML::Value << opt.first_image_s;
-  e << YAML::Key << "output" << YAML::Value << (opt.no_images ? "none" : (opt.features_only ? "features" : "images"));
-  // Planted camera effects (docs/simulate.md): what the data carry and cam0/sensor.yaml does not say.
-  e << YAML::Key << "rolling_shutter_readout_s" << YAML::Value << opt.readout_s;
-  e << YAML::Key << "rolling_shutter_convention" << YAML::Value
-    << "row v exposed at the image's IMU-clock instant + v/height * readout; the stamp belongs to row 0";
-  e << YAML::Key << "focal_error" << YAML::Value << opt.focal_error;
-  const ov_core::CameraCalib tc = true_camera(opt);
-  e << YAML::Key << "true_intrinsics" << YAML::Value << YAML::Flow
-    << std::vector<double>{tc.intrinsics(0), tc.intrinsics(1), tc.intrinsics(2), tc.intrinsics(3)};
-  e << YAML::EndMap;
-  e << YAML::Key << "time_offset" << YAML::Value << YAML::BeginMap;
-  e << YAML::Key << "convention" << YAML::Value << "t_imu = t_cam + td";
-  e << YAML::Key << "model" << YAML::Value << to_string(opt.td.kind);
-  e << YAML::Key << "td0_s" << YAML::Value << opt.td.td0_s;
-  e << YAML::Key << "bias_s_per_s" << YAML::Value << opt.td.bias_s_per_s;
-  e << YAML::Key << "noise_s_per_sqrt_s" << YAML::Value << opt.td.noise_s_per_sqrt_s;
-  e << YAML::EndMap;
-  e << YAML::Key << "scene" << YAML::Value << YAML::BeginMap;
-  e << YAML::Key << "margin_xy_m" << YAML::Value << opt.scene.margin_xy_m;
-  e << YAML::Key << "margin_below_m" << YAML::Value << opt.scene.margin_below_m;
-  e << YAML::Key << "margin_above_m" << YAML::Value << opt.scene.margin_above_m;
-  e << YAML::Key << "num_boxes" << YAML::Value << opt.scene.num_boxes;
-  e << YAML::Key << "box_clearance_m" << YAML::Value << opt.scene.box_clearance_m;
-  e << YAML::Key << "texel_m" << YAML::Value << opt.scene.texel_m;
-  e << YAML::Key << "feature_min_m" << YAML::Value << opt.scene.feature_min_m;
-  e << YAML::Key << "feature_max_m" << YAML::Value << opt.scene.feature_max_m;
-  e << YAML::Key << "render_noise_sigma" << YAML::Value << opt.render.noise_sigma;
-  e << YAML::EndMap;
-  if (opt.features_only) {
-    e << YAML::Key << "features" << YAML::Value << YAML::BeginMap;
-    e << YAML::Key << "max_tracks" << YAML::Value << opt.features.max_tracks;
-    e << YAML::Key << "grid" << YAML::Value << YAML::Flow
-      << std::vector<int>{opt.features.grid_cols, opt.features.grid_rows};
-    e << YAML::Key << "pixel_noise" << YAML::Value << opt.features.pixel_noise;
-    e << YAML::Key << "mean_track_length" << YAML::Value << opt.features.mean_track_length;
-    e << YAML::Key << "landmarks_per_m2" << YAML::Value << opt.features.landmarks_per_m2;
-    e << YAML::EndMap;
-  }
-  e << YAML::EndMap;
-  return std::string(e.c_str()) + "\n";
 }
 
 SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
@@ -218,6 +193,10 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   io.gyro_scale = opt.gyro_scale;
   io.seed = derive_seed(opt.seed, kImu);
   ImuSynthResult imu = synthesize_imu(*traj, io);
+  if (opt.imu_errors.enabled && opt.imu_from.empty())
+    add_imu_errors(*traj, opt.imu_errors, opt.imu_noise ? opt.imu.gyro_noise_density : 0.0,
+                   opt.imu_noise ? opt.imu.accel_noise_density : 0.0, derive_seed(opt.seed, kImuErrors), imu.imu,
+                   imu.truth);
   if (!opt.imu_from.empty()) {
     ov_core::LoadOptions lo;
     lo.check_images_exist = false;
@@ -292,8 +271,24 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     scene = std::make_unique<Scene>(make_scene(*traj, opt));
     cam = std::make_unique<ov_core::CameraModel>(true_camera(opt)); // sensor.yaml above keeps opt.cam
   }
-  if (render)
+  std::unique_ptr<CameraEffects> effects;
+  std::ofstream exposure_out;
+  cv::Mat acc; // exposure-averaged radiance
+  if (render) {
     renderer = std::make_unique<Renderer>(*cam, *scene, opt.render);
+    if (opt.camera_effects.enabled) {
+      effects = std::make_unique<CameraEffects>(opt.camera_effects, *cam, derive_seed(opt.seed, kRenderNoise));
+      // Not part of the EuRoC layout (readers ignore it): what the camera did, frame by frame.
+      exposure_out = open_out(mav0 / "cam0" / "exposure.csv");
+      exposure_out << "#timestamp [ns] (camera clock; middle of the exposure),exposure_s,gain,blur_samples\n";
+      if (!frames.empty()) {
+        acc.create(opt.cam.height, opt.cam.width, CV_32F);
+        acc.setTo(0.0f);
+        renderer->accumulate(frame_pose(*traj, opt, frames.front().t_imu_ns), 1.0f, acc);
+        effects->settle(acc);
+      }
+    }
+  }
   if (opt.features_only) {
     FeatureSimOptions fo = opt.features;
     fo.seed = derive_seed(opt.seed, kFeatures);
@@ -309,8 +304,22 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     const FramePose pose = frame_pose(*traj, opt, fr.t_imu_ns);
     if (render) {
       const auto r0 = std::chrono::steady_clock::now();
-      renderer->render(pose, derive_seed(opt.seed, kRenderNoise) + k, img);
+      const double c0 = thread_cpu_seconds();
+      if (effects) {
+        const Exposure ex = effects->next_exposure();
+        const int n = render_exposed(*renderer, *effects, *traj, opt, fr.t_imu_ns, k, acc, img);
+        rep.n_renderings += n;
+        char buf[128];
+        std::snprintf(buf, sizeof(buf), "%lld,%.9f,%.6f,%d\n", static_cast<long long>(fr.t_cam_ns), ex.exposure_s,
+                      ex.gain, n);
+        exposure_out << buf;
+        exposure_out.flush();
+      } else {
+        renderer->render(pose, derive_seed(opt.seed, kRenderNoise) + k, img);
+        ++rep.n_renderings;
+      }
       rep.render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+      rep.render_cpu_seconds += thread_cpu_seconds() - c0;
       const fs::path file = mav0 / "cam0" / "data" / name;
       if (!cv::imwrite(file.string(), img, png_params))
         throw ov_core::DataError(file.string(), "cannot write image");

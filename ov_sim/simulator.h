@@ -1,7 +1,9 @@
 #pragma once
 // Writes a synthetic EuRoC-format folder: mav0/{cam0,imu0,state_groundtruth_estimate0,td_truth} + sim.yaml.
 #include "ov_core/cam/camera_calib.h"
+#include "ov_sim/camera_effects.h"
 #include "ov_sim/feature_sim.h"
+#include "ov_sim/imu_errors.h"
 #include "ov_sim/imu_synth.h"
 #include "ov_sim/renderer.h"
 #include "ov_sim/scene.h"
@@ -27,8 +29,9 @@ struct SimOptions {
   std::string cam_source = "builtin EuRoC cam0", imu_source = "builtin EuRoC imu0 (ADIS16448)";
   bool imu_noise = true;
   bool imu_bias_walk = true;
-  std::string imu_from; ///< semi-real: copy imu0/data.csv of this folder instead of synthesising
-  TdModelOptions td;    ///< its seed is derived from `seed`
+  std::string imu_from;     ///< semi-real: copy imu0/data.csv of this folder instead of synthesising
+  ImuErrorModel imu_errors; ///< synthetic IMU: errors beyond the datasheet (imu_errors.h); off by default
+  TdModelOptions td;        ///< its seed is derived from `seed`
   /// Rolling shutter: image row v (distorted pixel row, continuous) is exposed at the frame's IMU-clock instant
   /// + v / height · readout_s; the stamp (and td_truth) belongs to row 0. 0: global shutter.
   double readout_s = 0.0;
@@ -37,19 +40,26 @@ struct SimOptions {
   double focal_error = 0.0;
   /// Gyro scale error: imu0/data.csv reads (1 + gyro_scale)·ω; imu0/sensor.yaml does not say so.
   double gyro_scale = 0.0;
-  SceneOptions scene; ///< its seed is derived from `seed`
-  RenderOptions render;
-  FeatureSimOptions features; ///< its seed is derived from `seed`
-  bool features_only = false; ///< write cam0/features.csv instead of images
-  bool no_images = false;     ///< write neither images nor features (IMU, ground truth, stamps only)
-  bool overwrite = false;     ///< replace an existing OUT/mav0 (otherwise refuse: stale images would mix in)
+  /// Realism preset the options below came from (realism.h): "clean" (these defaults), "euroc", "harsh", or
+  /// "custom" once an option was changed by hand. Recorded in sim.yaml.
+  std::string realism = "clean";
+  std::string texture_from; ///< Room texture: posters cut from this EuRoC folder's cam0 frames (empty: procedural)
+  SceneOptions scene;       ///< its seed is derived from `seed`
+  RenderOptions render;     ///< the clean renderer's options (used when camera_effects is off)
+  CameraEffectsOptions camera_effects; ///< exposure, blur, noise, ... (camera_effects.h); off by default
+  FeatureSimOptions features;          ///< its seed is derived from `seed`
+  bool features_only = false;          ///< write cam0/features.csv instead of images
+  bool no_images = false;              ///< write neither images nor features (IMU, ground truth, stamps only)
+  bool overwrite = false;              ///< replace an existing OUT/mav0 (otherwise refuse: stale images would mix in)
 
   SimOptions();
 };
 
 struct SimReport {
   size_t n_imu = 0, n_images = 0, n_observations = 0;
-  double render_seconds = 0.0; ///< time spent rendering (excluding PNG encoding and disk)
+  size_t n_renderings = 0;         ///< sub-frame renderings (more than n_images when motion blur needs them)
+  double render_seconds = 0.0;     ///< wall time spent rendering (excluding PNG encoding and disk)
+  double render_cpu_seconds = 0.0; ///< CPU time of the rendering thread: one core's cost, whatever the load
   double total_seconds = 0.0;
   std::string trajectory;
 };

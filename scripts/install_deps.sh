@@ -1,8 +1,18 @@
 #!/usr/bin/env bash
-# Installs the Debian packages the build needs (skips apt when everything is already there).
+# Installs the Debian packages the build needs, and any given as arguments (skips apt when everything is already there).
+# --sanitize adds clang and its runtime libraries (ASan, UBSan, libFuzzer) for scripts/sanitize.sh and scripts/fuzz.sh;
+# other arguments are extra packages a script needs (check_format.sh: clang-format).
 set -euo pipefail
+# librosbag-storage-dev + libsensor-msgs-dev: ROS 1 bags read and written without ROS (Debian's rosbag storage library).
 PKGS=(build-essential cmake ccache libeigen3-dev libopencv-dev libyaml-cpp-dev libboost-program-options-dev
-      libgtest-dev python3)
+      libgtest-dev python3 librosbag-storage-dev libsensor-msgs-dev)
+for a in "$@"; do
+  if [ "$a" = "--sanitize" ]; then
+    PKGS+=(clang libclang-rt-14-dev)
+  else
+    PKGS+=("$a")
+  fi
+done
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

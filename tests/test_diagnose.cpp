@@ -14,8 +14,6 @@
 
 using namespace ov_core;
 using namespace ov_eval;
-using ovtest::estimate;
-using ovtest::top;
 
 namespace {
 

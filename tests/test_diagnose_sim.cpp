@@ -25,7 +25,6 @@ using namespace ov_core;
 using namespace ov_eval;
 using ovtest::expect_nothing_flagged;
 using ovtest::expect_top;
-using ovtest::top;
 
 namespace {
 

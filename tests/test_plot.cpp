@@ -20,7 +20,7 @@ std::pair<int, double> closest_row(const cv::Mat &img, const cv::Rect &area, int
   int best = -1;
   double best_d = 1e9;
   for (int y = area.y + 1; y < area.y + area.height - 1; ++y) {
-    const cv::Vec3b p = img.at<cv::Vec3b>(y, x);
+    const cv::Vec3b &p = img.at<cv::Vec3b>(y, x);
     const double d = std::abs(p[0] - c[0]) + std::abs(p[1] - c[1]) + std::abs(p[2] - c[2]);
     if (d < best_d)
       best_d = d, best = y;

@@ -1,5 +1,6 @@
 // Propagation, cloning and EKF helpers: every Jacobian against central finite differences of the discrete maps,
 // in the error-state convention of ov_msckf_ton/state/state.h.
+#include "fd_check.h"
 #include "ov_core/math/so3.h"
 #include "ov_msckf_ton/state/propagator.h"
 #include "ov_msckf_ton/state/state_helper.h"
@@ -51,16 +52,12 @@ Eigen::Matrix<double, 15, 1> minus(const ImuState &y, const ImuState &x) {
 TEST(So3, JacobiansAgainstFiniteDifferences) {
   const Eigen::Vector3d phi(0.3, -0.7, 1.1);
   const Eigen::Matrix3d Jr = ov_core::so3_jr(phi);
-  const double h = 1e-6;
-  for (int i = 0; i < 3; ++i) {
-    Eigen::Vector3d d = Eigen::Vector3d::Zero();
-    d(i) = h;
-    // Exp(phi + d) ≈ Exp(phi) Exp(Jr d)
-    const Eigen::Vector3d num =
-        (so3_log(so3_exp(phi).transpose() * so3_exp(phi + d)) - so3_log(so3_exp(phi).transpose() * so3_exp(phi - d))) /
-        (2 * h);
-    EXPECT_NEAR((num - Jr.col(i)).norm(), 0, 1e-8);
-  }
+  // Exp(phi + d) ≈ Exp(phi) Exp(Jr d)
+  const Eigen::MatrixXd num = ovtest::numeric_jacobian(
+      [&](const Eigen::Vector3d &y) -> Eigen::Vector3d { return so3_log(so3_exp(phi).transpose() * so3_exp(y)); }, phi,
+      1e-6);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NEAR((num.col(i) - Jr.col(i)).norm(), 0, 1e-8);
   EXPECT_NEAR((ov_core::so3_jr_inv(phi) * Jr - Eigen::Matrix3d::Identity()).norm(), 0, 1e-12);
   EXPECT_NEAR((so3_log(so3_exp(phi)) - phi).norm(), 0, 1e-12);
 }
@@ -76,16 +73,14 @@ TEST(Propagation, StepTransitionMatchesFiniteDifferences) {
     ImuState y;
     Mat15 Phi, Q;
     imu_step(x, wm, am, dt, g, noise, y, &Phi, &Q);
-    const double h = 1e-6;
-    Mat15 num;
-    for (int i = 0; i < 15; ++i) {
-      Eigen::Matrix<double, 15, 1> d = Eigen::Matrix<double, 15, 1>::Zero();
-      d(i) = h;
-      ImuState yp, ym;
-      imu_step(plus(x, d), wm, am, dt, g, noise, yp, nullptr, nullptr);
-      imu_step(plus(x, -d), wm, am, dt, g, noise, ym, nullptr, nullptr);
-      num.col(i) = (minus(yp, y) - minus(ym, y)) / (2 * h);
-    }
+    // The step's output in y's tangent space, as a function of x ⊞ δ.
+    const auto step = [&](const ImuState &xi) -> Eigen::Matrix<double, 15, 1> {
+      ImuState yi;
+      imu_step(xi, wm, am, dt, g, noise, yi, nullptr, nullptr);
+      return minus(yi, y);
+    };
+    const Mat15 num = ovtest::numeric_jacobian(
+        step, x, 15, [](const ImuState &xi, const Eigen::VectorXd &d) { return plus(xi, d); }, 1e-6);
     EXPECT_LT((num - Phi).cwiseAbs().maxCoeff(), 1e-7) << "dt " << dt << "\nnumeric\n" << num << "\nanalytic\n" << Phi;
     EXPECT_LT((Q - Q.transpose()).norm(), 1e-18);
     EXPECT_GT(Q.diagonal().minCoeff(), 0.0);
@@ -201,7 +196,8 @@ TEST(Cloning, TdJacobianMatchesFiniteDifferences) {
   ASSERT_TRUE(prop.propagate(s, t_img));
   state_helper::clone(s, t_img, true, prop.last_w_B(), s.imu.v);
   const CloneState &c = s.clones.at(t_img);
-  // Finite difference of the pose w.r.t. the clone time (forward, 0.1 ms).
+  // Finite difference of the pose w.r.t. the clone time: forward (0.1 ms), since the propagator predicts forward only
+  // (the central differences of fd_check.h would need the mean before the image).
   State s0(true);
   s0.imu = s.imu;
   s0.t_imu_ns = t_img;

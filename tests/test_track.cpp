@@ -5,6 +5,7 @@
 #include "ov_core/track/feature_database.h"
 #include "ov_core/track/track_klt.h"
 #include "ov_core/types/errors.h"
+#include "ov_sim/euroc_calib.h"
 #include "test_util.h"
 
 #include <opencv2/imgcodecs.hpp>
@@ -31,7 +32,7 @@ CameraCalib pinhole_calib() {
   c.width = kW;
   c.height = kH;
   c.rate_hz = 20;
-  c.intrinsics << 458.654, 457.296, 367.215, 248.375;
+  c.intrinsics = ov_sim::euroc_cam0_calib().intrinsics;
   c.dist_coeffs.setZero();
   return c;
 }
@@ -217,7 +218,7 @@ TEST(TrackKLT, SubPixelShiftIsRecoveredWithinATenthOfAPixel) {
         ++common;
         const double err = (uv1 - it->second - Eigen::Vector2d(sx, sy)).norm();
         // Where the LK window hangs over the image border it sees padding, which no shift explains.
-        const double hw = opt.win_size / 2 + 1;
+        const int hw = opt.win_size / 2 + 1; // whole pixels: the half window, rounded down
         const bool inside = uv1.x() >= hw && uv1.y() >= hw && uv1.x() <= kW - 1 - hw && uv1.y() <= kH - 1 - hw;
         if (inside) {
           worst = std::max(worst, err);

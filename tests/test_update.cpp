@@ -1,6 +1,7 @@
 // MSCKF update: measurement Jacobians and the image-plane t_d column against finite differences in the state's ⊞
 // convention, nullspace projection, triangulation accuracy, full updates on synthetic scenes (pose correction,
 // chi-square gating of an outlier, t_d recovery in image-plane mode) and the residual log.
+#include "fd_check.h"
 #include "ov_core/cam/camera_model.h"
 #include "ov_core/math/so3.h"
 #include "ov_core/track/feature_database.h"
@@ -10,6 +11,7 @@
 #include "ov_msckf_ton/update/residual_log.h"
 #include "ov_msckf_ton/update/triangulation.h"
 #include "ov_msckf_ton/update/updater_msckf.h"
+#include "ov_sim/euroc_calib.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
@@ -24,20 +26,12 @@ using ov_core::so3_log;
 
 namespace {
 
-/// EuRoC cam0 (intrinsics, radtan distortion, T_BS with its rotation re-orthonormalised).
+/// EuRoC cam0 with the rotation of its T_BS re-orthonormalised: the Jacobians take R_BC⁻¹ = R_BCᵀ, and the
+/// finite-difference checks below compare at 1e-7.
 ov_core::CameraCalib euroc_cam0() {
-  ov_core::CameraCalib c;
-  c.width = 752;
-  c.height = 480;
-  c.rate_hz = 20;
-  c.intrinsics << 458.654, 457.296, 367.215, 248.375;
-  c.dist_coeffs << -0.28340811, 0.07395907, 0.00019359, 1.76187114e-05;
-  Eigen::Matrix4d T;
-  T << 0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975, 0.999557249008, 0.0149672133247,
-      0.025715529948, -0.064676986768, -0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949, 0, 0, 0, 1;
-  const Eigen::Quaterniond q(Eigen::Matrix3d(T.topLeftCorner<3, 3>()));
-  T.topLeftCorner<3, 3>() = q.normalized().toRotationMatrix();
-  c.T_BC = T;
+  ov_core::CameraCalib c = ov_sim::euroc_cam0_calib();
+  const Eigen::Quaterniond q(Eigen::Matrix3d(c.T_BC.topLeftCorner<3, 3>()));
+  c.T_BC.topLeftCorner<3, 3>() = q.normalized().toRotationMatrix();
   return c;
 }
 
@@ -174,23 +168,20 @@ TEST(UpdateJacobians, CloneAndFeatureJacobiansMatchFiniteDifferences) {
     const Eigen::Vector3d p(n(rng), n(rng), n(rng));
     const Eigen::Vector3d p_C(0.5 * n(rng), 0.5 * n(rng), 2.0 + std::abs(n(rng)));
     const Eigen::Vector3d p_f = R * (R_BC * p_C + p_BC) + p;
-    Eigen::Vector2d z0, zp, zm;
+    Eigen::Vector2d z0;
     CloneMeasurementJacobians J;
     ASSERT_TRUE(project_in_clone(R, p, R_BC, p_BC, p_f, z0, nullptr, &J));
+    const auto z = [&](const Eigen::Matrix3d &Ri, const Eigen::Vector3d &pi, const Eigen::Vector3d &p_fi) {
+      Eigen::Vector2d zi;
+      project_in_clone(Ri, pi, R_BC, p_BC, p_fi, zi);
+      return zi;
+    };
     const double h = 1e-6;
-    Eigen::Matrix<double, 2, 3> Nth, Np, Nf;
-    for (int i = 0; i < 3; ++i) {
-      const Eigen::Vector3d d = h * Eigen::Vector3d::Unit(i);
-      project_in_clone(so3_exp(d) * R, p, R_BC, p_BC, p_f, zp);
-      project_in_clone(so3_exp(-d) * R, p, R_BC, p_BC, p_f, zm);
-      Nth.col(i) = (zp - zm) / (2 * h);
-      project_in_clone(R, p + d, R_BC, p_BC, p_f, zp);
-      project_in_clone(R, p - d, R_BC, p_BC, p_f, zm);
-      Np.col(i) = (zp - zm) / (2 * h);
-      project_in_clone(R, p, R_BC, p_BC, p_f + d, zp);
-      project_in_clone(R, p, R_BC, p_BC, p_f - d, zm);
-      Nf.col(i) = (zp - zm) / (2 * h);
-    }
+    const Eigen::MatrixXd Nth = ovtest::numeric_jacobian([&](const Eigen::Matrix3d &Ri) { return z(Ri, p, p_f); }, R, 3,
+                                                         ovtest::rotation_plus, h);
+    const Eigen::MatrixXd Np = ovtest::numeric_jacobian([&](const Eigen::Vector3d &pi) { return z(R, pi, p_f); }, p, h);
+    const Eigen::MatrixXd Nf =
+        ovtest::numeric_jacobian([&](const Eigen::Vector3d &p_fi) { return z(R, p, p_fi); }, p_f, h);
     EXPECT_LT((Nth - J.H_theta).norm(), 1e-7 * (1 + J.H_theta.norm())) << "trial " << trial;
     EXPECT_LT((Np - J.H_p).norm(), 1e-7 * (1 + J.H_p.norm())) << "trial " << trial;
     EXPECT_LT((Nf - J.H_f).norm(), 1e-7 * (1 + J.H_f.norm())) << "trial " << trial;
@@ -234,32 +225,36 @@ TEST(UpdateJacobians, StackedFeatureJacobianIncludingTdColumnMatchesFiniteDiffer
   ASSERT_TRUE(up.linearize(s, f, p_f, TdObservation::ImagePlane, VelocityProvider(), plain));
   EXPECT_EQ(static_cast<int>(plain.cols.size()), 6 * m);
 
+  // r = z − h(x), so H = −∂r/∂x: the function checked is −r, of the state ⊞-perturbed along the compact columns and
+  // of the feature position.
+  const auto minus_r = [&](const State &si, const Eigen::Vector3d &p_fi) -> Eigen::VectorXd {
+    FeatureLinearization li;
+    EXPECT_TRUE(up.linearize(si, f, p_fi, TdObservation::ImagePlane, vp, li));
+    return -li.r;
+  };
+  const auto along_cols = [&](const State &si, const Eigen::VectorXd &d) {
+    Eigen::VectorXd dx = Eigen::VectorXd::Zero(si.dim());
+    for (size_t j = 0; j < lin.cols.size(); ++j)
+      dx(lin.cols[j]) = d(static_cast<Eigen::Index>(j));
+    State out = si;
+    out.boxplus(dx);
+    return out;
+  };
   const double h = 1e-6;
-  FeatureLinearization lp, lm;
-  for (size_t j = 0; j < lin.cols.size(); ++j) {
-    Eigen::VectorXd dx = Eigen::VectorXd::Zero(s.dim());
-    dx(lin.cols[j]) = h;
-    State sp = s, sm = s;
-    sp.boxplus(dx);
-    sm.boxplus(-dx);
-    ASSERT_TRUE(up.linearize(sp, f, p_f, TdObservation::ImagePlane, vp, lp));
-    ASSERT_TRUE(up.linearize(sm, f, p_f, TdObservation::ImagePlane, vp, lm));
-    // r = z − h(x), so H = −∂r/∂x.
-    const Eigen::VectorXd num = -(lp.r - lm.r) / (2 * h);
-    EXPECT_LT((num - lin.H_x.col(j)).norm(), 1e-6 * (1 + lin.H_x.col(j).norm())) << "column " << j;
-  }
-  for (int i = 0; i < 3; ++i) {
-    const Eigen::Vector3d d = h * Eigen::Vector3d::Unit(i);
-    ASSERT_TRUE(up.linearize(s, f, p_f + d, TdObservation::ImagePlane, vp, lp));
-    ASSERT_TRUE(up.linearize(s, f, p_f - d, TdObservation::ImagePlane, vp, lm));
-    const Eigen::VectorXd num = -(lp.r - lm.r) / (2 * h);
-    EXPECT_LT((num - lin.H_f.col(i)).norm(), 1e-6 * (1 + lin.H_f.col(i).norm())) << "feature axis " << i;
-  }
+  const Eigen::MatrixXd num_x = ovtest::numeric_jacobian([&](const State &si) { return minus_r(si, p_f); }, s,
+                                                         static_cast<Eigen::Index>(lin.cols.size()), along_cols, h);
+  for (size_t j = 0; j < lin.cols.size(); ++j)
+    EXPECT_LT((num_x.col(j) - lin.H_x.col(j)).norm(), 1e-6 * (1 + lin.H_x.col(j).norm())) << "column " << j;
+  const Eigen::MatrixXd num_f =
+      ovtest::numeric_jacobian([&](const Eigen::Vector3d &p_fi) { return minus_r(s, p_fi); }, p_f, h);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_LT((num_f.col(i) - lin.H_f.col(i)).norm(), 1e-6 * (1 + lin.H_f.col(i).norm())) << "feature axis " << i;
   // The t_d column is +V (model form) on rows that have a velocity, in distorted pixels like every row.
   for (int k = 1; k < m; ++k)
     EXPECT_LT((lin.H_x.block<2, 1>(2 * k, 6 * m) - up.distortion_jacobian(f.obs[k].xy) * f.obs[k].vel_xy).norm(), 1e-9);
 
   // StateRelevant / None add no t_d column and no shift.
+  FeatureLinearization lp;
   ASSERT_TRUE(up.linearize(s, f, p_f, TdObservation::StateRelevant, vp, lp));
   EXPECT_EQ(static_cast<int>(lp.cols.size()), 6 * m);
   EXPECT_GT((lp.r - lin.r).norm(), 1e-6);
@@ -392,7 +387,7 @@ TEST(UpdateMsckf, ChiSquareTableMatchesKnownQuantiles) {
   EXPECT_NEAR(up.chi2_threshold(600), 658.09, 0.1); // beyond the cached table
   // Residual rows are in distorted pixels: at the principal point the scaling is the focal lengths.
   const Eigen::Matrix2d Jd = up.distortion_jacobian(Eigen::Vector2d::Zero());
-  EXPECT_NEAR((Jd - Eigen::Vector2d(458.654, 457.296).asDiagonal().toDenseMatrix()).norm(), 0, 1e-9);
+  EXPECT_NEAR((Jd - Eigen::Vector2d(euroc_cam0().intrinsics.head<2>()).asDiagonal().toDenseMatrix()).norm(), 0, 1e-9);
   UpdaterMSCKFOptions bad;
   bad.min_observations = 1;
   EXPECT_THROW(UpdaterMSCKF(euroc_cam0(), bad), ov_core::UsageError);

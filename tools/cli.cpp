@@ -1,4 +1,5 @@
 #include "tools/cli.h"
+#include "ov_core/types/errors.h"
 
 #include <iostream>
 
@@ -13,6 +14,23 @@ bool parse_command_line(const Args &args, const boost::program_options::options_
   }
   boost::program_options::notify(vm);
   return true;
+}
+
+bool parse_on_off(const std::string &value, const char *option) {
+  if (value != "on" && value != "off")
+    throw ov_core::UsageError(std::string(option) + " must be on or off, not '" + value + "'");
+  return value == "on";
+}
+
+void add_bag_options(boost::program_options::options_description &desc, ov_core::BagOptions &opt) {
+  desc.add_options()("cam-topic", boost::program_options::value(&opt.cam_topic),
+                     "ROS bag: sensor_msgs/Image topic (default: the only one, the calibration's rostopic, or "
+                     "/cam0/image_raw)") //
+      ("imu-topic", boost::program_options::value(&opt.imu_topic),
+       "ROS bag: sensor_msgs/Imu topic (default: the only one, the calibration's rostopic, or /imu0)") //
+      ("calib", boost::program_options::value(&opt.calib)->multitoken(),
+       "ROS bag: Kalibr camchain and imu YAML, or an EuRoC folder (default: found beside the bag: BAG/ folder, "
+       "camchain-imucam-BAG.yaml + imu-BAG.yaml, camchain-imucam.yaml + imu.yaml)");
 }
 
 } // namespace ovton

@@ -1,8 +1,10 @@
 #pragma once
 // Flag parsing shared by every subcommand.
+#include "ov_core/io/rosbag_reader.h"
 #include "tools/commands.h"
 
 #include <boost/program_options.hpp>
+#include <string>
 
 namespace ovton {
 
@@ -10,5 +12,10 @@ namespace ovton {
 /// Missing required options and malformed values throw boost::program_options::error (main() reports them).
 bool parse_command_line(const Args &args, const boost::program_options::options_description &desc,
                         boost::program_options::variables_map &vm);
+
+/// "on" -> true, "off" -> false; anything else is a UsageError naming the option.
+bool parse_on_off(const std::string &value, const char *option);
+/// --cam-topic, --imu-topic and --calib, for the commands that read a dataset folder or a ROS bag.
+void add_bag_options(boost::program_options::options_description &desc, ov_core::BagOptions &opt);
 
 } // namespace ovton

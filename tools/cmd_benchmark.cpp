@@ -1,6 +1,7 @@
 // `ovton benchmark`: per-frame cost by stage, throughput as a multiple of real time, and resident memory over a run,
 // for one or more time-offset modes replayed one after another in this process (see docs/benchmarks.md).
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/rosbag_reader.h"
 #include "ov_core/io/text_format.h"
 #include "ov_core/types/errors.h"
 #include "ov_sim/simulator.h"
@@ -38,6 +39,9 @@ struct ModeBench {
   // Mean cost per processed image [ms]. `other` is what the stage clocks do not see: IMU hand-over, replay,
   // trajectory output and the progress bar; total = wall / images, so the columns add up.
   double load = 0, track = 0, prop = 0, update = 0, nets = 0, other = 0, total = 0;
+  /// Process CPU time (user + system) per image [ms]: what a loaded, shared machine distorts least; with
+  /// --prefetch it includes the decoding thread.
+  double cpu = 0;
   std::array<double, 4> rss_quarter{}; ///< RSS [MB] at 25/50/75/100 % of the images
   double rss_start = 0, peak = 0;
   bool peak_own = false; ///< peak belongs to this mode alone (kernel mark was reset before it)
@@ -124,7 +128,9 @@ ModeBench bench_mode(const ov_core::Dataset &data, RunRequest req, const std::st
       }
   };
 
+  const double cpu0 = process_cpu_s();
   const RunResult r = run_dataset(data, req);
+  const double cpu_s = process_cpu_s() - cpu0;
   // A replay can end short of n_run (interrupted, images beyond the IMU log): the 100 % column is then its last frame.
   if (!taken[3])
     b.rss_quarter[3] = last_rss;
@@ -152,6 +158,7 @@ ModeBench bench_mode(const ov_core::Dataset &data, RunRequest req, const std::st
     b.update = t.update / n;
     b.nets = t.networks / n;
     b.total = r.wall_s * 1e3 / n;
+    b.cpu = cpu_s * 1e3 / n;
     b.other = b.total - (b.load + b.track + b.prop + b.update + b.nets);
   }
   return b;
@@ -161,15 +168,19 @@ void print_tables(const std::vector<ModeBench> &res, std::ostream &os) {
   char line[256];
   os << "\nper-frame cost [ms], mean over the images processed (stage clocks of VioManager; total = wall / images;\n"
         "x realtm = data span / wall; feat/frame = features used by MSCKF updates per image)\n";
-  std::snprintf(line, sizeof(line), "%-7s %6s %7s %7s %7s %7s %7s %7s %7s %9s %8s %10s\n", "mode", "images", "load",
-                "track", "prop", "update", "nets", "other", "total", "x realtm", "x first", "feat/frame");
+  std::snprintf(line, sizeof(line), "%-7s %6s %7s %7s %7s %7s %7s %7s %7s %9s %8s %7s %9s %10s\n", "mode", "images",
+                "load", "track", "prop", "update", "nets", "other", "total", "x realtm", "x first", "cpu", "cpu/first",
+                "feat/frame");
   os << line;
   for (const auto &b : res) {
-    std::snprintf(line, sizeof(line), "%-7s %6ld %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %9.1f %8.2f %10.1f\n",
+    std::snprintf(line, sizeof(line),
+                  "%-7s %6ld %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %9.1f %8.2f %7.2f %9.2f %10.1f\n",
                   b.mode.c_str(), b.images, b.load, b.track, b.prop, b.update, b.nets, b.other, b.total, b.realtime(),
-                  res.front().total > 0 ? b.total / res.front().total : 0.0, b.features_per_frame());
+                  res.front().total > 0 ? b.total / res.front().total : 0.0, b.cpu,
+                  res.front().cpu > 0 ? b.cpu / res.front().cpu : 0.0, b.features_per_frame());
     os << line;
   }
+  os << "cpu = process CPU time per image [ms] (user + system); cpu/first: its ratio to the first mode's\n";
   os << "\nresident memory [MB] at 25/50/75/100 % of the images; growth = 100 % - 25 %\n";
   std::snprintf(line, sizeof(line), "%-7s %8s %8s %8s %8s %8s %8s %8s\n", "mode", "start", "25%", "50%", "75%", "100%",
                 "peak", "growth");
@@ -217,10 +228,10 @@ void write_json(const std::string &file, const std::vector<ModeBench> &res, cons
         << ",\n     \"ms_per_frame\": {\"image_load\": " << num(b.load, 4) << ", \"tracking\": " << num(b.track, 4)
         << ", \"propagation\": " << num(b.prop, 4) << ", \"update\": " << num(b.update, 4)
         << ", \"networks\": " << num(b.nets, 4) << ", \"other\": " << num(b.other, 4)
-        << ", \"total\": " << num(b.total, 4) << "},\n     \"rss_mb\": {\"start\": " << num(b.rss_start, 2)
-        << ", \"p25\": " << num(b.rss_quarter[0], 2) << ", \"p50\": " << num(b.rss_quarter[1], 2)
-        << ", \"p75\": " << num(b.rss_quarter[2], 2) << ", \"p100\": " << num(b.rss_quarter[3], 2)
-        << ", \"peak\": " << num(b.peak, 2)
+        << ", \"total\": " << num(b.total, 4) << ", \"cpu\": " << num(b.cpu, 4)
+        << "},\n     \"rss_mb\": {\"start\": " << num(b.rss_start, 2) << ", \"p25\": " << num(b.rss_quarter[0], 2)
+        << ", \"p50\": " << num(b.rss_quarter[1], 2) << ", \"p75\": " << num(b.rss_quarter[2], 2)
+        << ", \"p100\": " << num(b.rss_quarter[3], 2) << ", \"peak\": " << num(b.peak, 2)
         << ", \"peak_scope\": " << ov_core::json_string(b.peak_own ? "mode" : "process")
         << "},\n     \"interrupted\": " << (b.interrupted ? "true" : "false") << "}";
   }
@@ -240,17 +251,20 @@ int cmd_benchmark(const Args &args) {
   bool quiet = false;
   RunRequest req;
   desc.add_options()("help,h", "this help")                                                                       //
-      ("dataset,d", po::value(&dataset), "dataset folder (EuRoC or SCube)")                                       //
+      ("dataset,d", po::value(&dataset), "dataset folder (EuRoC or SCube) or ROS bag (.bag)")                     //
       ("generate", po::value(&generate_dir), "without --dataset: render a built-in flight here and benchmark it") //
       ("generate-seconds", po::value(&gen_seconds), "length of the --generate flight [s] (default 30)")           //
       ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")                      //
       ("modes,m", po::value(&modes_str), "comma-separated td modes, run in this order (default sr)")              //
-      ("init", po::value(&init), "static|groundtruth (overrides the config; groundtruth with --generate)")        //
-      ("max-images", po::value(&req.max_images), "stop each mode after this many images")                         //
-      ("json", po::value(&json), "also write the numbers as JSON")                                                //
+      ("init", po::value(&init),
+       "static|groundtruth|auto|dynamic (overrides the config; groundtruth with --generate)") //
+      ("max-images", po::value(&req.max_images), "stop each mode after this many images")     //
+      ("json", po::value(&json), "also write the numbers as JSON")                            //
       ("prefetch", po::bool_switch(&req.prefetch),
        "decode the next images on a second thread (as `ovton run` does); `load` is then the wait for one") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bars");
+  ov_core::BagOptions bag_opt;
+  add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
@@ -260,9 +274,9 @@ int cmd_benchmark(const Args &args) {
     throw ov_core::UsageError("--dataset and --generate are exclusive");
   if (!(gen_seconds > 0))
     throw ov_core::UsageError("--generate-seconds must be positive");
-  if (!init.empty() && init != "static" && init != "groundtruth")
-    throw ov_core::UsageError("--init must be static or groundtruth");
-  std::vector<std::string> modes; // fail before any work on a typo
+  if (!init.empty())
+    ov_msckf_ton::parse_init_mode(init); // fail before any work on a typo
+  std::vector<std::string> modes;        // fail before any work on a typo
   for (const auto &spec : parse_compare_modes(modes_str))
     modes.push_back(spec.name);
 
@@ -281,7 +295,7 @@ int cmd_benchmark(const Args &args) {
   // One thread, so that the numbers say what one core does and modes do not compete with each other.
   cv::setNumThreads(0);
 
-  const ov_core::Dataset data = ov_core::load_dataset(dataset);
+  const ov_core::Dataset data = ov_core::load_recording(dataset, bag_opt);
   apply_dataset_defaults(data, false, req.opt);
   const std::string load_start = loadavg();
   std::cout << "dataset " << dataset << ": " << data.images.size() << " images " << data.cam.width << "x"

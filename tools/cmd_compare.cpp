@@ -1,5 +1,7 @@
 // `ovton compare`: run one dataset under several time-offset modes and write the paper's tables and figures.
+#include "ov_core/io/csv.h"
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/rosbag_reader.h"
 #include "ov_core/types/errors.h"
 #include "ov_eval/metrics.h"
 #include "tools/cli.h"
@@ -46,8 +48,9 @@ int cmd_compare(const Args &args) {
                                "(APE, ARE, TPE, CIT, runtime; t_d / APE / top-view plots)");
   std::string config, dataset, modes = "off,sr,sir,fvon,tpn,ton,oracle", init, align = "posyaw";
   CompareRequest req;
-  desc.add_options()("help,h", "this help")                                                                      //
-      ("dataset,d", po::value(&dataset)->required(), "dataset folder (EuRoC, SCube or `ovton simulate` output)") //
+  desc.add_options()("help,h", "this help") //
+      ("dataset,d", po::value(&dataset)->required(),
+       "dataset folder (EuRoC, SCube or `ovton simulate` output) or ROS bag")                                    //
       ("modes,m", po::value(&modes)->default_value(modes), "comma-separated time-offset modes to run")           //
       ("out,o", po::value(&req.out_dir)->required(), "results folder (created if needed)")                       //
       ("config,c", po::value(&config), "estimator config YAML shared by all modes (default: built-in defaults)") //
@@ -55,6 +58,8 @@ int cmd_compare(const Args &args) {
       ("jobs,j", po::value(&req.jobs)->default_value(2), "runs at a time")                                       //
       ("max-images", po::value(&req.max_images), "stop each run after this many images")                         //
       ("align", po::value(&align)->default_value(align), "trajectory alignment for APE/ARE: posyaw|se3");
+  ov_core::BagOptions bag_opt;
+  add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm)) {
     std::cout << "Writes OUT/traj_<mode>.csv, OUT/results.md, OUT/results.csv, OUT/td.png, OUT/ape.png, OUT/top.png.\n"
@@ -78,7 +83,13 @@ int cmd_compare(const Args &args) {
   req.info.working_dir = std::filesystem::current_path(ec).string();
   req.log = &std::cerr;
 
-  const ov_core::Dataset data = ov_core::load_dataset(dataset);
+  // The results folder is checked before the dataset is loaded and any mode runs.
+  std::filesystem::create_directories(req.out_dir, ec);
+  if (ec)
+    throw ov_core::DataError(req.out_dir, "cannot create the results folder: " + ec.message());
+  ov_core::require_writable((std::filesystem::path(req.out_dir) / "results.md").string());
+
+  const ov_core::Dataset data = ov_core::load_recording(dataset, bag_opt);
   apply_dataset_defaults(data, false, req.base);
   std::cerr << "compare: " << req.modes.size() << " modes on " << data.root << " (" << data.images.size()
             << " images), " << std::min<size_t>(req.jobs, req.modes.size()) << " at a time on "

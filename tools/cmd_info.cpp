@@ -1,9 +1,14 @@
-// `ovton info --dataset DIR`: load and validate a dataset folder, print what it holds.
+// `ovton info --dataset DIR|BAG`: load and validate a dataset folder or ROS bag, print what it holds; --td-search also
+// runs the coarse camera-IMU offset search that `run` starts the filter with.
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/rosbag_reader.h"
+#include "ov_core/types/errors.h"
+#include "ov_msckf_ton/init/td_search.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 
 #include <boost/program_options.hpp>
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 
@@ -12,14 +17,22 @@ namespace po = boost::program_options;
 namespace ovton {
 
 int cmd_info(const Args &args) {
-  po::options_description desc("ovton info: load a dataset folder (EuRoC or SCube), validate it, summarise it");
+  po::options_description desc(
+      "ovton info: load a dataset folder (EuRoC or SCube) or ROS bag, validate it, summarise it");
   std::string dir;
-  desc.add_options()("help,h", "this help")("dataset,d", po::value(&dir)->required(), "dataset folder");
+  double prior_ms = 0.0, range_ms = 200.0;
+  desc.add_options()("help,h", "this help")("dataset,d", po::value(&dir)->required(),
+                                            "dataset folder or ROS bag (.bag)")                        //
+      ("td-search", "also search the camera-IMU time offset (images' rotation rate against the gyro)") //
+      ("td-init-ms", po::value(&prior_ms), "centre of the search [ms] (default: the dataset's prior, else 0)")(
+          "td-range-ms", po::value(&range_ms), "half width of the search [ms] (default 200)");
+  ov_core::BagOptions bag_opt;
+  add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
 
-  const ov_core::Dataset d = ov_core::load_dataset(dir);
+  const ov_core::Dataset d = ov_core::load_recording(dir, bag_opt);
   const double t0 = ov_core::ns_to_s(d.images.front().t_cam_ns), t1 = ov_core::ns_to_s(d.images.back().t_cam_ns);
   std::cout << std::fixed << std::setprecision(3);
   std::cout << "dataset      " << d.root << " (" << d.kind << ")\n"
@@ -40,6 +53,19 @@ int cmd_info(const Args &args) {
             << "\n"
             << "td_truth     " << (d.has_td_truth() ? std::to_string(d.td_truth.size()) + " rows" : std::string("none"))
             << "\n";
+  if (vm.count("td-search")) {
+    if (!(range_ms > 0 && range_ms <= 1000) || !(std::abs(prior_ms) <= 10000))
+      throw ov_core::UsageError("--td-range-ms must be in (0, 1000] and --td-init-ms within +-10000");
+    ov_msckf_ton::TdSearchOptions so;
+    so.range_s = range_ms * 1e-3;
+    const auto r =
+        ov_msckf_ton::search_td(d.images, d.imu, d.cam, vm.count("td-init-ms") ? prior_ms * 1e-3 : d.td_prior_s, so);
+    std::cout << "t_d search   " << r.summary() << "\n";
+    if (!r.found && r.pairs > 0)
+      std::cout << "             best candidate " << r.td_s * 1e3 << " ms, sigma " << r.sigma_s * 1e3 << " ms\n";
+  }
+  if (!d.notes.empty())
+    std::cout << "read         " << d.notes << "\n";
   return 0;
 }
 

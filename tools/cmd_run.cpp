@@ -1,6 +1,9 @@
 // `ovton run`: replay a dataset folder through the estimator and write the trajectory.
+#include "ov_core/io/csv.h"
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/rosbag_reader.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/init_check.h"
 #include "ov_eval/metrics.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
@@ -9,6 +12,7 @@
 
 #include <boost/program_options.hpp>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -21,13 +25,13 @@ namespace ovton {
 
 int cmd_run(const Args &args) {
   po::options_description desc("ovton run: replay a dataset folder through the MSCKF and write its trajectory");
-  std::string config, dataset, mode, format = "csv", init, nees_log;
+  std::string config, dataset, mode, format = "csv", init, nees_log, td_search, health;
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
   bool quiet = false, no_prefetch = false;
   RunRequest req;
-  desc.add_options()("help,h", "this help")                                                  //
-      ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)") //
-      ("dataset,d", po::value(&dataset)->required(), "dataset folder (EuRoC or SCube)")      //
+  desc.add_options()("help,h", "this help")                                                               //
+      ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")              //
+      ("dataset,d", po::value(&dataset)->required(), "dataset folder (EuRoC or SCube) or ROS bag (.bag)") //
       ("td-mode,m", po::value(&mode),
        "off|sr|sir|fvon|tpn|ton|oracle|drift, optionally +PROCESS (constant|random_walk|drift|tpn), e.g. "
        "sr+random_walk (overrides the config)")                                                           //
@@ -36,13 +40,21 @@ int cmd_run(const Args &args) {
       ("residual-log", po::value(&req.residual_log), "write every feature residual of every update here") //
       ("velocity-log", po::value(&req.velocity_log),
        "write each observation's image velocity by every rule and network here (for `ovton velocities`)") //
-      ("init", po::value(&init), "static|groundtruth (overrides the config)")                             //
-      ("td-init-ms", po::value(&td_init_ms), "initial / fixed t_d [ms] (overrides the config)")           //
+      ("init", po::value(&init),
+       "static|groundtruth|auto|dynamic (overrides the config; auto: static when still, dynamic when moving)") //
+      ("td-init-ms", po::value(&td_init_ms), "initial / fixed t_d [ms] (overrides the config)")                //
+      ("td-search", po::value(&td_search),
+       "on|off: coarse t_d search around the initial t_d before the filter starts (overrides time_offset.search; "
+       "default on)") //
+      ("health-checks", po::value(&health),
+       "on|off: stop a run whose estimate has diverged, exit 4 (overrides health.enabled; default on)") //
       ("nees-log", po::value(&nees_log), "with --init groundtruth: write per-frame NEES (t_ns,ori,pos,td) here")(
           "max-images", po::value(&req.max_images), "stop after this many images") //
       ("no-prefetch", po::bool_switch(&no_prefetch),
        "decode images on the filter's thread (default: the next ones on a second thread, same results)") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bar, no option listing");
+  ov_core::BagOptions bag_opt;
+  add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
@@ -57,16 +69,39 @@ int cmd_run(const Args &args) {
     ov_msckf_ton::apply_mode_spec(ov_msckf_ton::parse_mode_spec(mode), req.opt);
   if (!init.empty())
     req.opt.init.mode = ov_msckf_ton::parse_init_mode(init);
-  if (!std::isnan(td_init_ms))
+  if (!std::isnan(td_init_ms)) {
+    if (!(std::abs(td_init_ms) <= 10000))
+      throw ov_core::UsageError("--td-init-ms must be a number within +-10000 ms");
     req.opt.td.init_s = td_init_ms * 1e-3;
+  }
+  if (!td_search.empty())
+    req.opt.td.search = parse_on_off(td_search, "--td-search");
+  if (!health.empty())
+    req.opt.health.enabled = parse_on_off(health, "--health-checks");
+  // Every output is checked before the run: a typo should not cost a whole run.
+  std::vector<std::string> outputs = {req.output};
+  for (const auto *o : {&req.residual_log, &req.velocity_log, &nees_log})
+    if (!o->empty())
+      outputs.push_back(*o);
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    ov_core::require_writable(outputs[i]);
+    for (size_t j = 0; j < i; ++j)
+      if (std::filesystem::weakly_canonical(outputs[i]) == std::filesystem::weakly_canonical(outputs[j]))
+        throw ov_core::UsageError("two outputs are the same file: " + outputs[i]);
+  }
 
-  const ov_core::Dataset data = ov_core::load_dataset(dataset);
+  const ov_core::Dataset data = ov_core::load_recording(dataset, bag_opt);
   apply_dataset_defaults(data, !std::isnan(td_init_ms), req.opt);
   if (!quiet)
     ov_msckf_ton::print_vio_options(req.opt, std::cerr);
 
   install_interrupt_handler();
-  const RunResult r = run_dataset(data, req);
+  RunResult r;
+  try {
+    r = run_dataset(data, req);
+  } catch (const ov_core::EstimatorFailure &e) {
+    throw ov_core::EstimatorFailure(e.t_ns(), std::string(e.what()) + "; the rows before it are in " + req.output);
+  }
 
   const auto &c = r.counters;
   const auto &tm = r.times;
@@ -75,11 +110,27 @@ int cmd_run(const Args &args) {
             << c.images_before_init << " before initialisation, " << r.replay.images_skipped << " beyond the IMU log), "
             << c.updates << " updates, " << c.features_used << " features used, " << c.features_gated << " gated, "
             << c.zupts << " zero-velocity updates, " << c.td_rows << " observations constraining t_d\n";
+  if (c.slam_initialised > 0)
+    std::cout << "SLAM: " << c.slam_initialised << " landmarks initialised, " << c.slam_updates
+              << " landmark observations used, " << c.slam_gated << " gated\n";
   std::cout << "t_d rows by velocity source: tracked " << c.td_rows_by_source[ov_msckf_ton::kVelocityTracked]
             << ", ITS-FVON " << c.td_rows_by_source[ov_msckf_ton::kVelocityItsFvon] << ", F2F-FVON "
             << c.td_rows_by_source[ov_msckf_ton::kVelocityF2fFvon] << " (" << c.td_features << " features); networks "
             << (tm.frames ? tm.networks / tm.frames : 0.0) << " ms/frame\n";
   std::cout << "initialisation: " << r.init_message << "\n";
+  if (r.td_search)
+    std::cout << "coarse t_d search: " << r.td_search->summary() << "\n";
+  const auto &acc = r.acceptance;
+  if (acc.examined() > 0)
+    std::cout << "update acceptance " << 100.0 * acc.acceptance() << " % of " << acc.examined() << " features ("
+              << acc.gated << " gated, " << acc.failed_triangulation << " failed triangulation)\n";
+  if (req.opt.init.mode != ov_msckf_ton::InitMode::GroundTruth && !r.traj.empty() && !data.images.empty()) {
+    const auto ic = ov_eval::check_initialisation(r.traj.front(), data.groundtruth, data.images.front().t_cam_ns);
+    if (ic.ok)
+      std::cout << "initialisation vs ground truth: after " << ic.data_s << " s of images, roll/pitch error "
+                << ic.tilt_err_deg << " deg, velocity error " << ic.vel_err_m_s << " m/s (true speed " << ic.speed_m_s
+                << " m/s)\n";
+  }
   if (tm.frames > 0)
     std::cout << "per frame [ms]: image load " << tm.image_load / tm.frames << ", tracking " << tm.tracking / tm.frames
               << ", propagation " << tm.propagation / tm.frames << ", update " << tm.update / tm.frames << "; "

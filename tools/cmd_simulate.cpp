@@ -1,14 +1,19 @@
 // `ovton simulate`: synthetic EuRoC-format folder with a known camera-IMU time offset (see docs/simulate.md).
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/trajectory_io.h"
 #include "ov_core/types/errors.h"
+#include "ov_sim/imu_match.h"
+#include "ov_sim/realism.h"
 #include "ov_sim/simulator.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 
+#include <algorithm>
 #include <boost/program_options.hpp>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
 
@@ -68,6 +73,8 @@ int cmd_simulate(const Args &args) {
   std::string out, gt, td_model = "constant", cam_yaml, imu_yaml;
   double td0_ms = 10.0, td_bias = 0.1, td_noise = 0.1, readout_ms = 0.0, focal_error_pct = 0.0, gyro_scale_pct = 0.0;
   int bench_frames = 100;
+  std::string realism = "euroc", texture;
+  double exposure_ms = 0.0;
   desc.add_options()("help,h", "this help")                                                               //
       ("out,o", po::value(&out), "output folder (mav0/ and sim.yaml are written inside)")                 //
       ("gt", po::value(&gt), "ground-truth trajectory to follow (EuRoC .txt/.csv, project CSV)")          //
@@ -86,23 +93,60 @@ int cmd_simulate(const Args &args) {
       ("focal-error-pct", po::value(&focal_error_pct)->default_value(0.0),
        "data made with focal lengths (1 + P/100) x those written to cam0/sensor.yaml [%]") //
       ("gyro-scale-pct", po::value(&gyro_scale_pct)->default_value(0.0),
-       "the gyro reads (1 + P/100) x the true rate; imu0/sensor.yaml does not say so [%]")                  //
-      ("imu-from", po::value(&o.imu_from), "semi-real: take imu0/data.csv from this EuRoC folder")          //
-      ("features-only", "write mav0/cam0/features.csv (timestamp_ns,feature_id,u,v) instead of images")     //
-      ("no-images", "write no images and no features (IMU, ground truth, stamps)")                          //
-      ("no-imu-noise", "noise-free IMU (no white noise, no bias walk)")                                     //
-      ("knot-dt-s", po::value(&o.knot_dt_s)->default_value(0.1), "B-spline knot spacing of the gt fit [s]") //
-      ("cam-yaml", po::value(&cam_yaml), "EuRoC cam0/sensor.yaml to use (default: built-in EuRoC cam0)")    //
-      ("imu-yaml", po::value(&imu_yaml), "EuRoC imu0/sensor.yaml to use (default: built-in ADIS16448)")     //
-      ("pixel-noise", po::value(&o.features.pixel_noise)->default_value(1.0), "features-only: noise [px]")  //
-      ("max-tracks", po::value(&o.features.max_tracks)->default_value(200), "features-only: live tracks")   //
-      ("benchmark", "measure render speed (one core) and disk size per minute; --out optional")             //
-      ("benchmark-frames", po::value(&bench_frames)->default_value(100), "frames rendered by --benchmark")  //
-      ("force", "replace OUT/mav0 if it exists")                                                            //
+       "the gyro reads (1 + P/100) x the true rate; imu0/sensor.yaml does not say so [%]")         //
+      ("imu-from", po::value(&o.imu_from), "semi-real: take imu0/data.csv from this EuRoC folder") //
+      ("realism", po::value(&realism)->default_value("euroc"),
+       "clean (blotch texture, instantaneous images, datasheet IMU) | euroc (room texture, auto-exposure with "
+       "motion blur, PSF, vignetting, sensor noise; tuned on real V1_01) | harsh")                            //
+      ("texture", po::value(&texture), "override the preset's texture: blotches | room")                      //
+      ("texture-density", po::value<double>(), "room texture: share of faces covered by textured patches")    //
+      ("texture-grain", po::value<double>(), "room texture: grain of plain surfaces [grey levels]")           //
+      ("texture-weave", po::value<double>(), "room texture: ~2 cm weave, relative to the grain")              //
+      ("texture-from", po::value(&o.texture_from), "room texture: posters cut from this EuRoC folder's cam0") //
+      ("exposure-ms", po::value(&exposure_ms), "fixed exposure [ms] (turns auto-exposure off)")               //
+      ("no-blur", "one rendering per image at the middle of the exposure (no motion blur)")                   //
+      ("psf-px", po::value<double>(), "optics blur sigma [px]")                                               //
+      ("vignetting", po::value<double>(), "brightness lost at the image corners [0-1)")                       //
+      ("full-well-e", po::value<double>(), "electrons at full scale, gain 1 (shot noise)")                    //
+      ("read-noise-e", po::value<double>(), "read noise [electrons]")                                         //
+      ("flicker", po::value<double>(), "relative lamp flicker at 100 Hz (0 = steady)")                        //
+      ("features-only", "write mav0/cam0/features.csv (timestamp_ns,feature_id,u,v) instead of images")       //
+      ("no-images", "write no images and no features (IMU, ground truth, stamps)")                            //
+      ("no-imu-noise", "noise-free IMU (no white noise, no bias walk)")                                       //
+      ("knot-dt-s", po::value(&o.knot_dt_s)->default_value(0.1), "B-spline knot spacing of the gt fit [s]")   //
+      ("cam-yaml", po::value(&cam_yaml), "EuRoC cam0/sensor.yaml to use (default: built-in EuRoC cam0)")      //
+      ("imu-yaml", po::value(&imu_yaml), "EuRoC imu0/sensor.yaml to use (default: built-in ADIS16448)")       //
+      ("pixel-noise", po::value(&o.features.pixel_noise)->default_value(1.0), "features-only: noise [px]")    //
+      ("max-tracks", po::value(&o.features.max_tracks)->default_value(200), "features-only: live tracks")     //
+      ("match-imu", "measure the real IMU log of --imu-from against --gt (noise, biases, scale, the ground truth's "
+                    "time shift and frame rotation) and print it; no folder is written")                   //
+      ("benchmark", "measure render speed (one core) and disk size per minute; --out optional")            //
+      ("benchmark-frames", po::value(&bench_frames)->default_value(100), "frames rendered by --benchmark") //
+      ("force", "replace OUT/mav0 if it exists")                                                           //
       ("quiet,q", "no progress output");
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
+  if (vm.count("match-imu")) {
+    if (gt.empty() || o.imu_from.empty())
+      throw ov_core::UsageError("--match-imu needs --gt and --imu-from (a real log and its ground truth)");
+    ov_core::LoadOptions lo;
+    lo.check_images_exist = false;
+    const ov_core::Dataset real = ov_core::load_dataset(o.imu_from, lo);
+    ov_sim::ImuMatchOptions mo;
+    mo.knot_dt_s = o.knot_dt_s;
+    const std::string yaml = "imu_log: " + o.imu_from + "\nground_truth: " + gt + "\n" +
+                             ov_sim::imu_match_yaml(ov_sim::match_imu(real.imu, ov_core::read_trajectory(gt), mo));
+    std::cout << yaml;
+    if (!out.empty()) {
+      fs::create_directories(out);
+      std::ofstream f(fs::path(out) / "imu_match.yaml");
+      f << yaml;
+      if (!f)
+        throw ov_core::DataError((fs::path(out) / "imu_match.yaml").string(), "cannot write");
+    }
+    return 0;
+  }
   const bool bench = vm.count("benchmark") > 0;
   if (out.empty() && !bench)
     throw ov_core::UsageError("--out is required");
@@ -115,6 +159,54 @@ int cmd_simulate(const Args &args) {
   if (o.agility != 0.0 && !gt.empty())
     throw ov_core::UsageError("--agility applies to the built-in flight, not to --gt");
   o.gt_file = gt;
+  ov_sim::apply_realism(realism, o);
+  {
+    // Hand overrides of the preset; sim.yaml records every value, and the preset's name says it was modified.
+    bool modified = false;
+    auto &c = o.camera_effects;
+    const auto need_effects = [&](const char *name) {
+      if (!c.enabled)
+        throw ov_core::UsageError(std::string("--") + name + " needs camera effects (--realism euroc or harsh)");
+      modified = true;
+    };
+    const auto camera_option = [&](const char *name, double &field) {
+      if (vm.count(name)) {
+        need_effects(name);
+        field = vm[name].as<double>();
+      }
+    };
+    if (vm.count("texture")) {
+      o.scene.texture.style = ov_sim::parse_texture_style(texture);
+      modified = true;
+    }
+    const auto scene_option = [&](const char *name, double &field) {
+      if (vm.count(name)) {
+        field = vm[name].as<double>();
+        modified = true;
+      }
+    };
+    scene_option("texture-density", o.scene.texture.density);
+    scene_option("texture-grain", o.scene.texture.grain);
+    scene_option("texture-weave", o.scene.texture.weave);
+    if (vm.count("exposure-ms")) {
+      need_effects("exposure-ms");
+      c.exposure_s = exposure_ms * 1e-3;
+      c.auto_exposure = false;
+    }
+    if (vm.count("no-blur")) {
+      need_effects("no-blur");
+      c.blur_max_samples = 1;
+    }
+    camera_option("psf-px", c.psf_sigma_px);
+    camera_option("vignetting", c.vignetting);
+    camera_option("full-well-e", c.full_well_e);
+    camera_option("read-noise-e", c.read_noise_e);
+    camera_option("flicker", c.flicker_amplitude);
+    if (!o.texture_from.empty() && o.scene.texture.style != ov_sim::TextureStyle::Room)
+      throw ov_core::UsageError("--texture-from needs the room texture (--realism euroc, or --texture room)");
+    if (modified || !o.texture_from.empty())
+      o.realism += " (modified)";
+  }
   o.features_only = vm.count("features-only") > 0;
   o.overwrite = vm.count("force") > 0;
   o.no_images = vm.count("no-images") > 0;
@@ -155,9 +247,12 @@ int cmd_simulate(const Args &args) {
   const auto sizes = sizes_by_part(fs::path(o.out_dir) / "mav0");
   const double minutes = o.duration_s / 60.0;
   uintmax_t total = 0;
-  std::printf("render      %zu frames %dx%d in %.2f s: %.1f frames/s on one core (%.1f x real time at %.0f Hz)\n",
-              rep.n_images, o.cam.width, o.cam.height, rep.render_seconds, rep.n_images / rep.render_seconds,
-              rep.n_images / rep.render_seconds / o.cam.rate_hz, o.cam.rate_hz);
+  std::printf("render      %zu frames %dx%d (%s, %.1f renderings per frame for motion blur): %.2f s CPU, %.1f "
+              "frames/s on one core (%.1f x real time at %.0f Hz); wall %.2f s, %.1f frames/s at this machine's load\n",
+              rep.n_images, o.cam.width, o.cam.height, o.realism.c_str(),
+              static_cast<double>(rep.n_renderings) / std::max<size_t>(1, rep.n_images), rep.render_cpu_seconds,
+              rep.n_images / rep.render_cpu_seconds, rep.n_images / rep.render_cpu_seconds / o.cam.rate_hz,
+              o.cam.rate_hz, rep.render_seconds, rep.n_images / rep.render_seconds);
   std::printf("end to end  %.2f s including scene build, IMU, PNG encoding and disk (%.1f frames/s)\n",
               rep.total_seconds, rep.n_images / rep.total_seconds);
   std::printf("disk per minute of data:\n");

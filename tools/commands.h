@@ -18,5 +18,7 @@ int cmd_benchmark(const Args &args);
 int cmd_diagnose(const Args &args);
 int cmd_velocities(const Args &args);
 int cmd_track(const Args &args);
+int cmd_trackstats(const Args &args);
+int cmd_export(const Args &args);
 
 } // namespace ovton

@@ -93,17 +93,29 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
 
   info.jobs = std::max(1, std::min(req.jobs, static_cast<int>(to_run.size())));
 
+  // One coarse t_d search for every mode that estimates t_d (off keeps its fixed value, oracle reads the truth).
+  ov_msckf_ton::VioOptions searched = req.base, unsearched = req.base;
+  searched.td.mode = TdMode::Sr;
+  unsearched.td.search = false;
+  if (const auto s = run_td_search(data, searched)) {
+    info.notes.push_back("coarse t_d search (shared by the modes that estimate t_d): " + s->summary());
+    if (req.log)
+      *req.log << "compare: " << info.notes.back() << "\n" << std::flush;
+  }
+
   const auto run_one = [&](const std::string &name) {
     RunRequest rr;
-    rr.opt = req.base;
-    ov_msckf_ton::apply_mode_spec(spec_of.at(name), rr.opt);
+    const ov_msckf_ton::ModeSpec &spec = spec_of.at(name);
+    rr.opt = spec.mode == TdMode::Off || spec.mode == TdMode::Oracle ? unsearched : searched;
+    ov_msckf_ton::apply_mode_spec(spec, rr.opt);
     rr.output = (fs::path(req.out_dir) / ("traj_" + name + ".csv")).string();
     rr.max_images = req.max_images;
     rr.progress = false; // parallel bars would overwrite each other; the log has one line per finished mode
+    // A diverged filter (EstimatorFailure) or a run without a single pose (DataError) throws: run_parallel makes
+    // that the mode's status, "failed: <why>".
     RunResult r = run_dataset(data, rr);
     ov_eval::RunRecord rec;
     rec.name = name;
-    const bool no_estimate = r.traj.empty();
     rec.traj = std::move(r.traj);
     rec.traj_file = rr.output;
     rec.wall_s = r.wall_s;
@@ -111,8 +123,6 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
     rec.frames = static_cast<long>(r.replay.images_fed);
     if (r.interrupted)
       rec.status = "interrupted";
-    else if (no_estimate)
-      rec.status = "no estimate (initialisation: " + r.init_message + ")";
     return rec;
   };
   const auto on_done = [&](const ov_eval::RunRecord &rec, size_t done, size_t total) {

@@ -26,6 +26,14 @@ double peak_rss_mb() {
   return static_cast<double>(ru.ru_maxrss) / 1024.0; // Linux reports kilobytes
 }
 
+double process_cpu_s() {
+  rusage ru{};
+  if (getrusage(RUSAGE_SELF, &ru) != 0)
+    return std::nan("");
+  const auto s = [](const timeval &t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
+  return s(ru.ru_utime) + s(ru.ru_stime);
+}
+
 bool reset_peak_rss() {
   std::FILE *f = std::fopen("/proc/self/clear_refs", "w");
   if (!f)

@@ -1,6 +1,6 @@
 #pragma once
-// Resident memory of this process, for the benchmark's "does memory stay flat" columns. Linux only; elsewhere the
-// functions return NaN and the benchmark prints "n/a".
+// Resident memory and CPU time of this process, for the benchmark's "does memory stay flat" and cost columns. Linux
+// only; elsewhere the memory functions return NaN and the benchmark prints "n/a".
 
 namespace ovton {
 
@@ -14,5 +14,8 @@ double peak_rss_mb();
 /// next mode's peak is its own and not the earlier modes'. Returns false when the kernel refuses; the peak is then
 /// process-wide.
 bool reset_peak_rss();
+
+/// CPU time (user + system, all threads) of this process so far [s], from getrusage.
+double process_cpu_s();
 
 } // namespace ovton

@@ -1,4 +1,5 @@
-// ovton: the command-line front of ov_msckf_ton. Only this file turns exceptions into exit codes.
+// ovton: the command-line front of ov_msckf_ton. Only this file turns exceptions into exit codes: 2 usage, 3 data
+// (file and line), 4 a diverged estimate (filter_health.h), 130 interrupted; 1 anything else.
 #include "ov_core/types/errors.h"
 #include "tools/commands.h"
 
@@ -21,11 +22,13 @@ const std::map<std::string, Command> &commands() {
       {"info", {ovton::cmd_info, "load a dataset folder, validate it and print what it holds"}},
       {"eval", {ovton::cmd_eval, "APE/ARE/RPE/TPE/CIT of a trajectory against ground truth"}},
       {"simulate", {ovton::cmd_simulate, "write a synthetic EuRoC-format folder with a known time offset"}},
+      {"export", {ovton::cmd_export, "write a dataset folder as a ROS 1 bag (with Kalibr calibration files)"}},
       {"perturb", {ovton::cmd_perturb, "rewrite a real folder's image stamps with a time-offset model"}},
       {"benchmark", {ovton::cmd_benchmark, "per-frame cost by stage, x real time and memory, mode by mode"}},
       {"diagnose", {ovton::cmd_diagnose, "rank candidate effects behind the residuals of `run --residual-log`"}},
       {"track", {ovton::cmd_track, "the KLT front end alone: tracks as features.csv, scored against the truth"}},
       {"velocities", {ovton::cmd_velocities, "score the image velocities of `run --velocity-log` against the truth"}},
+      {"trackstats", {ovton::cmd_trackstats, "how long a KLT keeps features on a folder's images; gradients, noise"}},
   };
   return cmds;
 }
@@ -60,6 +63,9 @@ int main(int argc, char **argv) {
   } catch (const ov_core::DataError &e) {
     std::cerr << "ovton " << name << ": data error: " << e.what() << "\n";
     return 3;
+  } catch (const ov_core::EstimatorFailure &e) {
+    std::cerr << "ovton " << name << ": estimate failed: " << e.what() << "\n";
+    return 4;
   } catch (const ov_core::UsageError &e) {
     std::cerr << "ovton " << name << ": " << e.what() << "\n";
     return 2;

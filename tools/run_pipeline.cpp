@@ -1,9 +1,11 @@
 #include "tools/run_pipeline.h"
+#include "ov_core/io/image_io.h"
 #include "ov_core/io/image_prefetcher.h"
 #include "ov_core/io/trajectory_io.h"
 #include "ov_core/types/errors.h"
 #include "tools/progress.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -15,8 +17,30 @@ void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov
     opt.td.init_s = data.td_prior_s;
 }
 
+std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt) {
+  using ov_msckf_ton::TdMode;
+  const bool due = opt.td.search && opt.td.mode != TdMode::Off && opt.td.mode != TdMode::Oracle;
+  opt.td.search = false;
+  if (!due)
+    return std::nullopt;
+  ov_msckf_ton::TdSearchOptions so;
+  so.range_s = opt.td.search_range_s;
+  so.track = opt.track;
+  const auto r = ov_msckf_ton::search_td(data.images, data.imu, data.cam, opt.td.init_s, so);
+  if (r.found) {
+    opt.td.init_s = r.td_s;
+    // The filter's prior must cover the search's own error.
+    opt.td.sigma_init_s = std::max(opt.td.sigma_init_s, 3 * r.sigma_s);
+  }
+  return r;
+}
+
 RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
-  const auto &opt = req.opt;
+  ov_msckf_ton::VioOptions opt = req.opt;
+  RunResult res;
+  res.td_search = run_td_search(data, opt);
+  if (res.td_search && req.progress) // before the run, so that it is seen even when the run fails
+    std::fprintf(stderr, "coarse t_d search: %s\n", res.td_search->summary().c_str());
   ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
   if (data.has_td_truth())
     vio.set_td_oracle([&data](int64_t t) { return data.td_truth_at(t); });
@@ -29,7 +53,6 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
     vio.set_groundtruth(data.groundtruth);
     nees = std::make_unique<ov_eval::NeesAccumulator>(data.groundtruth, data.td_truth);
   }
-  RunResult res;
   std::unique_ptr<ov_core::TrajectoryWriter> writer;
   if (!req.output.empty())
     writer = std::make_unique<ov_core::TrajectoryWriter>(req.output, req.tum ? ov_core::TrajectoryFormat::Tum
@@ -53,10 +76,16 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   }
 
   std::unique_ptr<ov_core::ImagePrefetcher> prefetcher;
-  if (req.prefetch && !data.images.empty() && !data.images.front().features) {
+  if (req.prefetch && !data.images.empty() && !data.images.front().features)
     prefetcher = std::make_unique<ov_core::ImagePrefetcher>(data.images);
-    vio.set_image_source([&prefetcher](const ov_core::ImageEntry &e) { return prefetcher->get(e); });
-  }
+  // An image of the wrong size is reported with its file here, not as a tracker error without one.
+  vio.set_image_source([&prefetcher, &data](const ov_core::ImageEntry &e) {
+    if (!prefetcher)
+      return ov_core::load_gray_image(e, data.cam.width, data.cam.height);
+    cv::Mat img = prefetcher->get(e);
+    ov_core::check_gray_image(img, e, data.cam.width, data.cam.height);
+    return img;
+  });
   ProgressBar bar(req.label.empty() ? "run " + ov_msckf_ton::to_string(opt.td.mode) : req.label, !req.progress);
   const auto t0 = std::chrono::steady_clock::now();
   size_t last_i = 0;
@@ -79,6 +108,12 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   if (nees)
     res.nees = nees->stats();
   res.init_message = vio.init_message();
+  res.acceptance = vio.health().total();
+  // A header-only trajectory is not a result: say why nothing was estimated.
+  if (res.traj.empty() && !res.interrupted)
+    throw ov_core::DataError(data.root, "no pose was estimated from " + std::to_string(res.replay.images_fed) +
+                                            " images (" + std::to_string(res.replay.images_skipped) +
+                                            " beyond the IMU log); initialisation: " + res.init_message);
   return res;
 }
 

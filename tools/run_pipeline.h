@@ -4,8 +4,10 @@
 #include "ov_core/io/replay.h"
 #include "ov_eval/nees.h"
 #include "ov_msckf_ton/core/vio_manager.h"
+#include "ov_msckf_ton/init/td_search.h"
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,13 +36,22 @@ struct RunResult {
   ov_eval::NeesStats nees; ///< counted with ground-truth initialisation only (the estimate is in its frame)
   ov_core::ReplayStats replay;
   std::string init_message;
+  ov_msckf_ton::UpdateTally acceptance;                  ///< features used / gated / failed triangulation over the run
+  std::optional<ov_msckf_ton::TdSearchResult> td_search; ///< when the coarse search ran
   double wall_s = 0.0;
   double data_span_s = 0.0; ///< camera time covered by the images replayed
   bool interrupted = false;
 };
 
-/// Runs the estimator over `data` as asked. Rows are written (and flushed) as they are produced.
+/// Runs the estimator over `data` as asked. Rows are written (and flushed) as they are produced. Runs the coarse t_d
+/// search first when req.opt asks for it (run_td_search). Throws ov_core::EstimatorFailure when the filter's health
+/// check fails (the rows before it stay on disk) and DataError when the run ends without a single pose.
 RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req);
+
+/// The coarse t_d search (ov_msckf_ton/init/td_search.h) when opt.td_search is set and the mode estimates t_d: on
+/// success opt.td_init_s becomes what it found. Either way opt.td_search is cleared, so that the runs of a comparison
+/// share one search. Returns nothing when no search was due.
+std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt);
 
 /// Applies the dataset's own facts to options the user did not set: Kalibr timeshift as t_d prior.
 void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov_msckf_ton::VioOptions &opt);

@@ -60,6 +60,33 @@ Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d &xn, Eigen::Matrix2d 
   return Eigen::Vector2d(fu() * xd.x() + cu(), fv() * xd.y() + cv());
 }
 
+Eigen::Matrix<double, 2, 8> CameraModel::intrinsics_jacobian(const Eigen::Vector2d &xn) const {
+  const Eigen::Vector2d xd = distort_normalized(xn);
+  Eigen::Matrix<double, 2, 8> J = Eigen::Matrix<double, 2, 8>::Zero();
+  J(0, 0) = xd.x();
+  J(1, 1) = xd.y();
+  J(0, 2) = 1.0;
+  J(1, 3) = 1.0;
+  const double x = xn.x(), y = xn.y();
+  Eigen::Matrix<double, 2, 4> dxd; // d(distorted normalised)/d(d0..d3)
+  if (calib_.distortion == DistortionModel::RadTan) {
+    const double r2 = x * x + y * y;
+    dxd << x * r2, x * r2 * r2, 2.0 * x * y, r2 + 2.0 * x * x, //
+        y * r2, y * r2 * r2, r2 + 2.0 * y * y, 2.0 * x * y;
+  } else {
+    const double r = std::sqrt(x * x + y * y);
+    if (r < 1e-10)
+      return J;
+    const double th = std::atan(r);
+    const double t3 = th * th * th, t5 = t3 * th * th, t7 = t5 * th * th, t9 = t7 * th * th;
+    dxd << x / r * t3, x / r * t5, x / r * t7, x / r * t9, //
+        y / r * t3, y / r * t5, y / r * t7, y / r * t9;
+  }
+  J.block<1, 4>(0, 4) = fu() * dxd.row(0);
+  J.block<1, 4>(1, 4) = fv() * dxd.row(1);
+  return J;
+}
+
 Eigen::Vector2d CameraModel::undistort(const Eigen::Vector2d &uv) const {
   const Eigen::Vector2d xd((uv.x() - cu()) / fu(), (uv.y() - cv()) / fv());
   Eigen::Vector2d xn = xd;

@@ -22,6 +22,8 @@ public:
   Eigen::Vector2d distort_normalized(const Eigen::Vector2d &xn, Eigen::Matrix2d *J = nullptr) const;
   /// Undistorted normalised point -> distorted pixel. J: d(uv)/d(xn).
   Eigen::Vector2d distort(const Eigen::Vector2d &xn, Eigen::Matrix2d *J = nullptr) const;
+  /// d(distorted pixel)/d[fu fv cu cv d0 d1 d2 d3] at the undistorted normalised point xn (online calibration).
+  Eigen::Matrix<double, 2, 8> intrinsics_jacobian(const Eigen::Vector2d &xn) const;
   /// Distorted pixel -> undistorted normalised point, by Gauss-Newton on distort() (exact to ~1e-12 inside
   /// the image; distortion models have no closed-form inverse).
   Eigen::Vector2d undistort(const Eigen::Vector2d &uv) const;

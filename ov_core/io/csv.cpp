@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <unistd.h>
 
 namespace ov_core {
 
@@ -15,6 +16,23 @@ void require_file(const std::string &file) {
     throw DataError(file, "file not found");
   if (!std::filesystem::is_regular_file(file, ec))
     throw DataError(file, "not a regular file");
+}
+
+void require_writable(const std::string &file) {
+  namespace fs = std::filesystem;
+  if (file.empty())
+    throw UsageError("empty output path");
+  std::error_code ec;
+  const fs::path p(file);
+  if (fs::is_directory(p, ec))
+    throw DataError(file, "is a folder, not a file that can be written");
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  if (!fs::is_directory(dir, ec))
+    throw DataError(file, "cannot be written: folder " + dir.string() + " does not exist");
+  const bool exists = fs::exists(p, ec);
+  if (::access((exists ? p : dir).c_str(), W_OK) != 0)
+    throw DataError(file, exists ? "cannot be written: no permission to overwrite it"
+                                 : "cannot be written: no permission to create files in " + dir.string());
 }
 
 std::string join_path(const std::string &a, const std::string &b) {
@@ -40,6 +58,9 @@ bool TextTableReader::next(std::vector<std::string> &fields) {
   std::string raw;
   while (std::getline(in_, raw)) {
     ++line_;
+    // A UTF-8 byte order mark (spreadsheet exports) is not part of the first field.
+    if (line_ == 1 && raw.rfind(kUtf8Bom, 0) == 0)
+      raw.erase(0, 3);
     const std::string s = trim(raw);
     if (s.empty())
       continue;

@@ -8,6 +8,9 @@
 
 namespace ov_core {
 
+/// The UTF-8 byte order mark some editors and spreadsheets put at the start of a text file.
+inline constexpr const char *kUtf8Bom = "\xEF\xBB\xBF";
+
 class TextTableReader {
 public:
   /// sep: ',' for CSV; ' ' splits on any run of spaces/tabs (TUM text).
@@ -36,6 +39,9 @@ private:
 
 /// Throws DataError unless `file` exists and is a regular file.
 void require_file(const std::string &file);
+/// Throws DataError unless `file` can be created or overwritten: its folder exists and is writable and it is not a
+/// folder itself. Checked before a long run, so that a typo in an output path costs nothing. Creates nothing.
+void require_writable(const std::string &file);
 std::string join_path(const std::string &a, const std::string &b);
 
 } // namespace ov_core

@@ -1,15 +1,12 @@
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/csv.h"
 #include "ov_core/io/trajectory_io.h"
+#include "ov_core/io/yaml_file.h"
 #include "ov_core/types/errors.h"
-
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -17,44 +14,38 @@ namespace ov_core {
 
 namespace {
 
-/// EuRoC sensor.yaml files start with OpenCV's "%YAML:1.0" directive, which yaml-cpp rejects; drop it.
-YAML::Node load_yaml(const std::string &file) {
-  require_file(file);
-  std::ifstream in(file);
-  std::stringstream ss;
-  std::string line;
-  bool first = true;
-  while (std::getline(in, line)) {
-    if (first && line.rfind("%YAML", 0) == 0)
-      line = "";
-    first = false;
-    ss << line << "\n";
-  }
-  try {
-    YAML::Node n = YAML::Load(ss.str());
-    if (!n.IsMap())
-      throw DataError(file, "expected a YAML mapping at the top level");
-    return n;
-  } catch (const YAML::Exception &e) {
-    throw DataError(file, e.mark.line + 1, std::string("unreadable YAML: ") + e.msg);
-  }
-}
-
 template <typename T> T get(const YAML::Node &n, const std::string &file, const std::string &key) {
   if (!n[key])
     throw DataError(file, "missing key '" + key + "'");
-  try {
-    return n[key].as<T>();
-  } catch (const YAML::Exception &e) {
-    throw DataError(file, e.mark.line + 1, "bad value for '" + key + "': " + e.msg);
-  }
+  return yaml_as<T>(n[key], file, key);
 }
 
 double get_finite(const YAML::Node &n, const std::string &file, const std::string &key) {
   const double v = get<double>(n, file, key);
   if (!std::isfinite(v))
-    throw DataError(file, "non-finite value for '" + key + "'");
+    throw DataError(file, yaml_line(n[key]), "non-finite value for '" + key + "'");
   return v;
+}
+
+/// A value that must lie in [lo, hi]: rates and noise densities outside any real sensor's range are typos or wrong
+/// units (a zero noise density makes the filter trust the IMU absolutely; a rate of 1e-300 Hz overflows every period).
+double get_in_range(const YAML::Node &n, const std::string &file, const std::string &key, double lo, double hi,
+                    const char *why) {
+  const double v = get_finite(n, file, key);
+  if (!(v >= lo && v <= hi))
+    throw DataError(file, yaml_line(n[key]),
+                    "'" + key + "' = " + std::to_string(v) + " is outside [" + std::to_string(lo) + ", " +
+                        std::to_string(hi) + "]: " + why);
+  return v;
+}
+
+/// A map-valued entry (Kalibr's cam0:, imu0:), checked so that a scalar there is reported, not subscripted.
+YAML::Node get_map(const YAML::Node &n, const std::string &file, const std::string &key) {
+  if (!n[key])
+    throw DataError(file, "missing '" + key + "'");
+  if (!n[key].IsMap())
+    throw DataError(file, yaml_line(n[key]), "'" + key + "' must be a mapping");
+  return n[key];
 }
 
 template <int N>
@@ -108,12 +99,14 @@ DistortionModel parse_distortion(const std::string &s, const std::string &file) 
     return DistortionModel::RadTan;
   if (s == "equidistant" || s == "fisheye")
     return DistortionModel::Equidistant;
+  if (s == "none") // Kalibr's undistorted pinhole: radtan with zero coefficients
+    return DistortionModel::RadTan;
   throw DataError(file, "unknown distortion model '" + s + "' (expected radial-tangential or equidistant)");
 }
 
 void check_camera(const CameraCalib &c, const std::string &file) {
-  if (c.width <= 0 || c.height <= 0)
-    throw DataError(file, "resolution must be positive");
+  if (c.width <= 0 || c.height <= 0 || c.width > 20000 || c.height > 20000)
+    throw DataError(file, "resolution must be positive and at most 20000 px a side");
   if (c.intrinsics(0) <= 0 || c.intrinsics(1) <= 0)
     throw DataError(file, "focal lengths must be positive");
 }
@@ -132,30 +125,79 @@ std::string resolve_mav0(const std::string &dir) {
   throw DataError(dir, "not an EuRoC folder: neither mav0/ nor cam0/ inside");
 }
 
-std::vector<ImageEntry> read_image_list(const std::string &csv, const std::string &image_dir, const LoadOptions &opt) {
+// Beyond these a reading is not a measurement: high-g MEMS accelerometers stop at ~400 g and the fastest gyros at
+// ~70 rad/s (4000 deg/s). A value past them (1e308 from a corrupted file) would otherwise reach the filter as NaN.
+constexpr double kMaxGyroRadS = 100.0;
+constexpr double kMaxAccelMS2 = 5000.0;
+// Stamps are ns since some epoch: negative ones cannot be a sensor clock, and one this close to the end of the int64
+// clock (year 2223) leaves no room for adding a time offset.
+constexpr int64_t kMaxStampNs = 8000000000000000000LL;
+
+/// A row's stamp: an integer in [0, kMaxStampNs], strictly after the previous row's.
+int64_t read_stamp(const TextTableReader &r, const std::string &field, bool has_prev, int64_t prev) {
+  const int64_t t = r.to_int64(field, "timestamp");
+  if (t < 0)
+    r.fail("negative timestamp " + field + " (stamps are nanoseconds since an epoch)");
+  if (t > kMaxStampNs)
+    r.fail("timestamp " + field + " ns lies beyond the year 2200: not a nanosecond stamp");
+  if (has_prev && t <= prev)
+    r.fail(t == prev ? "duplicate timestamp " + field : "timestamp " + field + " is not after the previous row");
+  return t;
+}
+
+/// The stated rate must match the stamps: a list stamped in ms or us (or a sensor.yaml with the wrong rate) shows as a
+/// median spacing far from 1/rate. Reported at the first row whose spacing is off by the same factor.
+void check_spacing(const std::string &file, const std::vector<int64_t> &t, const std::vector<long> &lines,
+                   double rate_hz, const char *rate_key) {
+  if (t.size() < 3 || !(rate_hz > 0))
+    return;
+  std::vector<int64_t> dt(t.size() - 1);
+  for (size_t i = 1; i < t.size(); ++i)
+    dt[i - 1] = t[i] - t[i - 1];
+  std::vector<int64_t> sorted = dt;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double median = static_cast<double>(sorted[sorted.size() / 2]);
+  const double expected = 1e9 / rate_hz;
+  if (median > expected / 3 && median < expected * 3)
+    return;
+  size_t k = 0;
+  while (k + 1 < dt.size() && (static_cast<double>(dt[k]) > expected / 3 && static_cast<double>(dt[k]) < expected * 3))
+    ++k;
+  char msg[256];
+  std::snprintf(msg, sizeof msg,
+                "stamps are %.6g ns apart (median), but %s %.6g Hz means %.6g ns: are the stamps in nanoseconds, and "
+                "is the rate right?",
+                median, rate_key, rate_hz, expected);
+  throw DataError(file, lines[k + 1], msg);
+}
+
+std::vector<ImageEntry> read_image_list(const std::string &csv, const std::string &image_dir, const LoadOptions &opt,
+                                        double rate_hz) {
   TextTableReader r(csv, ',');
   std::vector<ImageEntry> out;
+  std::vector<int64_t> stamps;
+  std::vector<long> lines;
   std::vector<std::string> f;
   while (r.next(f)) {
     if (f.size() != 2)
       r.fail("expected 2 columns (timestamp [ns], filename), found " + std::to_string(f.size()));
     ImageEntry e;
-    e.t_cam_ns = r.to_int64(f[0], "timestamp");
+    e.t_cam_ns = read_stamp(r, f[0], !out.empty(), out.empty() ? 0 : out.back().t_cam_ns);
     if (f[1].empty())
       r.fail("empty image file name");
     e.path = join_path(image_dir, f[1]);
-    if (!out.empty() && e.t_cam_ns <= out.back().t_cam_ns)
-      r.fail(e.t_cam_ns == out.back().t_cam_ns ? "duplicate timestamp " + f[0]
-                                               : "timestamp " + f[0] + " is not after the previous row");
     if (opt.check_images_exist) {
       std::error_code ec;
       if (!fs::is_regular_file(e.path, ec))
         r.fail("listed image does not exist: " + e.path);
     }
+    stamps.push_back(e.t_cam_ns);
+    lines.push_back(r.line());
     out.push_back(std::move(e));
   }
   if (out.empty())
     throw DataError(csv, "no images listed");
+  check_spacing(csv, stamps, lines, rate_hz, "the camera's rate_hz");
   return out;
 }
 
@@ -163,35 +205,60 @@ std::vector<ImuData> read_imu_csv(const std::string &csv, double rate_hz) {
   TextTableReader r(csv, ',');
   std::vector<ImuData> out;
   out.reserve(1 << 16);
+  std::vector<int64_t> stamps;
+  std::vector<long> lines;
   std::vector<std::string> f;
-  // A hole of more than a few nominal periods breaks propagation silently; reject it loudly.
+  // A hole of more than a few nominal periods breaks propagation silently; reject it loudly. (rate_hz is checked to
+  // lie in a sensor's range when it is read, so the period is finite.)
   const int64_t max_gap_ns = rate_hz > 0 ? static_cast<int64_t>(10.0 / rate_hz * 1e9) : 100000000;
   while (r.next(f)) {
     if (f.size() != 7)
       r.fail("expected 7 columns (timestamp, gyro xyz, accel xyz), found " + std::to_string(f.size()));
     ImuData d;
-    d.t_imu_ns = r.to_int64(f[0], "timestamp");
+    d.t_imu_ns = read_stamp(r, f[0], !out.empty(), out.empty() ? 0 : out.back().t_imu_ns);
     for (int i = 0; i < 3; ++i) {
       d.wm(i) = r.to_double(f[1 + i], "gyro value");
       d.am(i) = r.to_double(f[4 + i], "accel value");
+      if (std::abs(d.wm(i)) > kMaxGyroRadS)
+        r.fail("gyro value " + f[1 + i] + " rad/s is beyond any real gyroscope's range (" +
+               std::to_string(kMaxGyroRadS) + " rad/s)");
+      if (std::abs(d.am(i)) > kMaxAccelMS2)
+        r.fail("accel value " + f[4 + i] + " m/s^2 is beyond any real accelerometer's range (" +
+               std::to_string(kMaxAccelMS2) + " m/s^2)");
     }
     if (!out.empty()) {
-      const int64_t dt = d.t_imu_ns - out.back().t_imu_ns;
-      if (dt <= 0)
-        r.fail(dt == 0 ? "duplicate timestamp " + f[0] : "timestamp " + f[0] + " is not after the previous row");
+      const int64_t dt = d.t_imu_ns - out.back().t_imu_ns; // both stamps in [0, kMaxStampNs]: no overflow
       if (dt > max_gap_ns)
         r.fail("IMU gap of " + std::to_string(dt * 1e-6) + " ms before this row (rate " + std::to_string(rate_hz) +
                " Hz)");
     }
+    stamps.push_back(d.t_imu_ns);
+    lines.push_back(r.line());
     out.push_back(d);
   }
   if (out.size() < 2)
     throw DataError(csv, "fewer than 2 IMU readings");
+  check_spacing(csv, stamps, lines, rate_hz, "the IMU's rate");
   return out;
 }
 
+/// Images and IMU must share a clock: when no image lies within the IMU log's span (give or take a second, far more
+/// than any camera-IMU offset), the replay would skip every image and the run would write nothing.
+void check_overlap(const std::vector<ImageEntry> &images, const std::vector<ImuData> &imu, const std::string &cam_csv,
+                   const std::string &imu_csv) {
+  constexpr int64_t kMarginNs = 1000000000;
+  const int64_t lo = imu.front().t_imu_ns - kMarginNs, hi = imu.back().t_imu_ns + kMarginNs;
+  for (const auto &im : images)
+    if (im.t_cam_ns >= lo && im.t_cam_ns <= hi)
+      return;
+  throw DataError(cam_csv, "no image stamp lies within the IMU log's span (" + imu_csv + ": " +
+                               std::to_string(imu.front().t_imu_ns) + " to " + std::to_string(imu.back().t_imu_ns) +
+                               " ns; images " + std::to_string(images.front().t_cam_ns) + " to " +
+                               std::to_string(images.back().t_cam_ns) + " ns): are both in nanoseconds of one clock?");
+}
+
 /// cam0/features.csv (`timestamp_ns,feature_id,u,v`, grouped by stamp) attached to the listed images.
-void read_features_csv(const std::string &csv, std::vector<ImageEntry> &images) {
+void read_features_csv(const std::string &csv, const CameraCalib &cam, std::vector<ImageEntry> &images) {
   TextTableReader r(csv, ',');
   std::vector<std::string> f;
   size_t k = 0;
@@ -207,7 +274,12 @@ void read_features_csv(const std::string &csv, std::vector<ImageEntry> &images) 
     const int64_t id = r.to_int64(f[1], "feature id");
     if (id < 0)
       r.fail("negative feature id");
-    per_image[k].push_back({static_cast<size_t>(id), Eigen::Vector2d(r.to_double(f[2], "u"), r.to_double(f[3], "v"))});
+    const Eigen::Vector2d uv(r.to_double(f[2], "u"), r.to_double(f[3], "v"));
+    // Undistorting a point far outside the image diverges (NaN in the filter); a tracker never reports one.
+    if (std::abs(uv.x() - 0.5 * cam.width) > cam.width || std::abs(uv.y() - 0.5 * cam.height) > cam.height)
+      r.fail("feature at (" + f[2] + ", " + f[3] + ") px lies far outside the " + std::to_string(cam.width) + "x" +
+             std::to_string(cam.height) + " image");
+    per_image[k].push_back({static_cast<size_t>(id), uv});
   }
   for (size_t i = 0; i < images.size(); ++i)
     images[i].features = std::make_shared<const std::vector<PointObservation>>(std::move(per_image[i]));
@@ -218,41 +290,101 @@ std::string optional_file(const std::string &path) {
   return fs::exists(path, ec) ? path : std::string();
 }
 
+/// Rate and noise densities of an IMU, from EuRoC's imu0/sensor.yaml (rate_hz) or Kalibr's imu.yaml (update_rate).
+ImuCalib read_imu_calib(const YAML::Node &n, const std::string &file, const std::string &rate_key) {
+  ImuCalib c;
+  c.rate_hz = get_in_range(n, file, rate_key, 1.0, 1e5, "an IMU's rate in Hz");
+  // The filter weighs the IMU by these: zero or negative would make it trust the IMU absolutely (or not be a
+  // covariance); values past 1 are not a real sensor's noise in these units.
+  const char *density = "a noise density must be positive (units per sqrt(Hz))";
+  const char *walk = "a bias random walk must be >= 0 (units per sqrt(Hz))";
+  c.gyro_noise_density = get_in_range(n, file, "gyroscope_noise_density", 1e-12, 1.0, density);
+  c.gyro_random_walk = get_in_range(n, file, "gyroscope_random_walk", 0.0, 1.0, walk);
+  c.accel_noise_density = get_in_range(n, file, "accelerometer_noise_density", 1e-12, 10.0, density);
+  c.accel_random_walk = get_in_range(n, file, "accelerometer_random_walk", 0.0, 10.0, walk);
+  return c;
+}
+
+/// The camera entries EuRoC's cam0/sensor.yaml and Kalibr's camchain cam0 share (their key names differ).
+void read_camera_common(const YAML::Node &n, const std::string &file, const char *dist_key, CameraCalib &c) {
+  const std::string model = n["camera_model"] ? get<std::string>(n, file, "camera_model") : "pinhole";
+  if (model != "pinhole")
+    throw DataError(file, yaml_line(n["camera_model"]), "unsupported camera_model '" + model + "' (only pinhole)");
+  const auto res = get<std::vector<int>>(n, file, "resolution");
+  if (res.size() != 2)
+    throw DataError(file, yaml_line(n["resolution"]), "'resolution' must be [width, height]");
+  c.width = res[0];
+  c.height = res[1];
+  c.rate_hz = n["rate_hz"] ? get_in_range(n, file, "rate_hz", 0.1, 1e4, "a camera's rate in Hz") : 20.0;
+  c.intrinsics = get_vec<4>(n, file, "intrinsics");
+  c.distortion = parse_distortion(get<std::string>(n, file, "distortion_model"), file);
+  c.dist_coeffs = get_vec<4>(n, file, dist_key);
+}
+
 } // namespace
 
 CameraCalib load_euroc_camera_yaml(const std::string &file) {
-  const YAML::Node n = load_yaml(file);
+  const YAML::Node n = load_yaml_file(file);
   CameraCalib c;
-  const auto res = get<std::vector<int>>(n, file, "resolution");
-  if (res.size() != 2)
-    throw DataError(file, "'resolution' must be [width, height]");
-  c.width = res[0];
-  c.height = res[1];
-  c.rate_hz = n["rate_hz"] ? get_finite(n, file, "rate_hz") : 20.0;
-  const std::string model = n["camera_model"] ? get<std::string>(n, file, "camera_model") : "pinhole";
-  if (model != "pinhole")
-    throw DataError(file, "unsupported camera_model '" + model + "' (only pinhole)");
-  c.intrinsics = get_vec<4>(n, file, "intrinsics");
-  c.distortion = parse_distortion(get<std::string>(n, file, "distortion_model"), file);
-  c.dist_coeffs = get_vec<4>(n, file, "distortion_coefficients");
+  read_camera_common(n, file, "distortion_coefficients", c);
   c.T_BC = get_transform(n, file, "T_BS");
   check_camera(c, file);
   return c;
 }
 
 ImuCalib load_euroc_imu_yaml(const std::string &file) {
-  const YAML::Node n = load_yaml(file);
-  ImuCalib c;
-  c.rate_hz = get_finite(n, file, "rate_hz");
-  c.gyro_noise_density = get_finite(n, file, "gyroscope_noise_density");
-  c.gyro_random_walk = get_finite(n, file, "gyroscope_random_walk");
-  c.accel_noise_density = get_finite(n, file, "accelerometer_noise_density");
-  c.accel_random_walk = get_finite(n, file, "accelerometer_random_walk");
+  const YAML::Node n = load_yaml_file(file);
+  ImuCalib c = read_imu_calib(n, file, "rate_hz");
   if (n["T_BS"])
     c.T_BI = get_transform(n, file, "T_BS");
-  if (c.rate_hz <= 0)
-    throw DataError(file, "rate_hz must be positive");
   return c;
+}
+
+KalibrCamera load_kalibr_camchain(const std::string &chain_file, const std::string &cam_name) {
+  const YAML::Node chain = load_yaml_file(chain_file);
+  const YAML::Node c0 = get_map(chain, chain_file, cam_name);
+  KalibrCamera k;
+  CameraCalib &c = k.cam;
+  const std::string model = c0["camera_model"] ? get<std::string>(c0, chain_file, "camera_model") : "pinhole";
+  if (model != "pinhole")
+    throw DataError(chain_file, "unsupported camera_model '" + model + "' (only pinhole, with radtan or equidistant)");
+  c.intrinsics = get_vec<4>(c0, chain_file, "intrinsics");
+  c.distortion = parse_distortion(get<std::string>(c0, chain_file, "distortion_model"), chain_file);
+  // Kalibr writes no coefficients for distortion_model none.
+  if (c0["distortion_coeffs"] || get<std::string>(c0, chain_file, "distortion_model") != "none")
+    c.dist_coeffs = get_vec<4>(c0, chain_file, "distortion_coeffs");
+  const auto res = get<std::vector<int>>(c0, chain_file, "resolution");
+  if (res.size() != 2)
+    throw DataError(chain_file, "'resolution' must be [width, height]");
+  c.width = res[0];
+  c.height = res[1];
+  c.rate_hz = c0["rate_hz"] ? get_finite(c0, chain_file, "rate_hz") : 20.0;
+  // Kalibr writes T_cam_imu (IMU-frame points into the camera frame), so T_BC is its inverse; OpenVINS-style chains
+  // write T_imu_cam = T_BC itself.
+  if (c0["T_cam_imu"])
+    c.T_BC = get_transform(c0, chain_file, "T_cam_imu").inverse();
+  else if (c0["T_imu_cam"])
+    c.T_BC = get_transform(c0, chain_file, "T_imu_cam");
+  else
+    throw DataError(chain_file, "missing key 'T_cam_imu' (or 'T_imu_cam') in '" + cam_name + "'");
+  check_camera(c, chain_file);
+  if (c0["timeshift_cam_imu"])
+    k.timeshift_cam_imu_s =
+        get_in_range(c0, chain_file, "timeshift_cam_imu", -10.0, 10.0, "a camera-IMU time shift in s");
+  if (c0["rostopic"])
+    k.rostopic = get<std::string>(c0, chain_file, "rostopic");
+  return k;
+}
+
+KalibrImu load_kalibr_imu(const std::string &imu_file) {
+  const YAML::Node imu = load_yaml_file(imu_file);
+  const YAML::Node i0 = imu["imu0"] ? get_map(imu, imu_file, "imu0") : imu;
+  KalibrImu k;
+  // The same plausibility checks as an EuRoC sensor.yaml (noise densities > 0, a rate a real IMU has).
+  k.imu = read_imu_calib(i0, imu_file, "update_rate");
+  if (i0["rostopic"])
+    k.rostopic = get<std::string>(i0, imu_file, "rostopic");
+  return k;
 }
 
 double Dataset::td_truth_at(int64_t t_cam_ns) const {
@@ -281,10 +413,12 @@ Dataset load_euroc(const std::string &dir, const LoadOptions &opt) {
   LoadOptions list_opt = opt;
   if (!features.empty())
     list_opt.check_images_exist = false;
-  d.images = read_image_list(join_path(mav0, "cam0/data.csv"), join_path(mav0, "cam0/data"), list_opt);
+  const std::string cam_csv = join_path(mav0, "cam0/data.csv"), imu_csv = join_path(mav0, "imu0/data.csv");
+  d.images = read_image_list(cam_csv, join_path(mav0, "cam0/data"), list_opt, d.cam.rate_hz);
   if (!features.empty())
-    read_features_csv(features, d.images);
-  d.imu = read_imu_csv(join_path(mav0, "imu0/data.csv"), d.imu_calib.rate_hz);
+    read_features_csv(features, d.cam, d.images);
+  d.imu = read_imu_csv(imu_csv, d.imu_calib.rate_hz);
+  check_overlap(d.images, d.imu, cam_csv, imu_csv);
   if (auto gt = optional_file(join_path(mav0, "state_groundtruth_estimate0/data.csv")); !gt.empty())
     d.groundtruth = read_trajectory(gt);
   if (auto td = optional_file(join_path(mav0, "td_truth/data.csv")); !td.empty())
@@ -300,41 +434,15 @@ Dataset load_scube(const std::string &dir, const LoadOptions &opt) {
   d.root = dir;
   d.kind = "scube";
 
-  // Kalibr camchain: T_cam_imu maps IMU-frame points into the camera frame, so T_BC is its inverse.
-  const std::string chain_file = join_path(dir, "camchain-imucam.yaml");
-  const YAML::Node chain = load_yaml(chain_file);
-  if (!chain["cam0"])
-    throw DataError(chain_file, "missing 'cam0'");
-  const YAML::Node c0 = chain["cam0"];
-  const std::string model = c0["camera_model"] ? get<std::string>(c0, chain_file, "camera_model") : "pinhole";
-  if (model != "pinhole")
-    throw DataError(chain_file, "unsupported camera_model '" + model + "' (only pinhole)");
-  d.cam.intrinsics = get_vec<4>(c0, chain_file, "intrinsics");
-  d.cam.distortion = parse_distortion(get<std::string>(c0, chain_file, "distortion_model"), chain_file);
-  d.cam.dist_coeffs = get_vec<4>(c0, chain_file, "distortion_coeffs");
-  const auto res = get<std::vector<int>>(c0, chain_file, "resolution");
-  if (res.size() != 2)
-    throw DataError(chain_file, "'resolution' must be [width, height]");
-  d.cam.width = res[0];
-  d.cam.height = res[1];
-  d.cam.rate_hz = c0["rate_hz"] ? get_finite(c0, chain_file, "rate_hz") : 20.0;
-  const Eigen::Matrix4d T_CI = get_transform(c0, chain_file, "T_cam_imu");
-  d.cam.T_BC = T_CI.inverse();
-  check_camera(d.cam, chain_file);
-  if (c0["timeshift_cam_imu"])
-    d.td_prior_s = get_finite(c0, chain_file, "timeshift_cam_imu");
+  const KalibrCamera kc = load_kalibr_camchain(join_path(dir, "camchain-imucam.yaml"));
+  d.cam = kc.cam;
+  d.td_prior_s = kc.timeshift_cam_imu_s;
+  d.imu_calib = load_kalibr_imu(join_path(dir, "imu.yaml")).imu;
 
-  const std::string imu_file = join_path(dir, "imu.yaml");
-  const YAML::Node imu = load_yaml(imu_file);
-  const YAML::Node i0 = imu["imu0"] ? imu["imu0"] : imu;
-  d.imu_calib.rate_hz = get_finite(i0, imu_file, "update_rate");
-  d.imu_calib.gyro_noise_density = get_finite(i0, imu_file, "gyroscope_noise_density");
-  d.imu_calib.gyro_random_walk = get_finite(i0, imu_file, "gyroscope_random_walk");
-  d.imu_calib.accel_noise_density = get_finite(i0, imu_file, "accelerometer_noise_density");
-  d.imu_calib.accel_random_walk = get_finite(i0, imu_file, "accelerometer_random_walk");
-
-  d.images = read_image_list(join_path(dir, "cam0/data.csv"), join_path(dir, "cam0/data"), opt);
-  d.imu = read_imu_csv(join_path(dir, "imu0/data.csv"), d.imu_calib.rate_hz);
+  const std::string cam_csv = join_path(dir, "cam0/data.csv"), imu_csv = join_path(dir, "imu0/data.csv");
+  d.images = read_image_list(cam_csv, join_path(dir, "cam0/data"), opt, d.cam.rate_hz);
+  d.imu = read_imu_csv(imu_csv, d.imu_calib.rate_hz);
+  check_overlap(d.images, d.imu, cam_csv, imu_csv);
   if (auto gt = optional_file(join_path(dir, "groundtruth/data.csv")); !gt.empty())
     d.groundtruth = read_trajectory(gt);
   if (auto td = optional_file(join_path(dir, "td_truth/data.csv")); !td.empty())

@@ -10,7 +10,8 @@ namespace ov_core {
 
 struct Dataset {
   std::string root;               ///< folder the user named
-  std::string kind;               ///< "euroc" or "scube"
+  std::string kind;               ///< "euroc", "scube" or "rosbag"
+  std::string notes;              ///< what the reader chose on its own (a bag's topics, calibration), for `info`
   std::vector<ImageEntry> images; ///< cam0, time-ordered, camera clock
   std::vector<ImuData> imu;       ///< time-ordered, IMU clock
   CameraCalib cam;
@@ -38,5 +39,20 @@ Dataset load_scube(const std::string &dir, const LoadOptions &opt = {});
 /// EuRoC sensor.yaml readers (also used by the simulator to copy calibration).
 CameraCalib load_euroc_camera_yaml(const std::string &file);
 ImuCalib load_euroc_imu_yaml(const std::string &file);
+
+/// One camera of a Kalibr camchain (camchain-imucam.yaml): pinhole with radtan, equidistant or no distortion.
+struct KalibrCamera {
+  CameraCalib cam;
+  double timeshift_cam_imu_s = 0.0; ///< Kalibr's timeshift_cam_imu: t_imu = t_cam + shift, our t_d
+  std::string rostopic;             ///< the camera's topic when the chain names it ("" otherwise)
+};
+/// Kalibr IMU noise file (imu.yaml: an imu0 mapping, or its keys at the top level).
+struct KalibrImu {
+  ImuCalib imu;
+  std::string rostopic;
+};
+/// Kalibr readers. The chain's extrinsics may be Kalibr's T_cam_imu or an OpenVINS-style T_imu_cam.
+KalibrCamera load_kalibr_camchain(const std::string &file, const std::string &cam_name = "cam0");
+KalibrImu load_kalibr_imu(const std::string &file);
 
 } // namespace ov_core

@@ -1,12 +1,23 @@
 #include "ov_core/io/image_prefetcher.h"
-
-#include <opencv2/imgcodecs.hpp>
+#include "ov_core/io/image_store.h"
 
 namespace ov_core {
 namespace {
 
 cv::Mat decode(const ImageEntry &e) {
-  return e.features ? cv::Mat() : cv::imread(e.path, cv::IMREAD_GRAYSCALE);
+  return e.features ? cv::Mat() : load_image(e);
+}
+
+/// Decodes on the worker thread; what the decoder throws (a corrupt bag message) is kept for the consumer, who rethrows
+/// it when it asks for that image: an exception must not escape the thread.
+ImagePrefetcher::Decoded decode_caught(const ImageEntry &e) {
+  ImagePrefetcher::Decoded d;
+  try {
+    d.image = decode(e);
+  } catch (...) {
+    d.error = std::current_exception();
+  }
+  return d;
 }
 
 } // namespace
@@ -33,7 +44,7 @@ void ImagePrefetcher::work() {
     ++produced_;
     in_flight_ = index;
     lock.unlock();
-    cv::Mat m = decode(images_[index]); // the work that overlaps the consumer's
+    Decoded m = decode_caught(images_[index]); // the work that overlaps the consumer's
     lock.lock();
     in_flight_ = std::numeric_limits<size_t>::max();
     if (index >= wanted_)
@@ -59,11 +70,14 @@ cv::Mat ImagePrefetcher::get(size_t index) {
     cv_.wait(lock, [&] { return ready_.count(index) > 0 || (in_flight_ != index && produced_ > index); });
     const auto it = ready_.find(index);
     if (it != ready_.end()) {
-      cv::Mat m = std::move(it->second);
+      Decoded m = std::move(it->second);
       ready_.erase(it);
       wanted_ = index + 1;
       cv_.notify_all();
-      return m;
+      lock.unlock();
+      if (m.error)
+        std::rethrow_exception(m.error);
+      return m.image;
     }
   }
   lock.unlock(); // asked again for an index already taken or dropped: decode here

@@ -5,6 +5,7 @@
 
 #include <condition_variable>
 #include <cstddef>
+#include <exception>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -24,11 +25,18 @@ public:
   ImagePrefetcher &operator=(const ImagePrefetcher &) = delete;
 
   /// The decoded image of images[index] (empty if the file is unreadable: the caller reports it, as without the
-  /// prefetcher). Indices normally increase between calls; skipped ones are dropped, and an index asked again or
-  /// already dropped is decoded here instead. An index outside the list gives an empty image.
+  /// prefetcher; an error the image's store threw is rethrown here). Indices normally increase between calls; skipped
+  /// ones are dropped, and an index asked again or already dropped is decoded here instead. An index outside the list
+  /// gives an empty image.
   cv::Mat get(size_t index);
   /// The same for an entry of the list (the replay hands out the list's own entries); any other entry is decoded here.
   cv::Mat get(const ImageEntry &e);
+
+  /// One decoded image, or what decoding it threw (rethrown by get()).
+  struct Decoded {
+    cv::Mat image;
+    std::exception_ptr error;
+  };
 
 private:
   void work();
@@ -37,7 +45,7 @@ private:
   const size_t ahead_;
   std::mutex mutex_;
   std::condition_variable cv_;
-  std::map<size_t, cv::Mat> ready_;                       ///< decoded, not yet taken (indices ≥ wanted_)
+  std::map<size_t, Decoded> ready_;                       ///< decoded, not yet taken (indices ≥ wanted_)
   size_t wanted_ = 0;                                     ///< lowest index the consumer may still ask for
   size_t produced_ = 0;                                   ///< next index the thread decodes
   size_t in_flight_ = std::numeric_limits<size_t>::max(); ///< index being decoded now

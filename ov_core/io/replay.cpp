@@ -1,5 +1,8 @@
 #include "ov_core/io/replay.h"
 #include "ov_core/io/dataset.h"
+#include "ov_core/types/errors.h"
+
+#include <string>
 
 namespace ov_core {
 
@@ -8,7 +11,13 @@ ReplayStats Replay::run(ReplayConsumer &c, const std::function<bool(size_t, size
   size_t k = 0;
   for (size_t i = 0; i < images_.size(); ++i) {
     const ImageEntry &img = images_[i];
-    const int64_t t_imu_ns = img.t_cam_ns + s_to_ns(c.td_for_image_s(img.t_cam_ns));
+    const double td_s = c.td_for_image_s(img.t_cam_ns);
+    const auto td_ns = try_s_to_ns(td_s);
+    const auto t_imu = td_ns ? try_add_ns(img.t_cam_ns, *td_ns) : std::nullopt;
+    if (!t_imu)
+      throw UsageError("image " + img.path + " (stamp " + std::to_string(img.t_cam_ns) + " ns) with t_d " +
+                       std::to_string(td_s) + " s has no IMU-clock time in the int64 ns clock");
+    const int64_t t_imu_ns = *t_imu;
     // Feed every reading up to and including the image's IMU-clock time; one more if the image falls between two
     // readings, so the consumer can interpolate to the image time instead of extrapolating.
     while (k < imu_.size() && imu_[k].t_imu_ns <= t_imu_ns)

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
+#include <optional>
 
 namespace ov_core {
 
@@ -15,21 +16,26 @@ namespace {
 
 /// "1403715274.30214" -> ns without going through a double (a double keeps only ~0.1 us at 1.4e9 s).
 int64_t seconds_field_to_ns(const TextTableReader &r, const std::string &f) {
-  const auto dot = f.find('.');
-  const std::string ip = f.substr(0, dot);
-  std::string fp = dot == std::string::npos ? "" : f.substr(dot + 1);
-  if (fp.find_first_not_of("0123456789") != std::string::npos || (ip.empty() && fp.empty()) ||
-      f.find_first_of("eE") != std::string::npos) {
-    // Exponent notation or other forms: fall back to a double (fine for small, relative stamps).
-    return s_to_ns(r.to_double(f, "timestamp [s]"));
-  }
-  const int64_t sec = ip.empty() ? 0 : r.to_int64(ip, "timestamp [s]");
-  if (fp.size() > 9)
+  const bool negative = !f.empty() && f[0] == '-';
+  const std::string body = !f.empty() && (f[0] == '-' || f[0] == '+') ? f.substr(1) : f;
+  const auto dot = body.find('.');
+  const std::string ip = body.substr(0, dot);
+  std::string fp = dot == std::string::npos ? "" : body.substr(dot + 1);
+  const bool plain = (!ip.empty() || !fp.empty()) && ip.find_first_not_of("0123456789") == std::string::npos &&
+                     fp.find_first_not_of("0123456789") == std::string::npos;
+  std::optional<int64_t> ns;
+  if (plain) {
+    const int64_t sec = ip.empty() ? 0 : r.to_int64(ip, "timestamp [s]");
     fp = fp.substr(0, 9);
-  while (fp.size() < 9)
-    fp += '0';
-  const int64_t frac = r.to_int64(fp, "timestamp fraction");
-  return sec < 0 || (ip.size() && ip[0] == '-') ? sec * 1000000000LL - frac : sec * 1000000000LL + frac;
+    fp.resize(9, '0');
+    ns = try_seconds_parts_to_ns(sec, r.to_int64(fp, "timestamp fraction"), negative);
+  } else {
+    // Exponent notation or other forms: through a double (fine for small, relative stamps).
+    ns = try_s_to_ns(r.to_double(f, "timestamp [s]"));
+  }
+  if (!ns)
+    r.fail("timestamp '" + f + "' s is beyond the int64 nanosecond clock (+-292 years)");
+  return *ns;
 }
 
 Eigen::Quaterniond make_quat(const TextTableReader &r, double w, double x, double y, double z) {
@@ -68,9 +74,12 @@ void TrajectoryWriter::write(const StateSample &s) {
          << ',' << s.bg.z() << ',' << s.ba.x() << ',' << s.ba.y() << ',' << s.ba.z() << ',' << std::setprecision(12)
          << s.td_s << ',' << s.td_sigma_s << std::setprecision(9) << "\n";
   } else {
-    char stamp[32];
-    std::snprintf(stamp, sizeof(stamp), "%lld.%09lld", static_cast<long long>(s.t_ns / 1000000000LL),
-                  static_cast<long long>(s.t_ns % 1000000000LL));
+    // Sign and magnitude apart: -1.5 s is "-1.500000000", not "-1.-500000000".
+    const unsigned long long mag =
+        s.t_ns < 0 ? 0ULL - static_cast<unsigned long long>(s.t_ns) : static_cast<unsigned long long>(s.t_ns);
+    char stamp[40];
+    std::snprintf(stamp, sizeof(stamp), "%s%llu.%09llu", s.t_ns < 0 ? "-" : "", mag / 1000000000ULL,
+                  mag % 1000000000ULL);
     out_ << stamp << ' ' << s.p.x() << ' ' << s.p.y() << ' ' << s.p.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z()
          << ' ' << q.w() << "\n";
   }
@@ -88,6 +97,8 @@ std::vector<StateSample> read_trajectory(const std::string &file) {
     std::ifstream in(file);
     std::string line;
     while (std::getline(in, line)) {
+      if (line.rfind(kUtf8Bom, 0) == 0)
+        line.erase(0, 3);
       if (line.empty() || line[0] == '#' || line.find_first_not_of(" \t\r") == std::string::npos)
         continue;
       sep = line.find(',') != std::string::npos ? ',' : ' ';
@@ -172,6 +183,8 @@ std::vector<TdSample> read_td_truth(const std::string &file) {
     TdSample s;
     s.t_cam_ns = r.to_int64(f[0], "timestamp [ns]");
     s.td_s = r.to_double(f[1], "td_s");
+    if (std::abs(s.td_s) > 10.0)
+      r.fail("time offset " + f[1] + " s is not a camera-IMU offset (more than 10 s)");
     if (!out.empty() && s.t_cam_ns <= out.back().t_cam_ns)
       r.fail(s.t_cam_ns == out.back().t_cam_ns ? "duplicate timestamp" : "timestamp is not after the previous row");
     out.push_back(s);

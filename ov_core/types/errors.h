@@ -1,5 +1,6 @@
 #pragma once
 // Typed errors for library code. The CLI is the only place that turns them into a message and an exit code.
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -28,6 +29,18 @@ private:
 class UsageError : public std::runtime_error {
 public:
   using std::runtime_error::runtime_error;
+};
+
+/// The estimate went wrong although the input was readable: a non-finite state or covariance, an update acceptance
+/// that collapsed, innovations far beyond chance. Thrown instead of writing rows that look like an answer; the rows
+/// written before it stay on disk. `t_ns` is the IMU-clock time at which it was detected (0 when unknown).
+class EstimatorFailure : public std::runtime_error {
+public:
+  EstimatorFailure(int64_t t_ns, const std::string &what) : std::runtime_error(what), t_ns_(t_ns) {}
+  int64_t t_ns() const { return t_ns_; }
+
+private:
+  int64_t t_ns_;
 };
 
 } // namespace ov_core

@@ -1,5 +1,7 @@
 #pragma once
 // Sensor messages. Every stamp is int64 nanoseconds; the clock is in the name (see ARCHITECTURE.md).
+#include "ov_core/types/time.h"
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -22,10 +24,15 @@ struct PointObservation {
   Eigen::Vector2d uv = Eigen::Vector2d::Zero(); ///< distorted pixel
 };
 
-/// One image as listed in cam0/data.csv, stamped in the camera clock (t_imu = t_cam + t_d).
+class ImageStore; // ov_core/io/image_store.h
+
+/// One image as listed in cam0/data.csv (or a ROS bag), stamped in the camera clock (t_imu = t_cam + t_d).
 struct ImageEntry {
   int64_t t_cam_ns = 0;
-  std::string path; ///< absolute or dataset-relative path of the image file
+  std::string path; ///< absolute or dataset-relative path of the image file; for a bag message, "BAG: message N"
+  /// Set when the pixels live in a container (a ROS bag message) instead of a file: ov_core::load_image() asks it.
+  std::shared_ptr<const ImageStore> store;
+  size_t store_index = 0; ///< which image of the store
   /// Feature-level datasets: the frame's observations instead of pixels (the image file need not exist).
   std::shared_ptr<const std::vector<PointObservation>> features;
 };
@@ -55,12 +62,5 @@ struct TdSample {
   int64_t t_cam_ns = 0;
   double td_s = 0.0;
 };
-
-inline double ns_to_s(int64_t ns) {
-  return static_cast<double>(ns) * 1e-9;
-}
-inline int64_t s_to_ns(double s) {
-  return static_cast<int64_t>(s >= 0 ? s * 1e9 + 0.5 : s * 1e9 - 0.5);
-}
 
 } // namespace ov_core

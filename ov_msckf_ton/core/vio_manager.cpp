@@ -2,13 +2,13 @@
 #include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
 #include "ov_core/types/state_interpolation.h"
-#include "ov_msckf_ton/core/static_init.h"
 #include "ov_msckf_ton/state/state_helper.h"
 
-#include <opencv2/imgcodecs.hpp>
+#include "ov_core/io/image_store.h"
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
 namespace ov_msckf_ton {
 
@@ -39,6 +39,13 @@ UpdaterMSCKFOptions updater_options(const VioOptions &o) {
   return u;
 }
 
+UpdaterSlamOptions slam_options(const VioOptions &o) {
+  UpdaterSlamOptions u;
+  u.sigma_px = o.slam.sigma_px > 0 ? o.slam.sigma_px : o.update.sigma_px;
+  u.chi2_multiplier = o.slam.chi2_multiplier;
+  return u;
+}
+
 TdObservation td_observation(TdMode m) {
   if (uses_state_relevant(m))
     return TdObservation::StateRelevant;
@@ -61,13 +68,49 @@ FvonProviderOptions fvon_options(const TonOptions &o) {
   return f;
 }
 
+InertialInitOptions inertial_init_options(const VioOptions &o) {
+  const InitOptions &i = o.init;
+  InertialInitOptions r;
+  r.allow_static = i.mode != InitMode::Dynamic;
+  r.allow_dynamic = i.mode == InitMode::Auto || i.mode == InitMode::Dynamic;
+  r.static_window_s = i.window_s;
+  r.max_accel_std = i.max_accel_std;
+  r.max_gyro_std = i.max_gyro_std;
+  r.still_window_s = i.still_window_s;
+  r.still_max_disparity_px = i.still_max_disparity_px;
+  r.sigma_yaw = i.sigma_yaw;
+  r.sigma_pos = i.sigma_pos;
+  DynamicInitOptions &d = r.dynamic;
+  d.window_s = i.dyn_window_s;
+  d.min_features = i.dyn_min_features;
+  d.max_features = i.dyn_max_features;
+  d.min_observations = i.dyn_min_observations;
+  d.min_disparity_px = i.dyn_min_disparity_px;
+  d.sigma_px = o.update.sigma_px;
+  d.max_rms_px = i.dyn_max_rms_px;
+  d.max_sigma_rollpitch_deg = i.dyn_max_sigma_rollpitch_deg;
+  d.max_sigma_vel = i.dyn_max_sigma_vel;
+  d.sigma_inflation = i.dyn_sigma_inflation;
+  return r;
+}
+
 } // namespace
 
 VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, const ov_core::ImuCalib &imu)
     : opt_(opt), camera_(cam), tracker_(camera_, opt.track), propagator_(noise_from(imu, opt), opt.imu.gravity_mag),
-      updater_(cam, updater_options(opt)), state_(std::make_unique<State>(estimates_td(opt.td.mode))) {
+      updater_(cam, updater_options(opt)), slam_(cam, slam_options(opt), updater_),
+      state_(std::make_unique<State>(estimates_td(opt.td.mode))), health_(opt) {
   validate_vio_options(opt_);
   state_->td = opt.td.init_s;
+  // The calibration as the filter holds it; a variable (and a column in the updates) only where it is estimated.
+  CalibState &c = state_->calib;
+  c.R_BC = cam.T_BC.topLeftCorner<3, 3>();
+  c.p_BC = cam.T_BC.topRightCorner<3, 1>();
+  c.intrinsics << cam.intrinsics, cam.dist_coeffs;
+  c.readout_s = opt.calibration.readout_s;
+  if (opt.init.mode != InitMode::GroundTruth)
+    inertial_init_ = std::make_unique<InertialInitializer>(
+        inertial_init_options(opt), cam.T_BC, 0.5 * (cam.intrinsics(0) + cam.intrinsics(1)), opt.imu.gravity_mag);
   if (uses_fvon(opt.td.mode))
     fvon_ = std::make_unique<FvonVelocityProvider>(cam, fvon_options(opt.ton));
   td_model_ = make_td_model(opt_, [this](int64_t t_cam_ns) {
@@ -150,8 +193,8 @@ void VioManager::on_imu(const ov_core::ImuData &m) {
   propagator_.feed_imu(m);
   if (!initialized_) {
     init_imu_.push_back(m);
-    while (init_imu_.size() > 2 &&
-           init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns > ov_core::s_to_ns(opt_.init.window_s + 1.0))
+    while (init_imu_.size() > 2 && init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns >
+                                       ov_core::s_to_ns(std::max(opt_.init.window_s, opt_.init.dyn_window_s) + 1.0))
       init_imu_.pop_front();
   }
 }
@@ -162,17 +205,30 @@ void VioManager::on_image(const ov_core::ImageEntry &e) {
     return;
   }
   const auto t0 = Clock::now();
-  cv::Mat gray = image_source_ ? image_source_(e) : cv::imread(e.path, cv::IMREAD_GRAYSCALE);
+  cv::Mat gray = image_source_ ? image_source_(e) : ov_core::load_image(e);
   if (gray.empty())
     throw ov_core::DataError(e.path, "unreadable image (listed for stamp " + std::to_string(e.t_cam_ns) + ")");
   times_.image_load += ms_since(t0);
   process_image(e.t_cam_ns, gray);
 }
 
+InitFrame VioManager::init_frame(int64_t t_cam_ns, int64_t t_imu_ns) const {
+  InitFrame f;
+  f.t_cam_ns = t_cam_ns;
+  f.t_imu_ns = t_imu_ns;
+  std::vector<const ov_core::Feature *> seen;
+  db_.features_observed_at(t_cam_ns, seen);
+  for (const auto *feat : seen)
+    if (const auto *o = feat->at(t_cam_ns))
+      f.obs.emplace_back(feat->id, o->xy);
+  return f;
+}
+
 bool VioManager::try_initialize(int64_t t_cam_ns) {
   const int64_t t_imu = t_cam_ns + ov_core::s_to_ns(td_for_image_s(t_cam_ns));
   State &s = *state_;
   const InitOptions &io = opt_.init;
+  std::optional<Eigen::Matrix<double, ImuState::kSize, ImuState::kSize>> P_imu; // a dynamic initialisation's own
   if (io.mode == InitMode::GroundTruth) {
     ov_core::StateSample g;
     if (!ov_core::interpolate_state(gt_, t_imu, g)) {
@@ -186,17 +242,18 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
     s.imu.ba = g.ba;
     init_msg_ = "initialised from ground truth";
   } else {
-    const StaticInitResult r = static_initialize(init_imu_, t_imu, io.window_s, io.max_accel_std, io.max_gyro_std);
-    if (!r.ok) {
-      init_msg_ = r.why;
+    std::optional<InitSolution> r = inertial_init_->try_initialize(init_frame(t_cam_ns, t_imu), init_imu_);
+    if (!r) {
+      init_msg_ = inertial_init_->why();
       return false;
     }
-    s.imu.R = r.R_WB;
-    s.imu.p.setZero();
-    s.imu.v.setZero();
-    s.imu.bg = r.bg;
-    s.imu.ba = r.ba;
-    init_msg_ = "static initialisation (accel std " + std::to_string(r.accel_std) + " m/s^2)";
+    s.imu.R = r->R_WB;
+    s.imu.p = r->p;
+    s.imu.v = r->v;
+    s.imu.bg = r->bg;
+    s.imu.ba = r->ba;
+    P_imu = r->P;
+    init_msg_ = r->message;
   }
   s.t_imu_ns = t_imu;
   s.imu.set_fej();
@@ -208,13 +265,39 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
   s.P.diagonal().segment<3>(ImuState::kVel).setConstant(sq(io.sigma_vel));
   s.P.diagonal().segment<3>(ImuState::kBg).setConstant(sq(io.sigma_bg));
   s.P.diagonal().segment<3>(ImuState::kBa).setConstant(sq(io.sigma_ba));
+  if (P_imu)
+    s.P.topLeftCorner<ImuState::kSize, ImuState::kSize>() = *P_imu;
   if (s.estimates_td()) {
     s.P(s.td_index, s.td_index) = sq(opt_.td.sigma_init_s);
     td_model_->initialize(s);
   }
+  add_calibration_variables();
   initialized_ = true;
   init_imu_.clear();
   return true;
+}
+
+void VioManager::add_calibration_variables() {
+  State &s = *state_;
+  const CalibrationOptions &o = opt_.calibration;
+  const auto add = [&](const Eigen::VectorXd &sigmas) {
+    return s.add_variable(Eigen::MatrixXd(sigmas.array().square().matrix().asDiagonal()));
+  };
+  if (o.extrinsics) {
+    Eigen::VectorXd sig(6);
+    sig << Eigen::Vector3d::Constant(o.sigma_ext_rot), Eigen::Vector3d::Constant(o.sigma_ext_pos);
+    s.calib.extrinsics_index = add(sig);
+  }
+  if (o.intrinsics) {
+    Eigen::VectorXd sig(8);
+    sig << o.sigma_focal_px, o.sigma_focal_px, o.sigma_center_px, o.sigma_center_px,
+        Eigen::Vector4d::Constant(o.sigma_distortion);
+    s.calib.intrinsics_index = add(sig);
+  }
+  if (o.readout)
+    s.calib.readout_index = add(Eigen::VectorXd::Constant(1, o.sigma_readout_s));
+  if (o.imu_intrinsics)
+    s.calib.imu_intrinsics_index = add(Eigen::VectorXd::Constant(12, o.sigma_imu_intrinsics));
 }
 
 void VioManager::process_image(int64_t t_cam_ns, const cv::Mat &gray) {
@@ -266,8 +349,10 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
   // The clone's t_d Jacobian needs the body rate AT the image time (interpolated reading), not the mean over the
   // last IMU interval, and not a stale value: the first clone after initialisation has no interval behind it.
   ov_core::ImuData at_image;
-  const Eigen::Vector3d w_B =
+  Eigen::Vector3d w_B =
       propagator_.reading_at(s.t_imu_ns, at_image) ? Eigen::Vector3d(at_image.wm - s.imu.bg) : propagator_.last_w_B();
+  if (s.calib.imu_intrinsics_index >= 0 && propagator_.reading_at(s.t_imu_ns, at_image))
+    w_B = s.calib.D_w * w_B; // the gyro's scale and misalignment, as the propagation applies them
   state_helper::clone(s, t_cam_ns, uses_state_relevant(opt_.td.mode), w_B, s.imu.v);
   clone_rates_[t_cam_ns] = w_B;
   s.clones.at(t_cam_ns).has_fej = opt_.update.measurement_fej;
@@ -300,6 +385,7 @@ template <typename UpdateFn> void VioManager::td_tracked_update(UpdateFn &&fn) {
   const double td0 = state_->td, v0 = state_->td_variance();
   fn();
   td_model_->after_update(td0, v0, state_->td, state_->td_variance());
+  health_.on_td_update(state_->t_imu_ns, td0, v0, state_->td, state_->td_variance());
 }
 
 void VioManager::finish_image(int64_t t_cam_ns) {
@@ -328,60 +414,60 @@ bool VioManager::is_still(int64_t t_cam_ns) const {
   return disparity[disparity.size() / 2] < opt_.zupt.max_disparity_px;
 }
 
+const VelocityProvider &VioManager::prepare_velocities(const std::vector<const ov_core::Feature *> &feats,
+                                                       std::optional<NextForFirstVelocityProvider> &with_first) {
+  const VelocityProvider *velocities = opt_.td.sir_velocity == SirVelocity::Central
+                                           ? static_cast<const VelocityProvider *>(&central_velocities_)
+                                           : &tracked_velocities_;
+  if (fvon_) {
+    fvon_->set_tracked(velocities);
+    const auto t0 = Clock::now();
+    fvon_->prepare(*state_, feats, updater_);
+    velocities = fvon_.get();
+    times_.networks += ms_since(t0);
+  }
+  // Last, so that with FVON it covers the first observations the networks could not predict (too few labels yet).
+  if (opt_.td.first_velocity != FirstVelocity::Next)
+    return *velocities;
+  with_first.emplace(*velocities);
+  return *with_first;
+}
+
 void VioManager::update_and_marginalize(int64_t t_cam_ns) {
   State &s = *state_;
   // Features the tracker lost in this frame have complete tracks; when the window is full, features seen by the
-  // oldest clone must be used now or their information about it is lost.
-  std::vector<const ov_core::Feature *> feats;
+  // oldest clone must be used now or their information about it is lost — unless they are still tracked and there
+  // is room for SLAM features: then they become landmarks in the state instead (delayed initialisation below).
+  std::vector<const ov_core::Feature *> feats, slam_init;
   db_.lost_features(t_cam_ns, feats);
   const bool window_full = static_cast<int>(s.clones.size()) > opt_.update.max_clones;
   int64_t oldest = s.clones.begin()->first;
   if (window_full) {
     std::vector<const ov_core::Feature *> old;
     db_.features_observed_at(oldest, old);
-    feats.insert(feats.end(), old.begin(), old.end());
+    int room = std::min(opt_.slam.max_features - static_cast<int>(s.landmarks.size()), opt_.slam.max_init_per_frame);
+    for (const auto *f : old) {
+      if (room > 0 && f->newest().t_cam_ns == t_cam_ns && !s.landmarks.count(f->id)) {
+        slam_init.push_back(f);
+        --room;
+      } else {
+        feats.push_back(f);
+      }
+    }
     std::sort(feats.begin(), feats.end(), [](const auto *a, const auto *b) { return a->id < b->id; });
     feats.erase(std::unique(feats.begin(), feats.end()), feats.end());
   }
-  if (!feats.empty()) {
-    std::vector<ResidualRecord> records;
-    const VelocityProvider *velocities = opt_.td.sir_velocity == SirVelocity::Central
-                                             ? static_cast<const VelocityProvider *>(&central_velocities_)
-                                             : &tracked_velocities_;
-    if (fvon_) {
-      fvon_->set_tracked(velocities);
-      const auto t0 = Clock::now();
-      fvon_->prepare(s, feats, updater_);
-      velocities = fvon_.get();
-      times_.networks += ms_since(t0);
-    }
-    // Last, so that with FVON it covers the first observations the networks could not predict (too few labels yet).
-    const NextForFirstVelocityProvider with_first(*velocities);
-    if (opt_.td.first_velocity == FirstVelocity::Next)
-      velocities = &with_first;
-    if (velocity_log_)
-      log_velocities(feats, *velocities);
-    UpdateStats st;
-    td_tracked_update(
-        [&] { st = updater_.update(s, feats, td_observation(opt_.td.mode), *velocities, log_ ? &records : nullptr); });
-    ++counters_.updates;
-    counters_.features_used += st.features_used;
-    counters_.features_gated += st.gated_chi2;
-    counters_.features_rejected += st.rejected_triangulation;
-    for (int k = 0; k < kNumVelocitySources; ++k) {
-      counters_.td_rows += st.td_obs_used[k];
-      counters_.td_rows_by_source[k] += st.td_obs_used[k];
-    }
-    counters_.td_features += st.td_features_used;
-    if (log_)
-      log_->write(records);
-    // A feature used in an update must not be used again: its information is in the state now.
-    std::vector<size_t> ids;
-    ids.reserve(feats.size());
-    for (const auto *f : feats)
-      ids.push_back(f->id);
-    for (size_t id : ids)
-      db_.remove(id);
+  // A landmark's observations are its own: the MSCKF never sees them.
+  feats.erase(std::remove_if(feats.begin(), feats.end(), [&](const auto *f) { return s.landmarks.count(f->id) > 0; }),
+              feats.end());
+  std::optional<NextForFirstVelocityProvider> with_first;
+  const bool any_slam = !s.landmarks.empty() || !slam_init.empty();
+  if (!feats.empty() || any_slam) {
+    const VelocityProvider &velocities = prepare_velocities(feats, with_first);
+    if (!feats.empty())
+      msckf_update(feats, velocities);
+    if (any_slam)
+      slam_update(t_cam_ns, slam_init, velocities);
   }
   if (window_full) {
     state_helper::marginalize_clone(s, oldest);
@@ -390,8 +476,66 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
   }
 }
 
+void VioManager::msckf_update(const std::vector<const ov_core::Feature *> &feats, const VelocityProvider &velocities) {
+  State &s = *state_;
+  std::vector<ResidualRecord> records;
+  if (velocity_log_)
+    log_velocities(feats, velocities);
+  UpdateStats st;
+  td_tracked_update(
+      [&] { st = updater_.update(s, feats, td_observation(opt_.td.mode), velocities, log_ ? &records : nullptr); });
+  ++counters_.updates;
+  health_.on_update(s.t_imu_ns, st);
+  counters_.features_used += st.features_used;
+  counters_.features_gated += st.gated_chi2;
+  counters_.features_rejected += st.rejected_triangulation;
+  for (int k = 0; k < kNumVelocitySources; ++k) {
+    counters_.td_rows += st.td_obs_used[k];
+    counters_.td_rows_by_source[k] += st.td_obs_used[k];
+  }
+  counters_.td_features += st.td_features_used;
+  if (log_)
+    log_->write(records);
+  // A feature used in an update must not be used again: its information is in the state now.
+  std::vector<size_t> ids;
+  ids.reserve(feats.size());
+  for (const auto *f : feats)
+    ids.push_back(f->id);
+  for (size_t id : ids)
+    db_.remove(id);
+}
+
+void VioManager::slam_update(int64_t t_cam_ns, const std::vector<const ov_core::Feature *> &init,
+                             const VelocityProvider &velocities) {
+  State &s = *state_;
+  const TdObservation td_obs = td_observation(opt_.td.mode);
+  SlamStats st;
+  // OpenVINS' order: existing landmarks with this image's observation, then new ones from the window.
+  std::vector<size_t> lost;
+  td_tracked_update([&] { slam_.update(s, db_, t_cam_ns, td_obs, velocities, st, lost); });
+  if (!init.empty())
+    td_tracked_update([&] { slam_.initialize(s, init, t_cam_ns, td_obs, velocities, st); });
+  // Landmarks the tracker lost in this image (or that left the camera's depth range) leave the state.
+  for (const auto &[id, l] : s.landmarks) {
+    const ov_core::Feature *f = db_.get(id);
+    if (!f || f->newest().t_cam_ns != t_cam_ns)
+      lost.push_back(id);
+  }
+  std::sort(lost.begin(), lost.end());
+  lost.erase(std::unique(lost.begin(), lost.end()), lost.end());
+  for (size_t id : lost) {
+    state_helper::marginalize_landmark(s, id);
+    db_.remove(id);
+  }
+  st.marginalised = static_cast<int>(lost.size());
+  counters_.slam_initialised += st.initialised;
+  counters_.slam_updates += st.updated;
+  counters_.slam_gated += st.gated;
+}
+
 ov_core::StateSample VioManager::snapshot() const {
   const State &s = *state_;
+  health_.check(s); // no row leaves the filter without it: a diverged estimate is an error, not an answer
   ov_core::StateSample o;
   o.t_ns = s.t_imu_ns;
   o.p = s.imu.p;

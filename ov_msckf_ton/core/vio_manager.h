@@ -6,7 +6,9 @@
 #include "ov_core/io/velocity_log.h"
 #include "ov_core/track/feature_database.h"
 #include "ov_core/track/track_klt.h"
+#include "ov_msckf_ton/core/filter_health.h"
 #include "ov_msckf_ton/core/vio_options.h"
+#include "ov_msckf_ton/init/inertial_init.h"
 #include "ov_msckf_ton/state/propagator.h"
 #include "ov_msckf_ton/state/state.h"
 #include "ov_msckf_ton/td/td_model.h"
@@ -15,6 +17,7 @@
 #include "ov_msckf_ton/ton/tpn_driver.h"
 #include "ov_msckf_ton/update/residual_log.h"
 #include "ov_msckf_ton/update/updater_msckf.h"
+#include "ov_msckf_ton/update/updater_slam.h"
 
 #include <array>
 #include <chrono>
@@ -22,6 +25,7 @@
 #include <map>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 namespace ov_msckf_ton {
@@ -40,8 +44,9 @@ struct VioCounters {
   /// from ITS/F2F: a new feature's first observation has no tracked velocity, and without one none of its rows
   /// may carry t_d (updater_msckf.cpp).
   std::array<long, kNumVelocitySources> td_rows_by_source{};
-  long td_features = 0; ///< used features whose rows carried t_d
-  long zupts = 0;       ///< frames handled by a zero-velocity update
+  long td_features = 0;                                        ///< used features whose rows carried t_d
+  long zupts = 0;                                              ///< frames handled by a zero-velocity update
+  long slam_initialised = 0, slam_updates = 0, slam_gated = 0; ///< SLAM landmarks initialised, observations used
 };
 
 class VioManager : public ov_core::ReplayConsumer {
@@ -59,8 +64,8 @@ public:
   /// Per observation of every feature an update uses, each rule's and network's image velocity (for
   /// `ovton velocities`). In modes fvon/ton it makes FVON predict with both networks (on a copy; same trajectory).
   void set_velocity_log(ov_core::VelocityLogWriter *log);
-  /// Where on_image gets its decoded image (e.g. an ov_core::ImagePrefetcher); default cv::imread of the entry's path.
-  /// An empty image is reported as unreadable, naming the file.
+  /// Where on_image gets its decoded image (e.g. an ov_core::ImagePrefetcher); default ov_core::load_image (the file,
+  /// or the bag message). An empty image is reported as unreadable, naming the file.
   using ImageSource = std::function<cv::Mat(const ov_core::ImageEntry &)>;
   void set_image_source(ImageSource src) { image_source_ = std::move(src); }
 
@@ -86,11 +91,25 @@ public:
   const TdModel &td_model() const { return *td_model_; }
   /// TPN driver (process tpn: modes tpn, ton), nullptr otherwise.
   const TpnDriver *tpn() const;
+  /// Update acceptance so far; every state handed out has passed its check (filter_health.h).
+  const FilterHealth &health() const { return health_; }
 
 private:
   void process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time_point t_start);
   bool try_initialize(int64_t t_cam_ns);
+  /// The calibration variables the options ask for, with their priors (at initialisation, before any clone).
+  void add_calibration_variables();
+  /// The features the tracker has in this image, for the initialiser (it keeps its own window of them).
+  InitFrame init_frame(int64_t t_cam_ns, int64_t t_imu_ns) const;
   void update_and_marginalize(int64_t t_cam_ns);
+  /// The velocities every update of this image uses: the configured rule for tracked observations, FVON's
+  /// predictions (fvon/ton) and the next observation's for first ones (first_velocity next).
+  const VelocityProvider &prepare_velocities(const std::vector<const ov_core::Feature *> &feats,
+                                             std::optional<NextForFirstVelocityProvider> &with_first);
+  void msckf_update(const std::vector<const ov_core::Feature *> &feats, const VelocityProvider &velocities);
+  /// SLAM landmarks: update with this image, initialise `init` from the window, marginalise the lost ones.
+  void slam_update(int64_t t_cam_ns, const std::vector<const ov_core::Feature *> &init,
+                   const VelocityProvider &velocities);
   /// Median feature motion since the previous frame is below the ZUPT threshold.
   bool is_still(int64_t t_cam_ns) const;
   /// Propagates the IMU state and t_d (through its model) to the image's IMU-clock time.
@@ -107,8 +126,10 @@ private:
   ov_core::FeatureDatabase db_;
   Propagator propagator_;
   UpdaterMSCKF updater_;
+  UpdaterSLAM slam_;
   std::unique_ptr<State> state_;
   std::deque<ov_core::ImuData> init_imu_;
+  std::unique_ptr<InertialInitializer> inertial_init_; ///< every initialisation but ground truth
 
   std::function<double(int64_t)> td_oracle_;
   std::vector<ov_core::StateSample> gt_;
@@ -129,6 +150,7 @@ private:
   std::map<int64_t, Eigen::Vector3d> clone_rates_; ///< body rate at each clone, for the residual log
   StageTimes times_;
   VioCounters counters_;
+  FilterHealth health_;
 };
 
 } // namespace ov_msckf_ton

@@ -1,4 +1,5 @@
 #include "ov_msckf_ton/core/vio_options.h"
+#include "ov_core/io/yaml_file.h"
 #include "ov_core/types/errors.h"
 
 #include <yaml-cpp/yaml.h>
@@ -101,7 +102,9 @@ std::vector<Field> fields(VioOptions &o) {
   auto &up = o.update;
   auto &tr = o.track;
   auto &in = o.init;
-  const char *T = "time_offset", *N = "ton", *U = "update", *Z = "zupt", *K = "tracker", *I = "imu", *S = "init";
+  const char *T = "time_offset", *N = "ton", *U = "update", *L = "slam", *C = "calibration", *Z = "zupt",
+             *K = "tracker", *I = "imu", *S = "init";
+  auto &cal = o.calibration;
   return {
       enum_field<TdMode>(T, "mode", td.mode, parse_td_mode, [](TdMode m) { return to_string(m); }),
       enum_field<TdProcess>(T, "process", td.process, parse_td_process, [](TdProcess p) { return to_string(p); }),
@@ -115,6 +118,8 @@ std::vector<Field> fields(VioOptions &o) {
       field(T, "adaptive_noise", td.adaptive_noise),
       enum_field<SirVelocity>(T, "sir_velocity", td.sir_velocity, parser(kSirVelocity), namer(kSirVelocity)),
       enum_field<FirstVelocity>(T, "first_velocity", td.first_velocity, parser(kFirstVelocity), namer(kFirstVelocity)),
+      field(T, "search", td.search),
+      field(T, "search_range_s", td.search_range_s),
       field(N, "fvon_max_labels", ton.fvon_max_labels),
       field(N, "fvon_min_f2f_labels", ton.fvon_min_f2f_labels),
       field(N, "fvon_gate_px_s", ton.fvon_gate_px_s),
@@ -135,6 +140,22 @@ std::vector<Field> fields(VioOptions &o) {
       field(U, "sigma_px", up.sigma_px),
       field(U, "chi2_multiplier", up.chi2_multiplier),
       field(U, "max_features", up.max_features),
+      field(L, "max_features", o.slam.max_features),
+      field(L, "max_init_per_frame", o.slam.max_init_per_frame),
+      field(L, "chi2_multiplier", o.slam.chi2_multiplier),
+      field(L, "sigma_px", o.slam.sigma_px),
+      field(C, "extrinsics", cal.extrinsics),
+      field(C, "sigma_ext_rot", cal.sigma_ext_rot),
+      field(C, "sigma_ext_pos", cal.sigma_ext_pos),
+      field(C, "intrinsics", cal.intrinsics),
+      field(C, "sigma_focal_px", cal.sigma_focal_px),
+      field(C, "sigma_center_px", cal.sigma_center_px),
+      field(C, "sigma_distortion", cal.sigma_distortion),
+      field(C, "readout", cal.readout),
+      field(C, "readout_s", cal.readout_s),
+      field(C, "sigma_readout_s", cal.sigma_readout_s),
+      field(C, "imu_intrinsics", cal.imu_intrinsics),
+      field(C, "sigma_imu_intrinsics", cal.sigma_imu_intrinsics),
       field(Z, "enabled", o.zupt.enabled),
       field(Z, "max_disparity_px", o.zupt.max_disparity_px),
       field(Z, "sigma_v", o.zupt.sigma_v),
@@ -161,6 +182,18 @@ std::vector<Field> fields(VioOptions &o) {
       field(S, "sigma_vel", in.sigma_vel),
       field(S, "sigma_bg", in.sigma_bg),
       field(S, "sigma_ba", in.sigma_ba),
+      field("health", "enabled", o.health.enabled),
+      field(S, "still_window_s", in.still_window_s),
+      field(S, "still_max_disparity_px", in.still_max_disparity_px),
+      field(S, "dyn_window_s", in.dyn_window_s),
+      field(S, "dyn_min_features", in.dyn_min_features),
+      field(S, "dyn_max_features", in.dyn_max_features),
+      field(S, "dyn_min_observations", in.dyn_min_observations),
+      field(S, "dyn_min_disparity_px", in.dyn_min_disparity_px),
+      field(S, "dyn_max_rms_px", in.dyn_max_rms_px),
+      field(S, "dyn_max_sigma_rollpitch_deg", in.dyn_max_sigma_rollpitch_deg),
+      field(S, "dyn_max_sigma_vel", in.dyn_max_sigma_vel),
+      field(S, "dyn_sigma_inflation", in.dyn_sigma_inflation),
   };
 }
 
@@ -171,16 +204,22 @@ void require(bool ok, const std::string &what) {
 
 } // namespace
 
+namespace {
+const std::vector<std::pair<const char *, InitMode>> kInitModes = {{"static", InitMode::Static},
+                                                                   {"groundtruth", InitMode::GroundTruth},
+                                                                   {"auto", InitMode::Auto},
+                                                                   {"dynamic", InitMode::Dynamic}};
+} // namespace
+
 std::string to_string(InitMode m) {
-  return m == InitMode::Static ? "static" : "groundtruth";
+  return namer(kInitModes)(m);
 }
 
 InitMode parse_init_mode(const std::string &s) {
-  if (s == "static")
-    return InitMode::Static;
-  if (s == "groundtruth")
-    return InitMode::GroundTruth;
-  throw ov_core::UsageError("unknown initialisation '" + s + "' (expected static or groundtruth)");
+  for (const auto &[name, m] : kInitModes)
+    if (s == name)
+      return m;
+  throw ov_core::UsageError("unknown initialisation '" + s + "' (expected static, groundtruth, auto or dynamic)");
 }
 
 void apply_mode_spec(const ModeSpec &spec, VioOptions &o) {
@@ -209,15 +248,34 @@ void validate_vio_options(const VioOptions &o) {
   require(u.sigma_px > 0, "update.sigma_px must be > 0");
   require(u.chi2_multiplier > 0, "update.chi2_multiplier must be > 0");
   require(u.max_features >= 0, "update.max_features must be >= 0 (0 = no limit)");
+  require(o.slam.max_features >= 0 && o.slam.max_init_per_frame >= 0 && o.slam.chi2_multiplier > 0,
+          "slam.max_features and slam.max_init_per_frame >= 0, slam.chi2_multiplier > 0");
+  const auto &c = o.calibration;
+  require(c.sigma_ext_rot > 0 && c.sigma_ext_pos > 0 && c.sigma_focal_px > 0 && c.sigma_center_px > 0 &&
+              c.sigma_distortion > 0 && c.sigma_readout_s > 0 && c.sigma_imu_intrinsics > 0,
+          "calibration sigmas must be > 0");
+  require(std::isfinite(c.readout_s) && std::abs(c.readout_s) < 0.1, "calibration.readout_s must be in (-0.1, 0.1) s");
   require(o.zupt.max_disparity_px >= 0 && o.zupt.sigma_v > 0, "zupt.max_disparity_px >= 0 and zupt.sigma_v > 0");
   require(o.imu.noise_multiplier > 0, "imu.noise_multiplier must be > 0");
+  // Physical ranges: gravity 0 would let the accel bias absorb 9.8 m/s^2.
   require(o.imu.gravity_mag > 0, "imu.gravity_mag must be > 0");
+  require(o.imu.gravity_mag <= 100, "imu.gravity_mag must be <= 100 m/s^2");
+  require(std::abs(td.init_s) <= 10, "time_offset.init_s must be within +-10 s");
+  require(td.search_range_s > 0 && td.search_range_s <= 1, "time_offset.search_range_s must be in (0, 1]");
   const auto &i = o.init;
   require(i.window_s > 0, "init.window_s must be > 0");
+  require(i.window_s <= 60, "init.window_s must be <= 60 s");
   require(i.max_accel_std > 0 && i.max_gyro_std > 0, "init.max_accel_std and init.max_gyro_std must be > 0");
   require(i.sigma_rollpitch > 0 && i.sigma_yaw > 0 && i.sigma_pos > 0 && i.sigma_vel > 0 && i.sigma_bg > 0 &&
               i.sigma_ba > 0,
           "init sigmas must be > 0");
+  require(i.still_window_s > 0 && i.still_max_disparity_px > 0 && i.dyn_window_s > 0,
+          "init.still_window_s, still_max_disparity_px and dyn_window_s must be > 0");
+  require(i.dyn_min_features >= 3 && i.dyn_max_features >= i.dyn_min_features && i.dyn_min_observations >= 2,
+          "init.dyn_min_features >= 3, dyn_max_features >= dyn_min_features, dyn_min_observations >= 2");
+  require(i.dyn_min_disparity_px >= 0 && i.dyn_max_rms_px > 0 && i.dyn_max_sigma_rollpitch_deg > 0 &&
+              i.dyn_max_sigma_vel > 0 && i.dyn_sigma_inflation > 0,
+          "init.dyn_* thresholds must be > 0");
   const auto &t = o.track;
   require(t.num_features > 0 && t.grid_x > 0 && t.grid_y > 0, "tracker.num_features, grid_x and grid_y must be > 0");
   require(t.win_size >= 3 && t.pyr_levels >= 0 && t.min_px_dist >= 0 && t.ransac_px > 0,
@@ -242,21 +300,22 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
   const std::vector<Field> table = fields(o);
   std::set<std::string> sections_seen;
   for (const auto &sec : root) {
-    const std::string section = sec.first.as<std::string>();
+    const std::string section = ov_core::yaml_as<std::string>(sec.first, file, "section name");
     if (!sections_seen.insert(section).second)
       throw ov_core::DataError(file, line_of(sec.first), "duplicate section '" + section + "'");
     bool known = false;
     for (const Field &f : table)
       known = known || section == f.section;
     if (!known)
-      throw ov_core::DataError(file, line_of(sec.first),
-                               "unknown section '" + section +
-                                   "' (expected time_offset, ton, update, zupt, tracker, imu or init)");
+      throw ov_core::DataError(
+          file, line_of(sec.first),
+          "unknown section '" + section +
+              "' (expected time_offset, ton, update, slam, calibration, zupt, tracker, imu, init or health)");
     if (!sec.second.IsMap())
       throw ov_core::DataError(file, line_of(sec.first), "section '" + section + "' must be a mapping of keys");
     std::set<std::string> keys_seen;
     for (const auto &kv : sec.second) {
-      const std::string key = kv.first.as<std::string>();
+      const std::string key = ov_core::yaml_as<std::string>(kv.first, file, "key");
       if (!keys_seen.insert(key).second)
         throw ov_core::DataError(file, line_of(kv.first), "duplicate key '" + section + "." + key + "'");
       const Field *match = nullptr;

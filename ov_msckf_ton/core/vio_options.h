@@ -10,7 +10,9 @@
 
 namespace ov_msckf_ton {
 
-enum class InitMode { Static, GroundTruth };
+/// Static: from a still start. GroundTruth: from the dataset's truth (simulations). Dynamic: from a moving start
+/// (init/dynamic_init.h). Auto: static when the images are still, dynamic when they move (init/inertial_init.h).
+enum class InitMode { Static, GroundTruth, Auto, Dynamic };
 /// Image-plane velocity of tracked observations: Backward is the paper's eq. 2 (previous observation); Central
 /// leaves the observation's own noise out (CentralVelocityProvider; not the paper's SIR).
 enum class SirVelocity { Backward, Central };
@@ -45,6 +47,11 @@ struct TimeOffsetOptions {
   /// start.
   SirVelocity sir_velocity = SirVelocity::Central;
   FirstVelocity first_velocity = FirstVelocity::Next;
+  /// Before the filter starts, in the modes that estimate t_d: search init_s ± search_range_s with the images' rotation
+  /// rate against the gyro (init/td_search.h) and start from what it finds. Started 100+ ms off, the filter diverges
+  /// (docs/robustness.md); within a few ms it converges in about a second.
+  bool search = true;
+  double search_range_s = 0.2;
 };
 
 /// The paper's networks (Table I), trained online. Epochs are per training call, i.e. per frame; lower them to
@@ -84,6 +91,32 @@ struct UpdateOptions {
   int max_features = 80;         ///< per update
 };
 
+/// SLAM features (update/updater_slam.h): features tracked through the whole window become landmarks in the state.
+struct SlamOptions {
+  int max_features = 0;        ///< landmarks in the state at most (0: MSCKF only; OpenVINS' default is 50)
+  int max_init_per_frame = 10; ///< delayed initialisations per image at most
+  double chi2_multiplier = 1.0;
+  double sigma_px = 0.0; ///< pixel noise of a landmark observation; 0 = update.sigma_px
+};
+
+/// Online calibration (OpenVINS-style): each estimated quantity becomes a state variable with the prior sigma given
+/// here, starting from the dataset's calibration. Off by default: each costs observability time and, where the
+/// calibration is right, a little accuracy (measured in docs/results.md).
+struct CalibrationOptions {
+  bool extrinsics = false;      ///< camera–IMU rotation and translation
+  double sigma_ext_rot = 0.01;  ///< [rad]
+  double sigma_ext_pos = 0.01;  ///< [m]
+  bool intrinsics = false;      ///< focal lengths, principal point, distortion
+  double sigma_focal_px = 2.0;  ///< fu, fv [px]
+  double sigma_center_px = 2.0; ///< cu, cv [px]
+  double sigma_distortion = 0.005;
+  bool readout = false;   ///< rolling-shutter readout time
+  double readout_s = 0.0; ///< known (or initial) readout [s]: row v is seen at t + t_d + (v/H − ½)·t_r
+  double sigma_readout_s = 0.01;
+  bool imu_intrinsics = false; ///< gyro and accelerometer scale and misalignment (lower-triangular D_w, D_a)
+  double sigma_imu_intrinsics = 0.01;
+};
+
 /// Zero-velocity update: when the features do not move on the image the platform is taken as still, the state
 /// gets a v = 0 measurement instead of a clone (no parallax would make every MSCKF feature untriangulable).
 struct ZuptOptions {
@@ -105,16 +138,33 @@ struct InitOptions {
   double max_gyro_std = 0.1;  ///< rad/s (EuRoC idle: ~0.04)
   double sigma_rollpitch = 0.01, sigma_yaw = 1e-4, sigma_pos = 1e-4, sigma_vel = 0.01;
   double sigma_bg = 0.005, sigma_ba = 0.05;
+  /// auto: the images are still when their median feature motion over still_window_s stays below this [px].
+  double still_window_s = 0.3, still_max_disparity_px = 2.0;
+  /// Dynamic initialisation (init/dynamic_init.h): window, features, motion needed, and the quality it must reach.
+  double dyn_window_s = 1.0;
+  int dyn_min_features = 15, dyn_max_features = 60, dyn_min_observations = 5;
+  double dyn_min_disparity_px = 8.0, dyn_max_rms_px = 1.5;
+  double dyn_max_sigma_rollpitch_deg = 0.5, dyn_max_sigma_vel = 0.04;
+  double dyn_sigma_inflation = 2.0; ///< the covariance handed to the filter, in sigmas above the fit's
+};
+
+/// Stop the run (ov_core::EstimatorFailure) when the estimate has evidently diverged (core/filter_health.h). Off only
+/// to watch a divergence to its end; a non-finite state stops the run either way.
+struct HealthOptions {
+  bool enabled = true;
 };
 
 struct VioOptions {
   TimeOffsetOptions td;
   TonOptions ton;
   UpdateOptions update;
+  SlamOptions slam;
+  CalibrationOptions calibration;
   ZuptOptions zupt;
   ov_core::TrackKLTOptions track; ///< YAML section `tracker`
   ImuOptions imu;
   InitOptions init;
+  HealthOptions health;
   std::string source; ///< file the options came from, "" for defaults
 };
 
@@ -130,6 +180,6 @@ void print_vio_options(const VioOptions &o, std::ostream &os);
 void validate_vio_options(const VioOptions &o);
 
 std::string to_string(InitMode m);
-InitMode parse_init_mode(const std::string &s); ///< static | groundtruth; throws ov_core::UsageError
+InitMode parse_init_mode(const std::string &s); ///< static | groundtruth | auto | dynamic; throws UsageError
 
 } // namespace ov_msckf_ton

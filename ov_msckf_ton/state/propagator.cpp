@@ -11,10 +11,14 @@ using ov_core::skew;
 using ov_core::so3_exp;
 using ov_core::so3_jr;
 
-void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt,
-              const Eigen::Vector3d &gravity, const ImuNoise &noise, ImuState &out, Mat15 *Phi, Mat15 *Q,
-              bool use_fej) {
-  const Eigen::Vector3d w = wm - x.bg, a = am - x.ba;
+namespace {
+
+/// The step's body, shared by the plain and the calibrated form; D == nullptr means identity (and no extra work).
+void imu_step_impl(const ImuState &x, const ImuIntrinsics *D, const Eigen::Vector3d &wm, const Eigen::Vector3d &am,
+                   double dt, const Eigen::Vector3d &gravity, const ImuNoise &noise, ImuState &out, Mat15 *Phi,
+                   Mat15 *Q, Mat15x12 *Phi_cal, bool use_fej) {
+  const Eigen::Vector3d u_w = wm - x.bg, u_a = am - x.ba;
+  const Eigen::Vector3d w = D ? Eigen::Vector3d(D->D_w * u_w) : u_w, a = D ? Eigen::Vector3d(D->D_a * u_a) : u_a;
   const Eigen::Matrix3d dR = so3_exp(w * dt), dR_half = so3_exp(0.5 * w * dt);
   const Eigen::Matrix3d R_mid = x.R * dR_half;
   const Eigen::Vector3d acc_W = R_mid * a + gravity;
@@ -22,7 +26,7 @@ void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3
   out.R = x.R * dR;
   out.v = x.v + acc_W * dt;
   out.p = x.p + x.v * dt + 0.5 * acc_W * dt * dt;
-  if (!Phi && !Q)
+  if (!Phi && !Q && !Phi_cal)
     return;
 
   // World-frame rotation error: Exp(δθ) R a ≈ R a − [R a]× δθ. The rotated specific force is written as the state
@@ -39,14 +43,31 @@ void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3
   constexpr int T = ImuState::kTheta, P = ImuState::kPos, V = ImuState::kVel, G = ImuState::kBg, A = ImuState::kBa;
 
   Mat15 F = Mat15::Identity();
-  F.block<3, 3>(T, G) = -out.R * so3_jr(w * dt) * dt;
+  // With the intrinsics, a bias error enters through D (δω = −D_w δb_g): its columns are the plain ones times D.
+  const Eigen::Matrix3d dTh_dw = out.R * so3_jr(w * dt) * dt; // ∂δθ'/∂δω
+  F.block<3, 3>(T, G) = D ? Eigen::Matrix3d(-dTh_dw * D->D_w) : Eigen::Matrix3d(-dTh_dw);
   F.block<3, 3>(V, T) = -skew(dv);
-  F.block<3, 3>(V, G) = dAcc_dbg * dt;
-  F.block<3, 3>(V, A) = dAcc_dba * dt;
+  const Eigen::Matrix3d vg = D ? Eigen::Matrix3d(dAcc_dbg * D->D_w) : dAcc_dbg;
+  const Eigen::Matrix3d va = D ? Eigen::Matrix3d(dAcc_dba * D->D_a) : dAcc_dba;
+  F.block<3, 3>(V, G) = vg * dt;
+  F.block<3, 3>(V, A) = va * dt;
   F.block<3, 3>(P, V) = Eigen::Matrix3d::Identity() * dt;
   F.block<3, 3>(P, T) = -skew(dp);
-  F.block<3, 3>(P, G) = 0.5 * dAcc_dbg * dt * dt;
-  F.block<3, 3>(P, A) = 0.5 * dAcc_dba * dt * dt;
+  F.block<3, 3>(P, G) = 0.5 * vg * dt * dt;
+  F.block<3, 3>(P, A) = 0.5 * va * dt * dt;
+  if (Phi_cal) {
+    // δD_w's entry (i, j) changes ω by e_i·u_w(j), i.e. like δω = e_i u_w(j) (= −δb_g through the plain columns);
+    // likewise δD_a through a (= −δb_a).
+    Phi_cal->setZero();
+    for (int k = 0; k < 6; ++k) {
+      const int i = kTriRow[k], j = kTriCol[k];
+      Phi_cal->block<3, 1>(T, k) = dTh_dw.col(i) * u_w(j);
+      Phi_cal->block<3, 1>(V, k) = -dAcc_dbg.col(i) * u_w(j) * dt;
+      Phi_cal->block<3, 1>(P, k) = -0.5 * dAcc_dbg.col(i) * u_w(j) * dt * dt;
+      Phi_cal->block<3, 1>(V, 6 + k) = -dAcc_dba.col(i) * u_a(j) * dt;
+      Phi_cal->block<3, 1>(P, 6 + k) = -0.5 * dAcc_dba.col(i) * u_a(j) * dt * dt;
+    }
+  }
   if (Phi)
     *Phi = F;
   if (Q) {
@@ -65,6 +86,20 @@ void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3
     Q->block<3, 3>(G, G).diagonal().array() += noise.sigma_wb * noise.sigma_wb * dt;
     Q->block<3, 3>(A, A).diagonal().array() += noise.sigma_ab * noise.sigma_ab * dt;
   }
+}
+
+} // namespace
+
+void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt,
+              const Eigen::Vector3d &gravity, const ImuNoise &noise, ImuState &out, Mat15 *Phi, Mat15 *Q,
+              bool use_fej) {
+  imu_step_impl(x, nullptr, wm, am, dt, gravity, noise, out, Phi, Q, nullptr, use_fej);
+}
+
+void imu_step_calibrated(const ImuState &x, const ImuIntrinsics &D, const Eigen::Vector3d &wm,
+                         const Eigen::Vector3d &am, double dt, const Eigen::Vector3d &gravity, const ImuNoise &noise,
+                         ImuState &out, Mat15 *Phi, Mat15 *Q, Mat15x12 *Phi_cal, bool use_fej) {
+  imu_step_impl(x, &D, wm, am, dt, gravity, noise, out, Phi, Q, Phi_cal, use_fej);
 }
 
 Propagator::Propagator(const ImuNoise &noise, double gravity_mag) : noise_(noise), gravity_(0, 0, -gravity_mag) {}
@@ -122,6 +157,13 @@ template <typename StepFn> bool Propagator::integrate(int64_t t_from, int64_t t_
 bool Propagator::propagate(State &s, int64_t t_to_ns) {
   ImuState x = s.imu;
   Mat15 Phi_total = Mat15::Identity(), Q_total = Mat15::Zero();
+  // With IMU intrinsics in the state, the step also depends on them: x' = Φ x + Γ δD, accumulated as
+  // Γ_total <- Φ Γ_total + Γ (the intrinsics are constants).
+  const bool cal = s.calib.imu_intrinsics_index >= 0;
+  ImuIntrinsics D;
+  D.D_w = s.calib.D_w;
+  D.D_a = s.calib.D_a;
+  Mat15x12 G_total = Mat15x12::Zero();
   Eigen::Vector3d w_last = last_w_B_;
   // FEJ: the first step starts from the state an update may have moved; its Jacobian uses the first estimates.
   // The following steps start from states no update has touched, where first and current estimates agree.
@@ -129,17 +171,27 @@ bool Propagator::propagate(State &s, int64_t t_to_ns) {
   const bool ok = integrate(s.t_imu_ns, t_to_ns, [&](const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt) {
     Mat15 Phi, Q;
     ImuState next;
-    imu_step(x, wm, am, dt, gravity_, noise_, next, &Phi, &Q, first && use_fej_);
+    if (cal) {
+      Mat15x12 G;
+      imu_step_calibrated(x, D, wm, am, dt, gravity_, noise_, next, &Phi, &Q, &G, first && use_fej_);
+      G_total = Phi * G_total + G;
+      w_last = D.D_w * (wm - x.bg);
+    } else {
+      imu_step(x, wm, am, dt, gravity_, noise_, next, &Phi, &Q, first && use_fej_);
+      w_last = wm - x.bg;
+    }
     first = false;
     next.set_fej();
     Phi_total = Phi * Phi_total;
     Q_total = Phi * Q_total * Phi.transpose() + Q;
-    w_last = wm - x.bg;
     x = next;
   });
   if (!ok)
     return false;
-  state_helper::propagate_covariance(s, Phi_total, Q_total);
+  if (cal)
+    state_helper::propagate_covariance(s, Phi_total, Q_total, G_total, s.calib.imu_intrinsics_index);
+  else
+    state_helper::propagate_covariance(s, Phi_total, Q_total);
   s.imu = x; // x carries the propagated values as its first estimates (set_fej in each step)
   s.t_imu_ns = t_to_ns;
   last_w_B_ = w_last;
@@ -148,9 +200,16 @@ bool Propagator::propagate(State &s, int64_t t_to_ns) {
 
 bool Propagator::predict_mean(const State &s, int64_t t_to_ns, ImuState &out) const {
   ImuState x = s.imu;
+  ImuIntrinsics D;
+  D.D_w = s.calib.D_w;
+  D.D_a = s.calib.D_a;
+  const bool cal = s.calib.imu_intrinsics_index >= 0;
   const bool ok = integrate(s.t_imu_ns, t_to_ns, [&](const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt) {
     ImuState next;
-    imu_step(x, wm, am, dt, gravity_, noise_, next, nullptr, nullptr);
+    if (cal)
+      imu_step_calibrated(x, D, wm, am, dt, gravity_, noise_, next, nullptr, nullptr, nullptr);
+    else
+      imu_step(x, wm, am, dt, gravity_, noise_, next, nullptr, nullptr);
     x = next;
   });
   if (ok)

@@ -28,6 +28,18 @@ void imu_step(const ImuState &x, const Eigen::Vector3d &wm, const Eigen::Vector3
               const Eigen::Vector3d &gravity, const ImuNoise &noise, ImuState &out, Mat15 *Phi, Mat15 *Q,
               bool use_fej = false);
 
+/// IMU scale and misalignment (online calibration): ω = D_w (ω_m − b_g), a = D_a (a_m − b_a), D lower-triangular.
+struct ImuIntrinsics {
+  Eigen::Matrix3d D_w = Eigen::Matrix3d::Identity(), D_a = Eigen::Matrix3d::Identity();
+};
+using Mat15x12 = Eigen::Matrix<double, 15, 12>;
+
+/// imu_step with the readings corrected by `D` before use. Phi_cal, when given, is the Jacobian of the step w.r.t.
+/// the 12 lower-triangle entries of [D_w D_a] (state.h order): δω = D_w δ(−b_g) + δD_w (ω_m − b_g), likewise a.
+void imu_step_calibrated(const ImuState &x, const ImuIntrinsics &D, const Eigen::Vector3d &wm,
+                         const Eigen::Vector3d &am, double dt, const Eigen::Vector3d &gravity, const ImuNoise &noise,
+                         ImuState &out, Mat15 *Phi, Mat15 *Q, Mat15x12 *Phi_cal, bool use_fej = false);
+
 class Propagator {
 public:
   Propagator(const ImuNoise &noise, double gravity_mag = 9.81);

@@ -19,6 +19,32 @@ int State::add_variable(const Eigen::MatrixXd &prior) {
   return n;
 }
 
+void State::remove_block(int idx, int size) {
+  const int n = dim(), m = n - size;
+  // Keep [0, idx) and [idx + size, n): four contiguous blocks, no index lists.
+  Eigen::MatrixXd Pn(m, m);
+  const int tail = n - idx - size;
+  Pn.topLeftCorner(idx, idx) = P.topLeftCorner(idx, idx);
+  Pn.topRightCorner(idx, tail) = P.topRightCorner(idx, tail);
+  Pn.bottomLeftCorner(tail, idx) = P.bottomLeftCorner(tail, idx);
+  Pn.bottomRightCorner(tail, tail) = P.bottomRightCorner(tail, tail);
+  P = std::move(Pn);
+  const auto shift = [&](int &i) {
+    if (i > idx)
+      i -= size;
+  };
+  shift(td_index);
+  shift(td_rate_index);
+  shift(calib.extrinsics_index);
+  shift(calib.intrinsics_index);
+  shift(calib.readout_index);
+  shift(calib.imu_intrinsics_index);
+  for (auto &[key, c] : clones)
+    shift(c.index);
+  for (auto &[key, l] : landmarks)
+    shift(l.index);
+}
+
 void State::boxplus(const Eigen::VectorXd &dx) {
   imu.R = ov_core::so3_exp(dx.segment<3>(ImuState::kTheta)) * imu.R;
   imu.p += dx.segment<3>(ImuState::kPos);
@@ -33,6 +59,21 @@ void State::boxplus(const Eigen::VectorXd &dx) {
     c.R = ov_core::so3_exp(dx.segment<3>(c.index)) * c.R;
     c.p += dx.segment<3>(c.index + 3);
   }
+  for (auto &[key, l] : landmarks)
+    l.p_W += dx.segment<3>(l.index);
+  if (calib.extrinsics_index >= 0) {
+    calib.R_BC = ov_core::so3_exp(dx.segment<3>(calib.extrinsics_index)) * calib.R_BC;
+    calib.p_BC += dx.segment<3>(calib.extrinsics_index + 3);
+  }
+  if (calib.intrinsics_index >= 0)
+    calib.intrinsics += dx.segment<8>(calib.intrinsics_index);
+  if (calib.readout_index >= 0)
+    calib.readout_s += dx(calib.readout_index);
+  if (calib.imu_intrinsics_index >= 0)
+    for (int k = 0; k < 6; ++k) {
+      calib.D_w(kTriRow[k], kTriCol[k]) += dx(calib.imu_intrinsics_index + k);
+      calib.D_a(kTriRow[k], kTriCol[k]) += dx(calib.imu_intrinsics_index + 6 + k);
+    }
 }
 
 } // namespace ov_msckf_ton

@@ -8,6 +8,12 @@
 //   b_g = b̂_g + δb_g,  b_a = b̂_a + δb_a
 //   t_d = t̂_d + δt_d               t_imu = t_cam + t_d
 //   ṫ_d = ṫ̂_d + δṫ_d               rate of t_d [s/s], only with the drift-state model (td/td_drift.cpp)
+// Online calibration (each only when estimated, calibration.* options):
+//   R_BC = Exp(δθ_BC) · R̂_BC       camera–IMU rotation, error on the body side; p_BC = p̂_BC + δp_BC
+//   k = k̂ + δk                     intrinsics [fu fv cu cv d0 d1 d2 d3] (radtan k1 k2 p1 p2 / equidistant k1..k4)
+//   t_r = t̂_r + δt_r               rolling-shutter readout: row v is seen at t + t_d + (v/H − ½)·t_r
+//   D_w = D̂_w + δD_w, D_a = D̂_a + δD_a   IMU scale/misalignment, lower triangles (6 + 6): ω = D_w (ω_m − b_g),
+//                                        a = D_a (a_m − b_a)
 // Clones use the same rotation and position convention.
 //
 // Why world-frame: the directions the filter cannot observe (yaw about gravity, global position) are then fixed
@@ -59,6 +65,38 @@ struct CloneState {
   const Eigen::Vector3d &p_lin() const { return has_fej ? p_fej : p; }
 };
 
+/// The camera and IMU calibration as the filter holds it: fixed values from the dataset, or state variables when
+/// an index is >= 0.
+struct CalibState {
+  Eigen::Matrix3d R_BC = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p_BC = Eigen::Vector3d::Zero();
+  int extrinsics_index = -1;                                                    ///< [δθ_BC δp_BC]
+  Eigen::Matrix<double, 8, 1> intrinsics = Eigen::Matrix<double, 8, 1>::Zero(); ///< fu fv cu cv d0..d3
+  int intrinsics_index = -1;
+  double readout_s = 0.0;
+  int readout_index = -1;
+  Eigen::Matrix3d D_w = Eigen::Matrix3d::Identity(), D_a = Eigen::Matrix3d::Identity();
+  int imu_intrinsics_index = -1; ///< [δD_w lower triangle (00 10 11 20 21 22), δD_a likewise]
+  bool estimates_camera() const { return extrinsics_index >= 0 || intrinsics_index >= 0 || readout_index >= 0; }
+};
+
+/// Lower-triangle parameter order of D_w and D_a in the state: (0,0) (1,0) (1,1) (2,0) (2,1) (2,2).
+constexpr int kTriRow[6] = {0, 1, 1, 2, 2, 2};
+constexpr int kTriCol[6] = {0, 0, 1, 0, 1, 2};
+
+/// A SLAM feature: a landmark kept in the state across the window (world position, additive error δp_f), updated by
+/// every new observation and marginalised when the tracker loses it. Its measurement Jacobians use its first
+/// estimate (FEJ), like the clones'.
+struct LandmarkState {
+  static constexpr int kSize = 3;
+  size_t id = 0; ///< the tracker's feature id
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();
+  Eigen::Vector3d p_fej = Eigen::Vector3d::Zero();
+  int index = -1;
+  int64_t t_init_ns = 0; ///< camera stamp of the image it was initialised at
+  int updates = 0;       ///< observations that updated it
+};
+
 class State {
 public:
   /// estimate_td: t_d gets a covariance entry (modes sr, sir, fvon, tpn, ton); otherwise it is a fixed parameter.
@@ -71,6 +109,8 @@ public:
   double td_rate = 0.0; ///< ṫ_d [s/s]; a state variable only when td_rate_index >= 0 (drift-state model)
   int td_rate_index = -1;
   std::map<int64_t, CloneState> clones;
+  std::map<size_t, LandmarkState> landmarks; ///< by feature id
+  CalibState calib;
   Eigen::MatrixXd P;
 
   int dim() const { return static_cast<int>(P.rows()); }
@@ -81,6 +121,10 @@ public:
   /// Appends a variable of `size` error dimensions with prior covariance `prior` (uncorrelated with the rest);
   /// returns its index. Clones keep their indices (they are appended by state_helper::clone the same way).
   int add_variable(const Eigen::MatrixXd &prior);
+
+  /// Removes the error-state block [idx, idx + size) from P and moves every variable behind it forward. The
+  /// variable that owned the block must be dropped by the caller.
+  void remove_block(int idx, int size);
 
   /// Applies an error-state correction dx (size dim()) with the convention above.
   void boxplus(const Eigen::VectorXd &dx);

@@ -21,6 +21,18 @@ void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, co
   s.P = 0.5 * (s.P + s.P.transpose());
 }
 
+void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q,
+                          const Eigen::Matrix<double, 15, 12> &Gamma, int cal_index) {
+  constexpr int I = ImuState::kSize;
+  const Eigen::MatrixXd rows = Phi * s.P.topRows(I) + Gamma * s.P.middleRows(cal_index, 12); // A·P, 15 x n
+  const Eigen::Matrix<double, 15, 15> Pii =
+      rows.leftCols(I) * Phi.transpose() + rows.middleCols(cal_index, 12) * Gamma.transpose() + Q;
+  s.P.topRows(I) = rows;
+  s.P.leftCols(I) = rows.transpose();
+  s.P.topLeftCorner<I, I>() = Pii;
+  s.P = 0.5 * (s.P + s.P.transpose());
+}
+
 void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w_B, const Eigen::Vector3d &v_W) {
   if (s.clones.count(t_cam_ns))
     throw ov_core::UsageError("clone for image " + std::to_string(t_cam_ns) + " already exists");
@@ -58,25 +70,18 @@ void marginalize_clone(State &s, int64_t t_cam_ns) {
   auto it = s.clones.find(t_cam_ns);
   if (it == s.clones.end())
     throw ov_core::UsageError("no clone for image " + std::to_string(t_cam_ns));
-  const int idx = it->second.index, n = s.dim(), k = CloneState::kSize;
-  std::vector<int> keep;
-  keep.reserve(n - k);
-  for (int i = 0; i < n; ++i)
-    if (i < idx || i >= idx + k)
-      keep.push_back(i);
-  Eigen::MatrixXd Pn(n - k, n - k);
-  for (int r = 0; r < n - k; ++r)
-    for (int c = 0; c < n - k; ++c)
-      Pn(r, c) = s.P(keep[r], keep[c]);
-  s.P = std::move(Pn);
+  const int idx = it->second.index;
   s.clones.erase(it);
-  for (auto &[key, c] : s.clones)
-    if (c.index > idx)
-      c.index -= k;
-  if (s.td_index > idx)
-    s.td_index -= k;
-  if (s.td_rate_index > idx)
-    s.td_rate_index -= k;
+  s.remove_block(idx, CloneState::kSize);
+}
+
+void marginalize_landmark(State &s, size_t id) {
+  auto it = s.landmarks.find(id);
+  if (it == s.landmarks.end())
+    throw ov_core::UsageError("no landmark " + std::to_string(id));
+  const int idx = it->second.index;
+  s.landmarks.erase(it);
+  s.remove_block(idx, LandmarkState::kSize);
 }
 
 double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, double sigma2) {

@@ -7,6 +7,10 @@ namespace state_helper {
 
 /// P_II <- Φ P_II Φᵀ + Q, cross terms P_IX <- Φ P_IX (the IMU block; t_d's model propagates its own block).
 void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q);
+/// The same with the IMU block also depending on the 12 constant IMU intrinsics at `cal_index` through Γ:
+/// the IMU rows become A·P with A = [Φ at the IMU block, Γ at the intrinsics], and P_II = A P Aᵀ + Q.
+void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q,
+                          const Eigen::Matrix<double, 15, 12> &Gamma, int cal_index);
 
 /// Clones the current IMU pose for the image stamped t_cam_ns (camera clock) at IMU time s.t_imu_ns.
 /// In state-relevant mode the clone depends on t_d: the true image time is t̂_imu + δt_d, so
@@ -16,6 +20,8 @@ void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w
 
 /// Removes a clone and its rows/columns from the covariance.
 void marginalize_clone(State &s, int64_t t_cam_ns);
+/// Removes a SLAM landmark and its rows/columns from the covariance.
+void marginalize_landmark(State &s, size_t id);
 
 /// EKF update with a dense Jacobian H (m × dim), residual r = z − h(x̂), and isotropic noise sigma².
 /// Keeps P symmetric; returns the Mahalanobis distance rᵀS⁻¹r.

@@ -7,11 +7,14 @@
 
 namespace ov_msckf_ton {
 
-/// Jacobians of z = π(p_C) w.r.t. the clone's [δθ δp] and the world feature position p_f.
+/// Jacobians of z = π(p_C) w.r.t. the clone's [δθ δp], the world feature position p_f and the camera–IMU
+/// extrinsics [δθ_BC δp_BC] (R_BC = Exp(δθ_BC)·R̂_BC).
 struct CloneMeasurementJacobians {
   Eigen::Matrix<double, 2, 3> H_theta;
   Eigen::Matrix<double, 2, 3> H_p;
   Eigen::Matrix<double, 2, 3> H_f;
+  Eigen::Matrix<double, 2, 3> H_ext_theta;
+  Eigen::Matrix<double, 2, 3> H_ext_p;
 };
 
 /// Projects the world point p_f into the camera of a clone:
@@ -19,6 +22,8 @@ struct CloneMeasurementJacobians {
 /// With R_WB = Exp(δθ)·R̂_WB, R_WBᵀ ≈ R̂_WBᵀ (I − [δθ]×), so p_B ≈ p̂_B + R̂_WBᵀ [p_f − p̂_WB]× δθ and
 ///   ∂p_C/∂δθ = R_BCᵀ R_WBᵀ [p_f − p_WB]×,   ∂p_C/∂δp = −R_BCᵀ R_WBᵀ,   ∂p_C/∂p_f = R_BCᵀ R_WBᵀ,
 ///   ∂z/∂p_C = [1/z 0 −x/z²; 0 1/z −y/z²].
+/// With R_BC = Exp(δθ_BC)·R̂_BC, R_BCᵀ ≈ R̂_BCᵀ (I − [δθ_BC]×):
+///   ∂p_C/∂δθ_BC = R_BCᵀ [p_B − p_BC]×,   ∂p_C/∂δp_BC = −R_BCᵀ.
 /// Returns false (outputs untouched except p_C) when the point is not in front of the camera (z <= min_z), where
 /// the projection and its Jacobian are meaningless.
 inline bool project_in_clone(const Eigen::Matrix3d &R_WB, const Eigen::Vector3d &p_WB, const Eigen::Matrix3d &R_BC,
@@ -40,6 +45,9 @@ inline bool project_in_clone(const Eigen::Matrix3d &R_WB, const Eigen::Vector3d 
     J->H_f = dz_dpc * R_CW;
     J->H_theta = J->H_f * ov_core::skew(p_f - p_WB);
     J->H_p = -J->H_f;
+    const Eigen::Matrix<double, 2, 3> dz_dpB = dz_dpc * R_BC.transpose();
+    J->H_ext_theta = dz_dpB * ov_core::skew(p_B - p_BC);
+    J->H_ext_p = -dz_dpB;
   }
   return true;
 }

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
+#include <optional>
 
 namespace ov_msckf_ton {
 
@@ -47,6 +48,10 @@ UpdaterMSCKF::UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKF
     chi2_table_[d] = opt_.chi2_multiplier * chi2_quantile(opt_.chi2_confidence, d);
 }
 
+double UpdaterMSCKF::row_factor(const CameraView &v, const ov_core::FeatureObservation &o) {
+  return o.uv.y() / static_cast<double>(v.height) - 0.5;
+}
+
 Eigen::Matrix2d UpdaterMSCKF::distortion_jacobian(const Eigen::Vector2d &xy) const {
   Eigen::Matrix2d J;
   camera_.distort(xy, &J);
@@ -71,21 +76,51 @@ void UpdaterMSCKF::usable_observations(const State &state, const ov_core::Featur
   }
 }
 
+UpdaterMSCKF::CameraView UpdaterMSCKF::camera_view(const State &state) const {
+  const CalibState &c = state.calib;
+  CameraView v;
+  v.est_ext = c.extrinsics_index >= 0;
+  v.est_intr = c.intrinsics_index >= 0;
+  v.est_readout = c.readout_index >= 0;
+  v.R_BC = v.est_ext ? c.R_BC : R_BC_;
+  v.p_BC = v.est_ext ? c.p_BC : p_BC_;
+  v.readout_s = c.readout_s;
+  v.height = calib_.height;
+  if (v.est_intr) {
+    ov_core::CameraCalib k = calib_;
+    k.intrinsics = c.intrinsics.head<4>();
+    k.dist_coeffs = c.intrinsics.tail<4>();
+    v.est.emplace(k);
+  }
+  v.cam = v.est ? &*v.est : &camera_;
+  return v;
+}
+
+Eigen::Vector2d UpdaterMSCKF::observation_xy(const CameraView &v, const ov_core::FeatureObservation &o) const {
+  // With the intrinsics in the state the tracker's undistortion (configured intrinsics) is stale: redo it.
+  return v.est ? v.cam->undistort(o.uv) : o.xy;
+}
+
 TriangulationResult UpdaterMSCKF::triangulate_feature(const State &state, const ov_core::Feature &feature,
                                                       TdObservation td_obs, const VelocityProvider &velocities) const {
+  const CameraView view = camera_view(state);
   usable_observations(state, feature, usable_);
   poses_.clear();
   xy_.clear();
   for (const auto &[i, c] : usable_) {
     CameraPose cp;
-    cp.R_WC = c->R * R_BC_;
-    cp.p_WC = c->p + c->R * p_BC_;
+    cp.R_WC = c->R * view.R_BC;
+    cp.p_WC = c->p + c->R * view.p_BC;
     poses_.push_back(cp);
-    Eigen::Vector2d z = feature.obs[i].xy;
+    const ov_core::FeatureObservation &o = feature.obs[i];
+    Eigen::Vector2d z = observation_xy(view, o);
     Eigen::Vector2d v;
     int src = 0;
-    if (td_obs == TdObservation::ImagePlane && velocities.velocity(feature, i, v, src))
+    const bool has_v = velocities.velocity(feature, i, v, src);
+    if (td_obs == TdObservation::ImagePlane && has_v)
       z -= v * (state.td - c->td_ref);
+    if (view.readout_s != 0.0 && has_v)
+      z -= v * (view.readout_s * row_factor(view, o));
     xy_.push_back(z);
   }
   TriangulationOptions to;
@@ -101,11 +136,12 @@ TriangulationResult UpdaterMSCKF::triangulate_feature(const State &state, const 
 bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature, const Eigen::Vector3d &p_f,
                              TdObservation td_obs, const VelocityProvider &velocities,
                              FeatureLinearization &out) const {
+  const CameraView view = camera_view(state);
   const std::vector<std::pair<size_t, const CloneState *>> &usable = usable_;
   usable_observations(state, feature, usable_);
   const int m = static_cast<int>(usable.size());
   out.obs.resize(m);
-  bool any_td = false;
+  bool all_vel = m > 0;
   for (int k = 0; k < m; ++k) {
     FeatureLinearization::Obs &o = out.obs[k];
     o.obs_index = usable[k].first;
@@ -117,25 +153,32 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
       o.vel_xy.setZero();
       o.vel_source = kVelocityNone;
     }
-    o.td_column = td_obs == TdObservation::ImagePlane && o.vel_source != kVelocityNone && state.estimates_td();
+    all_vel = all_vel && o.vel_source != kVelocityNone;
   }
   // All or nothing per feature: an observation without a velocity shifts by an unknown V·δt_d too. Giving t_d
   // columns to only some rows would tell the filter that the others stay put, a relative shift the feature position
   // cannot absorb: spurious information that pins t̂_d to td_ref. Such a feature constrains t_d only once every
   // observation has a velocity (a track that started before the window, or FVON's prediction for its first one).
-  bool all_td = m > 0;
+  // The readout's row shift V·ρ·t_r follows the same rule.
+  const bool any_td = all_vel && td_obs == TdObservation::ImagePlane && state.estimates_td();
+  const bool readout_col = all_vel && view.est_readout;
   for (int k = 0; k < m; ++k)
-    all_td = all_td && out.obs[k].td_column;
-  for (int k = 0; k < m; ++k)
-    out.obs[k].td_column = all_td;
-  any_td = all_td;
-  const int nc = 6 * m + (any_td ? 1 : 0);
+    out.obs[k].td_column = any_td;
+  // Columns: six per clone, then t_d, the extrinsics, the intrinsics and the readout where they are estimated.
+  const int c_td = 6 * m, c_ext = c_td + (any_td ? 1 : 0), c_intr = c_ext + (view.est_ext ? 6 : 0),
+            c_ro = c_intr + (view.est_intr ? 8 : 0), nc = c_ro + (readout_col ? 1 : 0);
   out.cols.resize(nc);
   for (int k = 0; k < m; ++k)
     for (int j = 0; j < 6; ++j)
       out.cols[6 * k + j] = out.obs[k].clone->index + j;
   if (any_td)
-    out.cols[6 * m] = state.td_index;
+    out.cols[c_td] = state.td_index;
+  for (int j = 0; view.est_ext && j < 6; ++j)
+    out.cols[c_ext + j] = state.calib.extrinsics_index + j;
+  for (int j = 0; view.est_intr && j < 8; ++j)
+    out.cols[c_intr + j] = state.calib.intrinsics_index + j;
+  if (readout_col)
+    out.cols[c_ro] = state.calib.readout_index;
   out.H_x.setZero(2 * m, nc);
   out.H_f.resize(2 * m, 3);
   out.r.resize(2 * m);
@@ -153,24 +196,45 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
   for (int k = 0; k < m; ++k) {
     FeatureLinearization::Obs &o = out.obs[k];
     const CloneState &c = *o.clone;
-    if (!project_in_clone(c.R, c.p, R_BC_, p_BC_, p_f, zhat, &p_C) ||
-        !project_in_clone(c.R_lin(), c.p_lin(), R_BC_, p_BC_, p_f_lin, z_lin, nullptr, &J))
+    if (!project_in_clone(c.R, c.p, view.R_BC, view.p_BC, p_f, zhat, &p_C) ||
+        !project_in_clone(c.R_lin(), c.p_lin(), view.R_BC, view.p_BC, p_f_lin, z_lin, nullptr, &J))
       return false;
     o.depth = p_C.z();
-    Eigen::Vector2d z = feature.obs[o.obs_index].xy;
+    const ov_core::FeatureObservation &obs = feature.obs[o.obs_index];
+    // The image-plane shifts: the image was taken when the point was V·(t_d − td_ref) away, and row v of it
+    // V·ρ·t_r later (rolling shutter).
+    Eigen::Vector2d shift = Eigen::Vector2d::Zero();
     if (td_obs == TdObservation::ImagePlane && o.vel_source != kVelocityNone)
-      z -= o.vel_xy * (state.td - c.td_ref);
-    // Rows are scaled to distorted pixels by the distortion Jacobian at the observation, so that the tracker's
-    // isotropic pixel noise is modelled where it arises: undistortion magnifies it by up to 1.5x at the EuRoC
-    // image corners, which in normalised units gates most edge features. J_d is constant in the state, so the
-    // rows stay exact derivatives of the (scaled) residual.
-    const Eigen::Matrix2d Jd = distortion_jacobian(feature.obs[o.obs_index].xy);
-    out.r.segment<2>(2 * k) = Jd * (z - zhat);
+      shift += o.vel_xy * (state.td - c.td_ref);
+    const double rho = row_factor(view, obs);
+    if (view.readout_s != 0.0 && o.vel_source != kVelocityNone)
+      shift += o.vel_xy * (view.readout_s * rho);
+    Eigen::Matrix2d Jd;
+    if (view.est_intr) {
+      // With the intrinsics in the state the measurement is the raw pixel: r = uv − π_d(k; ẑ + shift), exact in k.
+      const Eigen::Vector2d zs = zhat + shift;
+      out.r.segment<2>(2 * k) = obs.uv - view.cam->distort(zs, &Jd);
+      out.H_x.block<2, 8>(2 * k, c_intr) = view.cam->intrinsics_jacobian(zs);
+    } else {
+      // Rows are scaled to distorted pixels by the distortion Jacobian at the observation, so that the tracker's
+      // isotropic pixel noise is modelled where it arises: undistortion magnifies it by up to 1.5x at the EuRoC
+      // image corners, which in normalised units gates most edge features. J_d is constant in the state, so the
+      // rows stay exact derivatives of the (scaled) residual.
+      const Eigen::Vector2d &xy = obs.xy;
+      view.cam->distort(xy, &Jd);
+      out.r.segment<2>(2 * k) = Jd * (xy - shift - zhat);
+    }
     out.H_x.block<2, 3>(2 * k, 6 * k) = Jd * J.H_theta;
     out.H_x.block<2, 3>(2 * k, 6 * k + 3) = Jd * J.H_p;
     out.H_f.block<2, 3>(2 * k, 0) = Jd * J.H_f;
     if (o.td_column)
-      out.H_x.block<2, 1>(2 * k, 6 * m) = Jd * o.vel_xy;
+      out.H_x.block<2, 1>(2 * k, c_td) = Jd * o.vel_xy;
+    if (view.est_ext) {
+      out.H_x.block<2, 3>(2 * k, c_ext) = Jd * J.H_ext_theta;
+      out.H_x.block<2, 3>(2 * k, c_ext + 3) = Jd * J.H_ext_p;
+    }
+    if (readout_col)
+      out.H_x.block<2, 1>(2 * k, c_ro) = Jd * o.vel_xy * rho;
   }
   return true;
 }

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <functional>
+#include <optional>
 #include <vector>
 
 namespace ov_msckf_ton {
@@ -107,6 +108,23 @@ public:
   Eigen::Matrix2d distortion_jacobian(const Eigen::Vector2d &xy) const;
   const UpdaterMSCKFOptions &options() const { return opt_; }
   void set_angular_rate_lookup(AngularRateLookup f) { rate_lookup_ = std::move(f); }
+
+  /// The camera calibration an update uses: the state's estimate where it is estimated (calibration.* options),
+  /// the configured calibration elsewhere.
+  struct CameraView {
+    Eigen::Matrix3d R_BC;
+    Eigen::Vector3d p_BC;
+    const ov_core::CameraModel *cam = nullptr;
+    std::optional<ov_core::CameraModel> est; ///< the state's intrinsics, when estimated
+    double readout_s = 0.0;
+    int height = 0;
+    bool est_ext = false, est_intr = false, est_readout = false;
+  };
+  CameraView camera_view(const State &state) const;
+  /// The observation's undistorted normalised coordinates under the view's intrinsics.
+  Eigen::Vector2d observation_xy(const CameraView &v, const ov_core::FeatureObservation &o) const;
+  /// ρ = v/H − ½: the observation's row time relative to the image's middle row, in readouts.
+  static double row_factor(const CameraView &v, const ov_core::FeatureObservation &o);
 
 private:
   /// Observations of `feature` that have a clone, as (obs index, clone).

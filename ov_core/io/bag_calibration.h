@@ -1,0 +1,29 @@
+#pragma once
+// Where a bag's calibration comes from. A bag carries no calibration of its own; users have it as Kalibr output
+// (camchain-imucam-<bag>.yaml and imu-<bag>.yaml beside the bag) or, for EuRoC, as the ASL folder downloaded with it.
+#include "ov_core/cam/camera_calib.h"
+#include "ov_core/types/sensor_data.h"
+
+#include <string>
+#include <vector>
+
+namespace ov_core {
+
+struct BagCalibration {
+  CameraCalib cam;
+  ImuCalib imu;
+  double td_prior_s = 0.0;                    ///< Kalibr timeshift_cam_imu (0 for EuRoC)
+  std::vector<StateSample> groundtruth;       ///< from a companion folder, when it has one
+  std::vector<TdSample> td_truth;             ///< from a companion folder (`ovton simulate` output)
+  std::string cam_topic_hint, imu_topic_hint; ///< Kalibr's rostopic entries ("" when absent)
+  std::string source;                         ///< what was read, for `ovton info`
+};
+
+/// `calib` lists what the user gave (--calib): Kalibr camchain / imu YAML files (told apart by their keys) or folders
+/// (an EuRoC folder: cam0/imu0 sensor.yaml, ground truth, td_truth; or a folder with one camchain-imucam*.yaml and one
+/// imu*.yaml, and optionally groundtruth/data.csv and td_truth/data.csv as in the SCube layout). Empty: beside the bag
+/// B.bag, the folder B/, then camchain-imucam-B.yaml + imu-B.yaml (Kalibr's names), then camchain-imucam.yaml +
+/// imu.yaml. Throws DataError naming the bag and every place looked at when nothing is found.
+BagCalibration resolve_bag_calibration(const std::string &bag, const std::vector<std::string> &calib);
+
+} // namespace ov_core

@@ -1,0 +1,70 @@
+#pragma once
+// The candidate effects of `ovton diagnose`, as one table: key, model, the design columns it adds, the unit of each
+// estimate, and whether it can be tested on rates. The designs (residual_design.h, rate_design.h) fill the columns,
+// the stepwise selection (regression.h) tests them; docs/diagnose.md gives each model and its sign convention.
+#include "ov_eval/diagnose.h"
+#include "ov_eval/diagnose/regression.h"
+
+#include <string>
+#include <vector>
+
+namespace ov_eval::diag {
+
+/// Columns of the design matrix; a candidate is a list of them, so nested candidates share columns. On the residual
+/// design (pixels) they are as below; the rate design fills kV (α), kVt (α·(t − t_mid)), kVrow (α, on ψ rows), kFocal
+/// (ω_vis's response to a unit focal error) and kGyroScale (−ω̄_gyro), whitened by each row's standard error.
+enum Col : int {
+  kV = 0,                  ///< image velocity [px/s]
+  kVt,                     ///< image velocity × (t − t_mid) [px]
+  kVrow,                   ///< image velocity × (row fraction − 0.5) [px/s]
+  kFocal,                  ///< (fu·x, fv·y) [px]
+  kPpU,                    ///< (1, 0)
+  kPpV,                    ///< (0, 1)
+  kRadial,                 ///< r²·(fu·x, fv·y) [px]
+  kGyro0,                  ///< 9 columns B(x,y)·e_i·Θ_j [px·rad/rad]
+  kGyroScale = kGyro0 + 9, ///< with the camera: −B(x,y)·R_CB·Θ [px], the nine above contracted with R_CB
+  kNumCols
+};
+
+/// A candidate's coefficients in the fit that estimated them (at: their positions in fit.beta, in column order).
+struct Coefs {
+  const Fit &fit;
+  std::vector<int> at;
+  double b(int i) const { return fit.beta(at[i]); }
+  double s(int i) const;
+  double cov(int i, int j) const { return fit.cov(at[i], at[j]); }
+};
+
+/// The estimates shown for a candidate, in the user's units, from its coefficients.
+using EstimatesFn = std::vector<EffectEstimate> (*)(const Coefs &c, const DiagnoseReport &rep, const Design &d);
+
+/// What a candidate needs of the residual log's rows to be tested on the residual (the rate design has both).
+enum class Needs { Nothing, Velocity, BodyRates };
+
+struct CandidateDef {
+  std::string key;              ///< td_const, td_drift, rolling_shutter, focal, principal_point, radial_k1, gyro_scale
+  std::vector<int> cols;        ///< its columns
+  std::vector<int> camera_cols; ///< its columns when the dataset's camera is known, if different
+  Needs needs = Needs::Nothing;
+  EstimatesFn estimates = nullptr;
+  std::string description;      ///< the model on the residual, in one line
+  std::string rate_description; ///< the model on rates; empty: tested on the residual only
+  std::string fallback_note;    ///< rate-capable candidates: what a test on the residual is worth
+  std::string xlabel;           ///< the plot's x axis on the residual
+  std::string rate_xlabel;      ///< the plot's x axis on rates
+
+  bool rate_capable() const { return !rate_description.empty(); }
+  const std::vector<int> &columns(bool have_camera) const {
+    return have_camera && !camera_cols.empty() ? camera_cols : cols;
+  }
+};
+
+/// Every candidate, in the order ties are ranked in.
+const std::vector<CandidateDef> &candidate_table();
+
+/// The candidate's estimates from `fit` over the columns `joint` (its own columns `cols` among them).
+std::vector<EffectEstimate> candidate_estimates(const CandidateDef &def, const std::vector<int> &cols, const Fit &fit,
+                                                const std::vector<int> &joint, const DiagnoseReport &rep,
+                                                const Design &d);
+
+} // namespace ov_eval::diag

@@ -1,0 +1,415 @@
+#include "ov_eval/diagnose/rate_design.h"
+#include "ov_core/math/so3.h"
+#include "ov_eval/diagnose/candidates.h"
+#include "ov_eval/diagnose/image_geometry.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+
+namespace ov_eval::diag {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+namespace {
+
+using Vec9 = Eigen::Matrix<double, 9, 1>;
+
+/// One observation with neighbours on both sides in its track, and its image velocity.
+struct FlowObs {
+  Eigen::Vector2d x, xdot;
+  double rho, inv_z;
+  size_t track;
+  int n_win = 0;                     ///< positions in the slope's window
+  std::array<double, 5> win_t_imu{}; ///< their IMU-clock times [ns]
+  std::array<double, 5> win_w{};     ///< the slope's weight on each: ẋ = Σ w_q·x_q
+  double t_imu = 0;                  ///< this observation's IMU-clock time [ns]
+};
+using FrameMap = std::map<int64_t, std::vector<FlowObs>>; ///< by camera time
+
+struct FlowData {
+  FrameMap frames;
+  size_t n_tracks = 0;
+  std::map<int64_t, double> frame_td; ///< the filter's t̂_d at each image
+};
+
+/// The observations of known depth with a neighbour on each side, per image, each with its image velocity: the local
+/// slope of a quadratic through up to five measured positions around it (least squares). The slope is linear in the
+/// positions, ẋ = Σ w_q·x_q, and the weights are kept to put the gyro through the same slope.
+FlowData collect_flow(const TrackMap &tracks, const DiagnoseReport &rep) {
+  FlowData fd;
+  for (const auto &kv : tracks) {
+    const auto &tr = kv.second;
+    const size_t m = tr.size();
+    for (size_t j = 1; j + 1 < m; ++j) {
+      const ResidualLogRow *r = tr[j];
+      if (!(std::isfinite(r->depth_m) && r->depth_m > 0))
+        continue;
+      const size_t a = j >= 2 ? j - 2 : 0, b = std::min(m - 1, j + 2);
+      const auto h = [&](size_t q) {
+        const double tau = 1e-9 * double(tr[q]->t_cam_ns - r->t_cam_ns);
+        return Eigen::Vector3d(1.0, tau, tau * tau);
+      };
+      Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+      for (size_t q = a; q <= b; ++q)
+        A += h(q) * h(q).transpose();
+      const Eigen::LDLT<Eigen::Matrix3d> Al(A);
+      FlowObs o{Eigen::Vector2d(r->x_norm, r->y_norm), Eigen::Vector2d::Zero(), r->v_px / rep.image_height - 0.5,
+                1.0 / r->depth_m, fd.n_tracks};
+      for (size_t q = a; q <= b; ++q) {
+        o.win_t_imu[o.n_win] = double(tr[q]->t_cam_ns) + 1e9 * tr[q]->td_s;
+        o.win_w[o.n_win] = Al.solve(h(q))(1);
+        o.xdot += o.win_w[o.n_win++] * Eigen::Vector2d(tr[q]->x_norm, tr[q]->y_norm);
+      }
+      o.t_imu = double(r->t_cam_ns) + 1e9 * r->td_s;
+      fd.frames[r->t_cam_ns].push_back(o);
+      fd.frame_td[r->t_cam_ns] = r->td_s;
+    }
+    ++fd.n_tracks;
+  }
+  return fd;
+}
+
+/// The flow model's rows for one feature: ẋ = H·(ω, ψ, v).
+Eigen::Matrix<double, 2, 9> flow_rows(const Eigen::Vector2d &x, double rho, double iz) {
+  Eigen::Matrix<double, 2, 9> H;
+  H.leftCols<3>() = rot_flow(x.x(), x.y());
+  H.middleCols<3>(3) = rho * H.leftCols<3>();
+  H.rightCols<3>() << -iz, 0, x.x() * iz, 0, -iz, x.y() * iz;
+  return H;
+}
+
+struct FrameFit {
+  Vec9 sol, focal; ///< fitted (ω, ψ, v) and its response to a unit relative focal error
+  Eigen::Matrix<double, 9, 9> C;
+  VectorXd w;
+};
+using FitMap = std::map<int64_t, FrameFit>;
+
+/// The per-image flow fits, alternated with a correction of every track's inverse depth. The logged depths ẑ come
+/// from the filter's triangulation. A filter holding a wrong offset triangulates with poses from the wrong instant,
+/// and its points take up part of the offset: their depth errors would let the translational flow absorb part of the
+/// rotation an offset error adds (measured: 30 ms read as 15-23 ms, docs/diagnose.md). Each track's inverse depth
+/// therefore gets a correction ε_track, alternated with the per-image fits: per image (ω, ψ, v) by Huber IRLS on the
+/// flow model with inverse depths 1/ẑ + ε_track, then every ε_track by weighted least squares on what the images'
+/// translational flow leaves of its observations.
+class FlowFitter {
+public:
+  explicit FlowFitter(size_t n_tracks) : eps_(n_tracks, 0.0) {}
+
+  /// The depth correction of a track, as left by the last solve().
+  double eps(size_t track) const { return eps_[track]; }
+
+  /// One image's flow design with the current depth corrections: (ω, ψ, v), or (ω, v) without ψ.
+  MatrixXd frame_design(const std::vector<FlowObs> &obs, bool with_psi) const {
+    const Eigen::Index no = static_cast<Eigen::Index>(obs.size());
+    MatrixXd H(2 * no, with_psi ? 9 : 6);
+    for (Eigen::Index q = 0; q < no; ++q) {
+      const Eigen::Matrix<double, 2, 9> Hq = flow_rows(obs[q].x, obs[q].rho, obs[q].inv_z + eps_[obs[q].track]);
+      if (with_psi)
+        H.middleRows<2>(2 * q) = Hq;
+      else
+        H.middleRows<2>(2 * q) << Hq.leftCols<3>(), Hq.rightCols<3>();
+    }
+    return H;
+  }
+
+  /// with_psi false: ψ fixed at 0, so ω is the rate at the features' mean row (what the time candidates compare with
+  /// the gyro; fitting ψ as well costs ω precision where the features do not span the rows evenly).
+  FrameFit fit_frame(const std::vector<FlowObs> &obs, bool with_psi) const {
+    const Eigen::Index no = static_cast<Eigen::Index>(obs.size());
+    const int p = with_psi ? 9 : 6;
+    const MatrixXd H = frame_design(obs, with_psi);
+    VectorXd y(2 * no);
+    FrameFit f;
+    f.w = VectorXd::Ones(2 * no);
+    for (Eigen::Index q = 0; q < no; ++q)
+      y.segment<2>(2 * q) = obs[q].xdot;
+    // The solution and its covariance in the 9 parameters (ψ rows and columns zero without ψ).
+    const auto expand = [&](const VectorXd &v) {
+      Vec9 out = Vec9::Zero();
+      if (with_psi)
+        out = v;
+      else
+        out << v.head<3>(), Eigen::Vector3d::Zero(), v.tail<3>();
+      return out;
+    };
+    double s2 = 0;
+    Eigen::LDLT<MatrixXd> N;
+    for (int it = 0; it < 3; ++it) { // Huber IRLS, scale from the previous pass
+      const MatrixXd Hw = f.w.asDiagonal() * H;
+      N.compute(H.transpose() * Hw);
+      const VectorXd sol = N.solve(Hw.transpose() * y);
+      f.sol = expand(sol);
+      const VectorXd e = y - H * sol;
+      std::vector<double> ae(e.size());
+      for (Eigen::Index q = 0; q < e.size(); ++q)
+        ae[q] = std::abs(e(q));
+      const double sc = std::max(1e-12, 1.4826 * median(ae));
+      s2 = sc * sc;
+      for (Eigen::Index q = 0; q < e.size(); ++q)
+        f.w(q) = std::abs(e(q)) <= 3 * sc ? 1.0 : 3 * sc / std::abs(e(q));
+    }
+    const MatrixXd Hw = f.w.asDiagonal() * H;
+    N.compute(H.transpose() * Hw);
+    const MatrixXd C = s2 * N.solve(MatrixXd::Identity(p, p));
+    f.C.setZero();
+    for (int a = 0; a < p; ++a)
+      f.C.col(with_psi || a < 3 ? a : a + 3) = expand(C.col(a));
+    return f;
+  }
+
+  /// Alternates the fits and the depth corrections (from zero). fits: without ψ, images with 12+ features;
+  /// fits_psi: with ψ, images with 20+.
+  void solve(const FrameMap &data, FitMap &fits, FitMap &fits_psi) {
+    std::fill(eps_.begin(), eps_.end(), 0.0);
+    const int n_alternations = 10; // measured: 10 and 30 give the same estimates within a tenth of their SE
+    for (int outer = 0; outer <= n_alternations; ++outer) {
+      const bool last = outer == n_alternations;
+      fits_psi.clear();
+      for (const auto &[t_cam, obs] : data) {
+        if (obs.size() >= 12 && last)
+          fits[t_cam] = fit_frame(obs, false);
+        if (obs.size() >= 20) // ψ needs features spread over the rows
+          fits_psi[t_cam] = fit_frame(obs, true);
+        else if (obs.size() >= 12 && !last)
+          fits_psi[t_cam] = fit_frame(obs, false);
+      }
+      if (last)
+        break;
+      // ε per track: least squares of what the translational flow leaves, given every image's (ω, ψ, v). With ψ: a
+      // rolling shutter's row-dependent flow would otherwise go into the depths of tracks at different rows.
+      std::vector<double> num(eps_.size(), 0.0), den(eps_.size(), 0.0);
+      for (const auto &[t_cam, f] : fits_psi) {
+        const auto &obs = data.at(t_cam);
+        for (size_t q = 0; q < obs.size(); ++q) {
+          const auto &o = obs[q];
+          const Eigen::Vector3d v = f.sol.tail<3>();
+          const Eigen::Vector2d a(-v.x() + o.x.x() * v.z(), -v.y() + o.x.y() * v.z());
+          const Eigen::Vector2d d = o.xdot - flow_rows(o.x, o.rho, o.inv_z) * f.sol;
+          const Eigen::Vector2d w = f.w.segment<2>(2 * q);
+          num[o.track] += w.dot(a.cwiseProduct(d));
+          den[o.track] += w.dot(a.cwiseAbs2());
+        }
+      }
+      for (size_t k = 0; k < eps_.size(); ++k)
+        eps_[k] = den[k] > 0 ? num[k] / den[k] : 0.0;
+    }
+  }
+
+private:
+  std::vector<double> eps_;
+};
+
+/// The focal column: how ω responds to a relative focal error ε, through the whole fit (depth corrections included),
+/// into fits[·].focal. A focal error moves a measured point to x_m = x + ε·s(x) (s: focal_dir) and its velocity by
+/// ε·J_s·ẋ, and the fit evaluates the model at x_m: to first order the data change by ε·(J_s·F − J_F·s), F the fitted
+/// flow at x. The data are perturbed by that for a small ε and fitted again. Only ω's response is used: with ψ's as
+/// well, a noise-free 1 % focal error read 0.80 % (without, 1.04 %; docs/diagnose.md). Leaves the fitter with the
+/// perturbed data's depth corrections.
+void add_focal_response(const FrameMap &frames, const ov_core::CameraModel &cam, FlowFitter &fitter, FitMap &fits,
+                        const FitMap &fits_psi) {
+  const double kappa = 0.01, h = 1e-5;
+  FrameMap perturbed = frames;
+  for (auto &[t_cam, obs] : perturbed) {
+    const FrameFit *fit = fits_psi.count(t_cam) ? &fits_psi.at(t_cam) : fits.count(t_cam) ? &fits.at(t_cam) : nullptr;
+    if (!fit)
+      continue;
+    for (auto &o : obs) {
+      const double iz = o.inv_z + fitter.eps(o.track);
+      const auto F = [&](const Eigen::Vector2d &x) -> Eigen::Vector2d { return flow_rows(x, o.rho, iz) * fit->sol; };
+      const Eigen::Vector2d Fx = F(o.x), s = focal_dir(&cam, o.x);
+      const Eigen::Vector2d JsF = (focal_dir(&cam, o.x + h * Fx) - focal_dir(&cam, o.x - h * Fx)) / (2 * h);
+      const Eigen::Vector2d JFs = (F(o.x + h * s) - F(o.x - h * s)) / (2 * h);
+      o.xdot += kappa * (JsF - JFs);
+    }
+  }
+  FitMap fits_p, fits_psi_p;
+  fitter.solve(perturbed, fits_p, fits_psi_p);
+  for (auto &[t_cam, f] : fits)
+    f.focal = fits_p.count(t_cam) ? ((fits_p.at(t_cam).sol - f.sol) / kappa).eval() : Vec9::Zero();
+}
+
+/// Gyro reading at t (linear interpolation; clamped at the ends).
+Eigen::Vector3d gyro_at(const std::vector<ov_core::ImuData> &imu, double t_ns) {
+  const auto it = std::lower_bound(imu.begin(), imu.end(), t_ns,
+                                   [](const ov_core::ImuData &m, double t) { return double(m.t_imu_ns) < t; });
+  if (it == imu.begin())
+    return imu.front().wm;
+  if (it == imu.end())
+    return imu.back().wm;
+  const auto &a = *(it - 1), &b = *it;
+  const double u = (t_ns - double(a.t_imu_ns)) / double(b.t_imu_ns - a.t_imu_ns);
+  return a.wm + u * (b.wm - a.wm);
+}
+
+/// ω̄_gyro: the gyro put through the images' whole estimator — every feature of an image rotated by the gyro's
+/// rotation to each image of its slope window (pure rotation, perspective included), the same slope, the same
+/// per-image fit with the same weights. The focal is compared with it: the slope of a quadratic through ±100 ms
+/// distorts fast rotation, and the raw gyro made V1_03's oracle run read a 3 % gyro "scale error" and a 0.9 % focal
+/// error; the gyro's rotation angle through the slope alone (no perspective) still left 0.46 % (docs/diagnose.md).
+/// The time candidates keep the raw gyro: smoothed, it left a −0.5 ms offset on clean runs.
+class GyroThroughImages {
+public:
+  GyroThroughImages(const std::vector<ov_core::ImuData> &imu, const Eigen::Matrix3d &R_BC) : imu_(imu), R_BC_(R_BC) {}
+
+  /// In the camera frame, for the image with features `obs` fitted as `ff` (the fitter's current depth corrections).
+  Eigen::Vector3d omega(const std::vector<FlowObs> &obs, const FrameFit &ff, const FlowFitter &fitter) {
+    const Eigen::Index no = static_cast<Eigen::Index>(obs.size());
+    const MatrixXd H = fitter.frame_design(obs, false);
+    VectorXd y(2 * no);
+    for (Eigen::Index q = 0; q < no; ++q) {
+      const FlowObs &o = obs[q];
+      Eigen::Vector2d xdot = Eigen::Vector2d::Zero();
+      for (int k = 0; k < o.n_win; ++k) {
+        const Eigen::Vector3d b = R_CjCq(o.t_imu, o.win_t_imu[k]).transpose() * o.x.homogeneous();
+        xdot += o.win_w[k] * b.head<2>() / b.z();
+      }
+      y.segment<2>(2 * q) = xdot;
+    }
+    const MatrixXd Hw = ff.w.asDiagonal() * H;
+    return (H.transpose() * Hw).ldlt().solve(Hw.transpose() * y).head<3>();
+  }
+
+private:
+  /// The camera's rotation from IMU time t0 to t1, integrated from the gyro (memoised: windows overlap).
+  const Eigen::Matrix3d &R_CjCq(double t0, double t1) {
+    auto it = cache_.find({t0, t1});
+    if (it != cache_.end())
+      return it->second;
+    const double span = 1e-9 * (t1 - t0);
+    const int steps = std::max(1, static_cast<int>(std::abs(span) / 1e-3)); // midpoint rule, ~1 ms steps
+    const double dt = span / steps;
+    Eigen::Matrix3d R = Eigen::Matrix3d::Identity(); // R_{B0 B1}
+    for (int k = 0; k < steps; ++k)
+      R = R * ov_core::so3_exp(gyro_at(imu_, t0 + 1e9 * (k + 0.5) * dt) * dt);
+    return cache_.emplace(std::make_pair(t0, t1), R_BC_.transpose() * R * R_BC_).first->second;
+  }
+
+  const std::vector<ov_core::ImuData> &imu_;
+  const Eigen::Matrix3d R_BC_;
+  std::map<std::pair<double, double>, Eigen::Matrix3d> cache_;
+};
+
+/// One image's rates, in the body frame.
+struct FrameRate {
+  double t;                     ///< s from t_first
+  Eigen::Vector3d e, alpha, se; ///< ω_vis − ω_gyro (body frame), α, SE of ω_vis
+  Eigen::Vector3d psi, psi_se;  ///< ψ_vis (body frame) and its SE
+  Eigen::Vector3d focal_e;      ///< response of ω_vis to a unit relative focal error
+  Eigen::Vector3d gyro_s, e_s;  ///< ω̄_gyro, the gyro through the images' estimator, and ω_vis − ω̄_gyro
+};
+
+/// The rows of the design from the images' rates: the gyro bias per 5-s bin and axis (weighted means) removed from
+/// the mismatch and the regressors of the ω rows (Frisch-Waugh). The ψ rows carry no gyro bias: α is a difference.
+void fill_rate_rows(const std::vector<FrameRate> &fr, const DiagnoseReport &rep, Design &dr) {
+  const int nb = std::max(1, static_cast<int>(std::lround(rep.duration_s / 5.0)));
+  const auto bin = [&](double t) {
+    return std::min(nb - 1, static_cast<int>(nb * t / std::max(1e-9, rep.duration_s)));
+  };
+  const double t_mid = 0.5 * rep.duration_s;
+  std::vector<Eigen::Vector3d> sw(nb, Eigen::Vector3d::Zero()), se(nb, Eigen::Vector3d::Zero()),
+      sa(nb, Eigen::Vector3d::Zero()), sat(nb, Eigen::Vector3d::Zero()), sf(nb, Eigen::Vector3d::Zero()),
+      ses(nb, Eigen::Vector3d::Zero()), sgs(nb, Eigen::Vector3d::Zero());
+  for (const auto &f : fr) {
+    const Eigen::Vector3d w = f.se.cwiseInverse().cwiseAbs2();
+    const int b = bin(f.t);
+    sw[b] += w, se[b] += w.cwiseProduct(f.e), sa[b] += w.cwiseProduct(f.alpha);
+    sat[b] += w.cwiseProduct(f.alpha) * (f.t - t_mid);
+    sf[b] += w.cwiseProduct(f.focal_e);
+    ses[b] += w.cwiseProduct(f.e_s);
+    sgs[b] += w.cwiseProduct(f.gyro_s);
+  }
+  const Eigen::Index n = kRateRowsPerImage * static_cast<Eigen::Index>(fr.size());
+  dr.D = MatrixXd::Zero(n, kNumCols);
+  dr.r.resize(n);
+  dr.cluster.resize(n);
+  dr.t_s.resize(n);
+  dr.t_mid = t_mid;
+  dr.have_velocity = true;
+  dr.have_rate = false; // the residual's need for logged body rates does not apply here
+  Eigen::Index i = 0;
+  for (const auto &f : fr) {
+    const int b = bin(f.t);
+    for (int a = 0; a < 3; ++a, ++i) { // ω rows
+      const double sq = 1.0 / f.se(a);
+      dr.r(i) = sq * (f.e(a) - se[b](a) / sw[b](a));
+      dr.D(i, kV) = sq * (f.alpha(a) - sa[b](a) / sw[b](a));
+      dr.D(i, kVt) = sq * (f.alpha(a) * (f.t - t_mid) - sat[b](a) / sw[b](a));
+    }
+    for (int a = 0; a < 3; ++a, ++i) { // ψ rows
+      const double sq = 1.0 / f.psi_se(a);
+      dr.r(i) = sq * f.psi(a);
+      dr.D(i, kVrow) = sq * f.alpha(a);
+    }
+    // ω rows against the gyro through the images' estimator, for the scale candidates.
+    for (int a = 0; a < 3; ++a, ++i) {
+      const double sq = 1.0 / f.se(a);
+      dr.r(i) = sq * (f.e_s(a) - ses[b](a) / sw[b](a));
+      dr.D(i, kFocal) = sq * (f.focal_e(a) - sf[b](a) / sw[b](a));
+      dr.D(i, kGyroScale) = -sq * (f.gyro_s(a) - sgs[b](a) / sw[b](a));
+    }
+    for (Eigen::Index q = i - kRateRowsPerImage; q < i; ++q) {
+      dr.cluster[q] = static_cast<int>(f.t); // one cluster per second: neighbouring images share tracks
+      dr.t_s[q] = f.t;
+    }
+  }
+  dr.n_clusters = static_cast<int>(fr.back().t) + 1;
+  std::vector<double> absr(n);
+  for (Eigen::Index q = 0; q < n; ++q)
+    absr[q] = std::abs(dr.r(q));
+  dr.scale = std::max(1e-12, 1.4826 * median(absr));
+}
+
+} // namespace
+
+bool build_rate_design(const UsedData &data, const DiagnoseOptions &opt, const DiagnoseReport &rep, Design &dr,
+                       std::string &why) {
+  const FlowData flow = collect_flow(data.tracks, rep);
+  const Eigen::Matrix3d R_BC = opt.camera.T_BC.block<3, 3>(0, 0);
+  const ov_core::CameraModel cam(opt.camera);
+  FlowFitter fitter(flow.n_tracks);
+  FitMap fits, fits_psi;
+  fitter.solve(flow.frames, fits, fits_psi);
+  add_focal_response(flow.frames, cam, fitter, fits, fits_psi);
+
+  const auto body_se = [&](const Eigen::Matrix3d &C) {
+    return (R_BC * C * R_BC.transpose()).diagonal().cwiseMax(1e-20).cwiseSqrt().eval();
+  };
+  const double h_ns = 50e6; // ±50 ms for the angular acceleration: the gyro noise of a difference shrinks with it
+  // ω̄_gyro's fit uses the fitter's depth corrections as add_focal_response left them (those of the perturbed data).
+  GyroThroughImages gyro_bar(opt.imu, R_BC);
+  std::vector<FrameRate> fr;
+  for (const auto &[t_cam, ff] : fits) {
+    const double t_imu = double(t_cam) + 1e9 * flow.frame_td.at(t_cam);
+    FrameRate f;
+    f.t = 1e-9 * double(t_cam - data.t_first);
+    f.e = R_BC * ff.sol.head<3>() - gyro_at(opt.imu, t_imu);
+    f.gyro_s = R_BC * gyro_bar.omega(flow.frames.at(t_cam), ff, fitter);
+    f.e_s = R_BC * ff.sol.head<3>() - f.gyro_s;
+    f.alpha = (gyro_at(opt.imu, t_imu + h_ns) - gyro_at(opt.imu, t_imu - h_ns)) / (2e-9 * h_ns);
+    f.se = body_se(ff.C.topLeftCorner<3, 3>());
+    f.focal_e = R_BC * ff.focal.head<3>();
+    const auto fp = fits_psi.find(t_cam);
+    if (fp != fits_psi.end()) {
+      f.psi = R_BC * fp->second.sol.segment<3>(3);
+      f.psi_se = body_se(fp->second.C.block<3, 3>(3, 3));
+    } else { // no ψ row: zero weight
+      f.psi.setZero();
+      f.psi_se.setConstant(1e30);
+    }
+    fr.push_back(f);
+  }
+  if (fr.size() < 50) {
+    why = "only " + std::to_string(fr.size()) + " images with 12+ features of known depth";
+    return false;
+  }
+  fill_rate_rows(fr, rep, dr);
+  return true;
+}
+
+} // namespace ov_eval::diag

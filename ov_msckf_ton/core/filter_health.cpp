@@ -1,0 +1,143 @@
+#include "ov_msckf_ton/core/filter_health.h"
+#include "ov_core/types/errors.h"
+#include "ov_core/types/time.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace ov_msckf_ton {
+
+namespace {
+
+/// " (at IMU time 12.345 s, t_d 10.000 ms)": where the run stopped, for the message.
+std::string where(const State &s) {
+  char buf[80];
+  std::snprintf(buf, sizeof buf, " (at IMU time %.3f s, t_d %.3f ms)", ov_core::ns_to_s(s.t_imu_ns), s.td * 1e3);
+  return buf;
+}
+
+} // namespace
+
+FilterHealth::FilterHealth(const VioOptions &o) {
+  opt_.enabled = o.health.enabled;
+}
+
+void FilterHealth::on_update(int64_t t_ns, const UpdateStats &st) {
+  Tally e{t_ns, {}};
+  e.tally.used = st.features_used;
+  e.tally.gated = st.gated_chi2;
+  e.tally.failed_triangulation = st.rejected_triangulation;
+  total_.used += e.tally.used;
+  total_.gated += e.tally.gated;
+  total_.failed_triangulation += e.tally.failed_triangulation;
+  recent_.push_back(e);
+  while (!recent_.empty() && static_cast<double>(t_ns - recent_.front().t_ns) > opt_.window_s * 1e9)
+    recent_.pop_front();
+}
+
+void FilterHealth::on_td_update(int64_t t_ns, double td_prior, double var_prior, double td_post, double var_post) {
+  if (first_correction_ns_ < 0)
+    first_correction_ns_ = t_ns;
+  corrections_.push_back({t_ns, td_post - td_prior, std::max(0.0, var_prior - var_post)});
+  const double keep_ns = (opt_.td_window_s + opt_.td_persist_s) * 1e9;
+  while (!corrections_.empty() && static_cast<double>(t_ns - corrections_.front().t_ns) > keep_ns)
+    corrections_.pop_front();
+}
+
+UpdateTally FilterHealth::window() const {
+  UpdateTally w;
+  for (const auto &e : recent_) {
+    w.used += e.tally.used;
+    w.gated += e.tally.gated;
+    w.failed_triangulation += e.tally.failed_triangulation;
+  }
+  return w;
+}
+
+std::string FilterHealth::nonfinite_part(const State &s) {
+  if (!s.imu.R.allFinite() || !s.imu.p.allFinite() || !s.imu.v.allFinite())
+    return "IMU pose or velocity";
+  if (!s.imu.bg.allFinite() || !s.imu.ba.allFinite())
+    return "IMU biases";
+  if (!std::isfinite(s.td))
+    return "time offset t_d";
+  for (const auto &[t, c] : s.clones)
+    if (!c.R.allFinite() || !c.p.allFinite())
+      return "cloned pose at camera time " + std::to_string(t) + " ns";
+  if (!s.P.allFinite())
+    return "covariance";
+  // Rounding leaves tiny negative variances after long runs; a clearly negative one means the covariance is broken.
+  for (int i = 0; i < s.dim(); ++i)
+    if (s.P(i, i) < -1e-9)
+      return "covariance (negative variance at index " + std::to_string(i) + ")";
+  return "";
+}
+
+void FilterHealth::check(const State &s) const {
+  // A non-finite state is never worth a row, checks enabled or not.
+  const std::string bad = nonfinite_part(s);
+  if (!bad.empty())
+    throw ov_core::EstimatorFailure(s.t_imu_ns, "the filter's " + bad + " is no longer finite" + where(s));
+  if (!opt_.enabled)
+    return;
+  check_rates(s);
+  check_td(s);
+}
+
+void FilterHealth::check_rates(const State &s) const {
+  const UpdateTally w = window();
+  if (w.examined() < opt_.min_features)
+    return;
+  char msg[512];
+  if (w.acceptance() < opt_.min_acceptance) {
+    std::snprintf(msg, sizeof msg,
+                  "the estimate has diverged: over the last %.1f s only %ld of %ld features entered the update (%ld "
+                  "failed triangulation, %ld failed the chi-square gate); a healthy run keeps ~90 %%",
+                  opt_.window_s, w.used, w.examined(), w.failed_triangulation, w.gated);
+    throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));
+  }
+  if (w.gate_rate() > opt_.max_gate_rate) {
+    std::snprintf(msg, sizeof msg,
+                  "the estimate is inconsistent with the images: over the last %.1f s the chi-square gate rejected "
+                  "%ld of %ld triangulated features, where a 95 %% gate rejects 5 %% by chance",
+                  opt_.window_s, w.gated, w.used + w.gated);
+    throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));
+  }
+}
+
+FilterHealth::TdSum FilterHealth::td_sum(int64_t end_ns) const {
+  TdSum r;
+  const int64_t begin_ns = end_ns - static_cast<int64_t>(opt_.td_window_s * 1e9);
+  r.covered = first_correction_ns_ >= 0 && first_correction_ns_ <= begin_ns;
+  for (const auto &c : corrections_)
+    if (c.t_ns > begin_ns && c.t_ns <= end_ns) {
+      r.moved += c.delta;
+      r.allowed_var += c.var_drop;
+    }
+  return r;
+}
+
+void FilterHealth::check_td(const State &s) const {
+  if (!s.estimates_td() || corrections_.empty())
+    return;
+  const auto runaway = [&](const TdSum &t) {
+    const double moved = std::abs(t.moved);
+    return t.covered && moved > opt_.td_min_step_s && moved > opt_.td_max_z * std::sqrt(t.allowed_var);
+  };
+  const int64_t now_ns = corrections_.back().t_ns;
+  const TdSum now = td_sum(now_ns);
+  // The same a second earlier: a sustained walk, not the one-off jump of a filter converging from far off.
+  if (!runaway(now) || !runaway(td_sum(now_ns - static_cast<int64_t>(opt_.td_persist_s * 1e9))))
+    return;
+  char msg[400];
+  std::snprintf(msg, sizeof msg,
+                "the time offset is running away: the updates moved t_d by %.1f ms in %.1f s where the information "
+                "they added allowed %.2f ms (%.0f sigma), and as much the second before - a diverging estimate, not "
+                "a measurement",
+                now.moved * 1e3, opt_.td_window_s, std::sqrt(now.allowed_var) * 1e3,
+                std::abs(now.moved) / std::max(std::sqrt(now.allowed_var), 1e-12));
+  throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));
+}
+
+} // namespace ov_msckf_ton

@@ -1,0 +1,76 @@
+#pragma once
+// Dynamic initialisation: the IMU state of a platform that is already moving, from a short window of tracked features
+// and IMU readings, without ground truth. Same maths as OpenVINS' dynamic initialiser (Geneva et al.), reimplemented:
+//
+// Over a window of ~1 s the IMU alone gives each frame's orientation and position relative to the first IMU frame I0
+// up to the unknowns x = (v0, g0, b_g, b_a): R_k = ΔR_k(b_g), p_k = v0 t_k + ½ g0 t_k² + Δp_k(b_g, b_a), with v0 the
+// velocity and g0 gravity in I0, ΔR, Δp the pre-integrated gyro and accelerometer readings. Every tracked feature p_f
+// (in I0) must project onto its observations. With the biases held, the projections are linear in (p_f, v0, g0)
+// (bearing × point = 0), which gives a closed-form start with |g0| = g imposed by a Lagrange multiplier; a
+// Gauss-Newton / Levenberg-Marquardt refinement of the reprojection errors then estimates everything, biases
+// included. Scale is not a separate unknown: Δp is metric. The refinement's information matrix gives the covariance.
+#include "ov_core/types/sensor_data.h"
+
+#include <Eigen/Core>
+#include <deque>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ov_msckf_ton {
+
+/// Features seen in one image: (feature id, undistorted normalised coordinates), and the image's IMU-clock time.
+struct InitFrame {
+  int64_t t_cam_ns = 0;
+  int64_t t_imu_ns = 0;
+  std::vector<std::pair<size_t, Eigen::Vector2d>> obs;
+};
+
+struct DynamicInitOptions {
+  double window_s = 1.0;         ///< frames used: the newest and those up to this much older
+  int min_features = 15;         ///< features tracked through enough of the window
+  int max_features = 60;         ///< the longest tracks are used
+  int min_observations = 5;      ///< of a feature within the window
+  double min_disparity_px = 8.0; ///< median track displacement over the window: less is too little motion
+  double sigma_px = 1.0;         ///< pixel noise of a tracked observation
+  double huber_px = 2.0;         ///< robust loss: residuals beyond this count linearly
+  double sigma_bg_prior = 0.1;   ///< rad/s, prior of the gyro bias around zero (weak: the data decide)
+  double sigma_ba_prior = 0.2;   ///< m/s^2, prior of the accelerometer bias around zero
+  double max_rms_px = 1.5;       ///< reprojection RMS after the refinement (inliers)
+  /// Accept only a well-determined solution: gravity direction and velocity sigmas from the refinement's covariance.
+  double max_sigma_rollpitch_deg = 0.5;
+  double max_sigma_vel = 0.04;
+  double sigma_inflation = 2.0; ///< the covariance handed to the filter is this factor (on sigmas) above the fit's
+  int max_iterations = 30;
+};
+
+struct DynamicInitResult {
+  bool ok = false;
+  std::string why; ///< reason when !ok; a summary when ok
+  /// State at the newest frame's IMU time, in a gravity-aligned world (z up) whose yaw follows I0's x axis.
+  Eigen::Matrix3d R_WB = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero(), v_W = Eigen::Vector3d::Zero();
+  Eigen::Vector3d bg = Eigen::Vector3d::Zero(), ba = Eigen::Vector3d::Zero();
+  /// Covariance of [δθ δp δv δb_g δb_a] in the filter's error convention (state.h).
+  Eigen::Matrix<double, 15, 15> P = Eigen::Matrix<double, 15, 15>::Zero();
+  int features = 0, frames = 0, iterations = 0;
+  double rms_px = 0.0, sigma_rollpitch_deg = 0.0, sigma_vel = 0.0, disparity_px = 0.0;
+};
+
+/// `frames` oldest first (the newest is the state's time); `imu` must cover them. T_BC camera -> body; focal_px
+/// converts normalised residuals to pixels. sigma_yaw and sigma_pos are added to the unobservable directions.
+DynamicInitResult dynamic_initialize(const std::vector<InitFrame> &frames, const std::deque<ov_core::ImuData> &imu,
+                                     const Eigen::Matrix4d &T_BC, double focal_px, double gravity_mag, double sigma_yaw,
+                                     double sigma_pos, const DynamicInitOptions &opt);
+
+/// Pre-integrated IMU from t0 to each time in `t_ns` (sorted, all ≥ t0) with biases removed: orientation of the body
+/// at t relative to t0, and velocity / position change in the t0 body frame without gravity. Readings are
+/// interpolated at the ends; midpoint rule as in the propagator. Returns false when the readings do not cover them.
+struct Preintegrated {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d v = Eigen::Vector3d::Zero(), p = Eigen::Vector3d::Zero();
+};
+bool preintegrate(const std::deque<ov_core::ImuData> &imu, int64_t t0_ns, const std::vector<int64_t> &t_ns,
+                  const Eigen::Vector3d &bg, const Eigen::Vector3d &ba, std::vector<Preintegrated> &out);
+
+} // namespace ov_msckf_ton

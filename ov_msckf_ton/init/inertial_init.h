@@ -1,0 +1,57 @@
+#pragma once
+// Initialisation without ground truth, whatever the start: static when the platform is still (gravity from the mean
+// specific force, zero velocity), dynamic when it moves (dynamic_init.h). `auto` tells them apart by the images: a
+// flying MAV or a walking hand-held rig can show an IMU as calm as one standing on the ground, but not still images.
+#include "ov_msckf_ton/init/dynamic_init.h"
+
+#include <deque>
+#include <optional>
+#include <string>
+
+namespace ov_msckf_ton {
+
+struct InertialInitOptions {
+  bool allow_static = true;                                              ///< false: dynamic only (init mode dynamic)
+  bool allow_dynamic = true;                                             ///< false: static only
+  double static_window_s = 1.0, max_accel_std = 1.0, max_gyro_std = 0.1; ///< static_init.h
+  /// Still when the median feature displacement over the last still_window_s of images is below this.
+  double still_window_s = 0.3;
+  double still_max_disparity_px = 2.0;
+  double sigma_yaw = 1e-4, sigma_pos = 1e-4; ///< the unobservable directions' prior (dynamic)
+  DynamicInitOptions dynamic;
+};
+
+/// What an initialisation found: the IMU state at t_imu_ns, and for a dynamic one its covariance ([δθ δp δv δb_g
+/// δb_a], state.h); a static one leaves P to the configured sigmas.
+struct InitSolution {
+  Eigen::Matrix3d R_WB = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
+  Eigen::Vector3d bg = Eigen::Vector3d::Zero(), ba = Eigen::Vector3d::Zero();
+  std::optional<Eigen::Matrix<double, 15, 15>> P;
+  std::string message;
+};
+
+class InertialInitializer {
+public:
+  InertialInitializer(const InertialInitOptions &opt, const Eigen::Matrix4d &T_BC, double focal_px, double gravity_mag);
+
+  /// Called with every image before initialisation (its IMU-clock time and the features seen in it); returns the
+  /// solution once one is accepted. `why()` says what is missing until then.
+  std::optional<InitSolution> try_initialize(InitFrame frame, const std::deque<ov_core::ImuData> &imu);
+  const std::string &why() const { return why_; }
+  /// IMU history the initialiser needs before the newest image [s].
+  double imu_window_s() const;
+
+private:
+  /// Median displacement [px] of the features seen both in the newest image and in the oldest image within `span_s`
+  /// of it; nullopt when the images do not span that long yet or share fewer than 10 features.
+  std::optional<double> disparity_px(double span_s) const;
+
+  InertialInitOptions opt_;
+  Eigen::Matrix4d T_BC_;
+  double focal_px_, gravity_mag_;
+  std::deque<InitFrame> frames_;
+  std::string why_ = "no image yet";
+};
+
+} // namespace ov_msckf_ton

@@ -1,0 +1,370 @@
+#include "ov_msckf_ton/init/td_search.h"
+#include "ov_core/cam/camera_model.h"
+#include "ov_core/io/image_io.h"
+#include "ov_core/math/so3.h"
+
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <unordered_map>
+
+namespace ov_msckf_ton {
+
+namespace {
+
+/// The gyro as a function of time: linear between readings, with its exact running integral so that the mean rate
+/// over any interval costs two lookups (every candidate t_d needs every pair's mean).
+class GyroIntegral {
+public:
+  GyroIntegral(const std::vector<ov_core::ImuData> &imu, int64_t t0_ns) {
+    t_.reserve(imu.size());
+    for (const auto &m : imu) {
+      t_.push_back(ov_core::ns_to_s(m.t_imu_ns - t0_ns));
+      w_.push_back(m.wm);
+    }
+    c_.assign(t_.size(), Eigen::Vector3d::Zero());
+    for (size_t i = 1; i < t_.size(); ++i)
+      c_[i] = c_[i - 1] + 0.5 * (t_[i] - t_[i - 1]) * (w_[i] + w_[i - 1]);
+  }
+  double begin() const { return t_.empty() ? 0.0 : t_.front(); }
+  double end() const { return t_.empty() ? 0.0 : t_.back(); }
+  /// Mean rate over [a, b] (a < b, both inside the log).
+  Eigen::Vector3d mean(double a, double b) const { return (integral(b) - integral(a)) / (b - a); }
+
+private:
+  Eigen::Vector3d integral(double t) const {
+    const size_t i = std::min<size_t>(t_.size() - 2, std::upper_bound(t_.begin(), t_.end(), t) - t_.begin() - 1);
+    const double h = t_[i + 1] - t_[i], u = t - t_[i];
+    return c_[i] + u * w_[i] + 0.5 * u * u / h * (w_[i + 1] - w_[i]);
+  }
+  std::vector<double> t_;
+  std::vector<Eigen::Vector3d> w_, c_;
+};
+
+/// One pair of consecutive images: the body rate the images saw between them.
+struct PairRate {
+  double t0, t1;     ///< camera-clock seconds after the first image
+  Eigen::Vector3d w; ///< body frame [rad/s]
+};
+
+/// Rotation R with a_i ≈ R·c_i for unit bearings, by Kabsch with Huber weights (threshold `huber` in radians): far
+/// features follow the rotation alone, near ones add parallax, which the weights keep from pulling the fit. (Fitting
+/// the translation direction as well, by Gauss-Newton on the epipolar angles, was tried: over 50 ms the lateral
+/// translation it should separate looks like rotation through the field of view, and the search's error grew, e.g.
+/// from 0.8-1.0 to 1.4-1.6 ms on a rendered V1_02 flight.)
+Eigen::Matrix3d fit_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &c,
+                             double huber) {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  std::vector<double> w(a.size(), 1.0);
+  for (int iter = 0; iter < 5; ++iter) {
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    for (size_t i = 0; i < a.size(); ++i)
+      H += w[i] * c[i] * a[i].transpose();
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+    R = svd.matrixV() * D * svd.matrixU().transpose();
+    for (size_t i = 0; i < a.size(); ++i) {
+      const double e = (a[i] - R * c[i]).norm();
+      w[i] = e <= huber ? 1.0 : huber / e;
+    }
+  }
+  return R;
+}
+
+/// For each pair, the pairs whose interval middles lie within ±half_s of its own: the stretch whose mean is taken away.
+std::vector<std::pair<size_t, size_t>> neighbourhoods(const std::vector<PairRate> &pairs, double half_s) {
+  std::vector<std::pair<size_t, size_t>> out(pairs.size());
+  size_t b = 0, e = 0;
+  const auto mid = [&](size_t k) { return 0.5 * (pairs[k].t0 + pairs[k].t1); };
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    while (mid(b) < mid(k) - half_s)
+      ++b;
+    while (e < pairs.size() && mid(e) <= mid(k) + half_s)
+      ++e;
+    out[k] = {b, e};
+  }
+  return out;
+}
+
+/// The rows of one candidate's cost: mean gyro rate over each image interval shifted by t_d, minus the images' rate,
+/// high-passed by taking away its mean over the neighbourhood. What the high-pass removes is the gyro bias and the
+/// translational flow a rotation fit cannot tell from rotation (lateral motion looks like a turn through a limited
+/// field of view: measured 0.15-0.2 rad/s on rendered flights, varying with the velocity, i.e. slowly), while the
+/// faster changes of the turn rate, which fix the time, stay.
+struct CostEval {
+  double cost = 0.0;       ///< Σ w·|h|² with the weights w
+  double huber_loss = 0.0; ///< Σ ρ(|h|), ρ Huber with scale c
+  std::vector<double> w;
+  std::vector<double> norms; ///< |h| per row
+};
+
+CostEval evaluate(const std::vector<PairRate> &pairs, const std::vector<std::pair<size_t, size_t>> &hood,
+                  const GyroIntegral &gyro, double td, double c, const std::vector<double> *fixed_w = nullptr) {
+  const size_t n = pairs.size();
+  std::vector<Eigen::Vector3d> r(n), prefix(n + 1, Eigen::Vector3d::Zero());
+  for (size_t k = 0; k < n; ++k) {
+    r[k] = gyro.mean(pairs[k].t0 + td, pairs[k].t1 + td) - pairs[k].w;
+    prefix[k + 1] = prefix[k] + r[k];
+  }
+  CostEval out;
+  out.w.assign(n, 1.0);
+  out.norms.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    const auto [b, e] = hood[k];
+    const double h = out.norms[k] = (r[k] - (prefix[e] - prefix[b]) / static_cast<double>(e - b)).norm();
+    out.w[k] = fixed_w ? (*fixed_w)[k] : (h <= c ? 1.0 : c / h);
+    out.cost += out.w[k] * h * h;
+    out.huber_loss += h <= c ? 0.5 * h * h : c * (h - 0.5 * c);
+  }
+  return out;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty())
+    return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+/// RMS angular acceleration of images [b, e) from the gyro's mean rate per image interval at t_d = prior.
+double rms_alpha(const std::vector<double> &t_img, size_t b, size_t e, const GyroIntegral &gyro, double prior) {
+  double sum = 0;
+  int n = 0;
+  for (size_t k = b + 2; k < e; ++k) {
+    const double a0 = t_img[k - 2] + prior, a1 = t_img[k - 1] + prior, a2 = t_img[k] + prior;
+    if (a0 < gyro.begin() || a2 > gyro.end())
+      continue;
+    const Eigen::Vector3d alpha = (gyro.mean(a1, a2) - gyro.mean(a0, a1)) / (0.5 * (a2 - a0));
+    sum += alpha.squaredNorm();
+    ++n;
+  }
+  return n > 0 ? std::sqrt(sum / n) : 0.0;
+}
+
+/// Images [b, e) of the search and their gyro's RMS angular acceleration.
+struct Window {
+  size_t b = 0, e = 0;
+  double rms_alpha = -1;
+};
+
+/// The first window (starts 1 s apart, within max_start_s) whose rotation changes enough to fix the time, else the one
+/// that changes most.
+Window choose_window(const std::vector<double> &t_img, const GyroIntegral &gyro, double prior,
+                     const TdSearchOptions &opt) {
+  Window best;
+  for (double start = 0; start <= opt.max_start_s && start <= t_img.back(); start += 1.0) {
+    Window w;
+    w.b = std::lower_bound(t_img.begin(), t_img.end(), start) - t_img.begin();
+    w.e = std::lower_bound(t_img.begin(), t_img.end(), start + opt.window_s) - t_img.begin();
+    w.rms_alpha = rms_alpha(t_img, w.b, w.e, gyro, prior);
+    if (w.rms_alpha > best.rms_alpha)
+      best = w;
+    if (w.rms_alpha >= opt.min_rms_alpha || w.e >= t_img.size())
+      break;
+  }
+  return best;
+}
+
+/// The images' rotation rate between consecutive frames of the window, in the body frame: KLT tracks (or a
+/// feature-level dataset's observations), a rotation-only fit per pair with 10 or more common features.
+std::vector<PairRate> image_pair_rates(const std::vector<ov_core::ImageEntry> &images, const Window &win,
+                                       const std::vector<double> &t_img, const ov_core::CameraCalib &cam,
+                                       const TdSearchOptions &opt, const TdSearchImageLoader &load) {
+  const ov_core::CameraModel camera(cam);
+  ov_core::TrackKLT tracker(camera, opt.track);
+  const Eigen::Matrix3d R_BC = cam.T_BC.block<3, 3>(0, 0);
+  const double huber_rad = 2.0 / std::max(camera.fu(), camera.fv());
+  std::unordered_map<size_t, Eigen::Vector3d> prev, curr;
+  std::vector<PairRate> pairs;
+  std::vector<Eigen::Vector3d> bear0, bear1;
+  for (size_t i = win.b; i < win.e; ++i) {
+    const auto &e = images[i];
+    curr.clear();
+    if (e.features) {
+      for (const auto &o : *e.features)
+        curr[o.id] = camera.undistort(o.uv).homogeneous().normalized();
+    } else {
+      const cv::Mat img = load ? load(e) : ov_core::load_gray_image(e, cam.width, cam.height);
+      for (const auto &f : tracker.track(e.t_cam_ns, img))
+        curr[f.id] = f.xy.homogeneous().normalized();
+    }
+    if (i > win.b) {
+      bear0.clear();
+      bear1.clear();
+      for (const auto &[id, b1] : curr)
+        if (auto it = prev.find(id); it != prev.end()) {
+          bear0.push_back(it->second);
+          bear1.push_back(b1);
+        }
+      const double dt = t_img[i] - t_img[i - 1];
+      if (bear0.size() >= 10 && dt > 0) {
+        // bear0 ≈ R_{C_{k-1} C_k}·bear1; the body rotation over the interval is R_BC·R·R_CB, so its rate is
+        // R_BC·log(R)/dt.
+        const Eigen::Matrix3d R = fit_rotation(bear0, bear1, huber_rad);
+        pairs.push_back({t_img[i - 1], t_img[i], R_BC * ov_core::so3_log(R) / dt});
+      }
+    }
+    std::swap(prev, curr);
+  }
+  return pairs;
+}
+
+} // namespace
+
+std::string TdSearchResult::summary() const {
+  char buf[320];
+  if (found)
+    std::snprintf(buf, sizeof buf,
+                  "t_d %.2f +- %.2f ms (searched %.1f +- %.0f ms on images %.1f-%.1f s, %d pairs, RMS angular "
+                  "acceleration %.2f rad/s^2, %.1f s)",
+                  td_s * 1e3, sigma_s * 1e3, prior_s * 1e3, range_s * 1e3, window_begin_s, window_end_s, pairs,
+                  rms_alpha, seconds);
+  else
+    std::snprintf(buf, sizeof buf, "not used, t_d stays at %.2f ms: %s (%.1f s)", prior_s * 1e3, why.c_str(), seconds);
+  return buf;
+}
+
+TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const std::vector<ov_core::ImuData> &imu,
+                         const ov_core::CameraCalib &cam, double prior_td_s, const TdSearchOptions &opt,
+                         const TdSearchImageLoader &load) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  TdSearchResult res;
+  res.prior_s = res.td_s = prior_td_s;
+  res.range_s = opt.range_s;
+  const auto finish = [&](const std::string &why) {
+    res.why = why;
+    res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    return res;
+  };
+  if (images.size() < 3 || imu.size() < 3)
+    return finish("too few images or IMU readings");
+
+  const int64_t t0 = images.front().t_cam_ns;
+  const GyroIntegral gyro(imu, t0);
+  std::vector<double> t_img(images.size());
+  for (size_t i = 0; i < images.size(); ++i)
+    t_img[i] = ov_core::ns_to_s(images[i].t_cam_ns - t0);
+
+  const Window win = choose_window(t_img, gyro, prior_td_s, opt);
+  res.rms_alpha = std::max(0.0, win.rms_alpha);
+  if (win.e <= win.b + 2)
+    return finish("no stretch of images within the IMU log");
+  res.window_begin_s = t_img[win.b];
+  res.window_end_s = t_img[win.e - 1];
+  if (win.rms_alpha < opt.min_rms_alpha) {
+    char why[160];
+    std::snprintf(why, sizeof why, "too little rotation change (RMS angular acceleration %.2f rad/s^2 < %.2f)",
+                  win.rms_alpha, opt.min_rms_alpha);
+    return finish(why);
+  }
+
+  std::vector<PairRate> pairs = image_pair_rates(images, win, t_img, cam, opt, load);
+  // Every candidate must see the same pairs: keep those the gyro covers over the whole search range.
+  pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                             [&](const PairRate &p) {
+                               return p.t0 + prior_td_s - opt.range_s < gyro.begin() ||
+                                      p.t1 + prior_td_s + opt.range_s > gyro.end();
+                             }),
+              pairs.end());
+  res.pairs = static_cast<int>(pairs.size());
+  if (res.pairs < opt.min_pairs)
+    return finish("only " + std::to_string(res.pairs) + " image pairs with a rotation fit inside the IMU log");
+
+  const auto hood = neighbourhoods(pairs, 0.5 * opt.highpass_s);
+  double mean_hood = 0;
+  for (const auto &[b, e] : hood)
+    mean_hood += static_cast<double>(e - b) / static_cast<double>(hood.size());
+
+  // Pass 1, least squares on the grid (c = inf); its residuals set the Huber scale of pass 2.
+  const int n_steps = static_cast<int>(std::round(opt.range_s / opt.step_s));
+  const double inf = std::numeric_limits<double>::infinity();
+  const auto grid_best = [&](double c, std::vector<double> *profile) {
+    double best = inf, best_td = prior_td_s;
+    for (int s = -n_steps; s <= n_steps; ++s) {
+      const double td = prior_td_s + s * opt.step_s;
+      const double J = evaluate(pairs, hood, gyro, td, c).huber_loss;
+      if (profile)
+        profile->push_back(J);
+      if (J < best) {
+        best = J;
+        best_td = td;
+      }
+    }
+    return best_td;
+  };
+  const double td1 = grid_best(inf, nullptr);
+  // Scale of the rows at the least-squares optimum (MAD of their norms), for the Huber threshold.
+  const double scale = std::max(1e-3, 1.4826 * median(evaluate(pairs, hood, gyro, td1, inf).norms));
+  const double c = 2.0 * scale;
+  std::vector<double> profile;
+  double td2 = grid_best(c, &profile);
+  // Refine: 0.1 ms steps around the best grid point.
+  {
+    double best = inf;
+    const double centre = td2;
+    for (int s = -20; s <= 20; ++s) {
+      const double td = centre + s * 1e-4;
+      const double J = evaluate(pairs, hood, gyro, td, c).huber_loss;
+      if (J < best) {
+        best = J;
+        td2 = td;
+      }
+    }
+  }
+  res.td_s = td2;
+
+  // Standard error from the curvature of the weighted least-squares cost at the minimum (weights fixed there):
+  // σ² = 2·s²/J'', s² the residual variance per row.
+  const CostEval at = evaluate(pairs, hood, gyro, td2, c);
+  const double h = 0.002;
+  const double Jp = evaluate(pairs, hood, gyro, td2 + h, c, &at.w).cost,
+               Jm = evaluate(pairs, hood, gyro, td2 - h, c, &at.w).cost;
+  const double curvature = (Jp - 2 * at.cost + Jm) / (h * h);
+  double sw = 0;
+  for (double w : at.w)
+    sw += w;
+  // Per row and axis; the high-pass takes away 1/m of white noise's variance (m rows per neighbourhood).
+  const double s2 = at.cost / std::max(1.0, 3 * sw * (1 - 1 / mean_hood) - 1);
+  res.sigma_s = curvature > 0 ? std::sqrt(2 * s2 / curvature) : inf;
+  res.residual_sigma = std::sqrt(s2);
+  res.cost_profile = profile;
+
+  // A second valley anywhere else in the range that the data cannot tell from the best one makes the answer a guess:
+  // the lowest local minimum of the profile farther from the best than its own valley plausibly reaches.
+  const double sep = std::max(0.01, 4 * res.sigma_s);
+  double rival = inf;
+  for (int i = 0; i < static_cast<int>(profile.size()); ++i) {
+    const bool local_min = (i == 0 || profile[i - 1] >= profile[i]) &&
+                           (i + 1 == static_cast<int>(profile.size()) || profile[i + 1] >= profile[i]);
+    if (local_min && std::abs(prior_td_s + (i - n_steps) * opt.step_s - td2) > sep)
+      rival = std::min(rival, profile[i]);
+  }
+  const double best_loss = at.huber_loss;
+  res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  char why[200];
+  if (std::abs(td2 - prior_td_s) > opt.range_s - 2 * opt.step_s) {
+    std::snprintf(why, sizeof why, "best candidate %.1f ms at the edge of the range: the offset may lie beyond it",
+                  td2 * 1e3);
+    return finish(why);
+  }
+  if (!(res.sigma_s <= opt.max_sigma_s)) {
+    std::snprintf(why, sizeof why, "best candidate %.1f ms too uncertain (sigma %.1f ms)", td2 * 1e3,
+                  res.sigma_s * 1e3);
+    return finish(why);
+  }
+  // Twice the loss difference over the residual variance is a chi-square-like statistic (the Huber loss is half the
+  // squared residual inside c): under 25 (5 sigma) the rival valley cannot be excluded.
+  if (2 * (rival - best_loss) / s2 < 25) {
+    std::snprintf(why, sizeof why, "ambiguous: another minimum fits almost as well as %.1f ms", td2 * 1e3);
+    return finish(why);
+  }
+  res.found = true;
+  return res;
+}
+
+} // namespace ov_msckf_ton

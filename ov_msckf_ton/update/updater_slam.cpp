@@ -1,0 +1,218 @@
+#include "ov_msckf_ton/update/updater_slam.h"
+#include "ov_core/types/errors.h"
+#include "ov_msckf_ton/state/state_helper.h"
+#include "ov_msckf_ton/update/feature_jacobians.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/QR>
+#include <cmath>
+
+namespace ov_msckf_ton {
+
+namespace {
+
+/// Scatters a compact Jacobian (columns = state indices `cols`) into a dense row block over `dim` columns.
+Eigen::MatrixXd scatter(const Eigen::MatrixXd &compact, const std::vector<int> &cols, int dim) {
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(compact.rows(), dim);
+  for (size_t j = 0; j < cols.size(); ++j)
+    H.col(cols[j]) = compact.col(static_cast<Eigen::Index>(j));
+  return H;
+}
+
+} // namespace
+
+UpdaterSLAM::UpdaterSLAM(const ov_core::CameraCalib &calib, const UpdaterSlamOptions &opt, const UpdaterMSCKF &msckf)
+    : opt_(opt), msckf_(msckf) {
+  (void)calib; // the calibration comes from the updater's view of the state (fixed or estimated)
+  if (!(opt_.sigma_px > 0) || !(opt_.chi2_multiplier > 0))
+    throw ov_core::UsageError("UpdaterSLAM: sigma_px and chi2_multiplier must be positive");
+}
+
+void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feature *> &features, int64_t t_cam_ns,
+                             TdObservation td_obs, const VelocityProvider &velocities, SlamStats &stats) {
+  const double sigma2 = opt_.sigma_px * opt_.sigma_px;
+  for (const ov_core::Feature *f : features) {
+    if (state.landmarks.count(f->id))
+      continue;
+    const TriangulationResult tri = msckf_.triangulate_feature(state, *f, td_obs, velocities);
+    if (!tri.ok() || !msckf_.linearize(state, *f, tri.p_W, td_obs, velocities, lin_) || lin_.r.size() < 5) {
+      ++stats.init_rejected;
+      continue;
+    }
+    // Split the rows by the QR of H_f: the first three fix the landmark, the rest do not involve it.
+    const Eigen::Index rows = lin_.r.size();
+    const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(lin_.H_f);
+    Eigen::MatrixXd Hx = lin_.H_x;
+    Eigen::VectorXd r = lin_.r;
+    Hx.applyOnTheLeft(qr.householderQ().adjoint());
+    r.applyOnTheLeft(qr.householderQ().adjoint());
+    const Eigen::Matrix3d R1 = qr.matrixQR().topRows<3>().triangularView<Eigen::Upper>();
+    // A landmark the window barely constrains along one direction would enter with a huge, badly conditioned
+    // covariance: leave it to the MSCKF.
+    if (R1.diagonal().cwiseAbs().minCoeff() < 1e-6 * R1.diagonal().cwiseAbs().maxCoeff()) {
+      ++stats.init_rejected;
+      continue;
+    }
+    const int n = state.dim();
+    const Eigen::MatrixXd H1 = scatter(Hx.topRows(3), lin_.cols, n);
+    const Eigen::MatrixXd H2 = scatter(Hx.bottomRows(rows - 3), lin_.cols, n);
+    const Eigen::Vector3d r1 = r.head<3>();
+    const Eigen::VectorXd r2 = r.tail(rows - 3);
+
+    Eigen::MatrixXd S2 = H2 * state.P * H2.transpose();
+    S2.diagonal().array() += sigma2;
+    const double chi2 = r2.dot(S2.ldlt().solve(r2));
+    if (!std::isfinite(chi2) || chi2 > opt_.chi2_multiplier / msckf_.options().chi2_multiplier *
+                                           msckf_.chi2_threshold(static_cast<int>(r2.size()))) {
+      ++stats.init_rejected;
+      continue;
+    }
+
+    // The invertible part initialises the landmark with its cross-covariance to the state.
+    const Eigen::Matrix3d R1inv = R1.inverse();
+    const Eigen::MatrixXd M = state.P * H1.transpose(); // n x 3
+    Eigen::Matrix3d S1 = H1 * M;
+    S1.diagonal().array() += sigma2;
+    LandmarkState l;
+    l.id = f->id;
+    l.p_W = tri.p_W + R1inv * r1;
+    // First estimate in the anchor clone's first-estimate frame, as the MSCKF linearises (UpdaterMSCKF::linearize).
+    const CloneState &anchor = *lin_.obs.back().clone;
+    l.p_fej = anchor.R_lin() * (anchor.R.transpose() * (l.p_W - anchor.p)) + anchor.p_lin();
+    l.t_init_ns = t_cam_ns;
+    const Eigen::Matrix3d P_ff = R1inv * S1 * R1inv.transpose();
+    const Eigen::MatrixXd P_xf = -M * R1inv.transpose();
+    l.index = state.add_variable(P_ff);
+    state.P.block(0, l.index, n, 3) = P_xf;
+    state.P.block(l.index, 0, 3, n) = P_xf.transpose();
+    state.landmarks[l.id] = l;
+    // The rest of the window's information, now that the landmark is in the state.
+    if (r2.size() > 0) {
+      Eigen::MatrixXd H2n = Eigen::MatrixXd::Zero(H2.rows(), state.dim());
+      H2n.leftCols(n) = H2;
+      state_helper::ekf_update(state, H2n, r2, sigma2);
+    }
+    ++stats.initialised;
+  }
+}
+
+bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
+                            const CloneState &c, const ov_core::Feature &feature, size_t obs_index,
+                            TdObservation td_obs, const VelocityProvider &velocities,
+                            LandmarkLinearization &out) const {
+  Eigen::Vector2d zhat, z_lin;
+  Eigen::Vector3d p_C;
+  CloneMeasurementJacobians J;
+  if (!project_in_clone(c.R, c.p, view.R_BC, view.p_BC, l.p_W, zhat, &p_C) ||
+      !project_in_clone(c.R_lin(), c.p_lin(), view.R_BC, view.p_BC, l.p_fej, z_lin, nullptr, &J))
+    return false;
+  out.depth = p_C.z();
+  if (out.depth < opt_.min_depth || out.depth > opt_.max_depth)
+    return false;
+  const ov_core::FeatureObservation &o = feature.obs[obs_index];
+  Eigen::Vector2d vel;
+  int src = kVelocityNone;
+  const bool has_vel = velocities.velocity(feature, obs_index, vel, src);
+  out.td_column = td_obs == TdObservation::ImagePlane && state.estimates_td() && has_vel;
+  Eigen::Vector2d shift = Eigen::Vector2d::Zero();
+  if (out.td_column)
+    shift += vel * (state.td - c.td_ref);
+  const double rho = UpdaterMSCKF::row_factor(view, o);
+  if (view.readout_s != 0.0 && has_vel)
+    shift += vel * (view.readout_s * rho);
+  // Pixel rows, as the MSCKF (UpdaterMSCKF::linearize): scaled by the distortion Jacobian at the observation, or
+  // the raw pixel when the intrinsics are estimated.
+  Eigen::Matrix2d Jd;
+  Eigen::Vector2d zs;
+  if (view.est_intr) {
+    zs = zhat + shift;
+    out.r = o.uv - view.cam->distort(zs, &Jd);
+  } else {
+    view.cam->distort(o.xy, &Jd);
+    out.r = Jd * (o.xy - shift - zhat);
+  }
+  out.H_clone.leftCols<3>() = Jd * J.H_theta;
+  out.H_clone.rightCols<3>() = Jd * J.H_p;
+  out.H_f = Jd * J.H_f;
+  out.H_td = out.td_column ? Eigen::Vector2d(Jd * vel) : Eigen::Vector2d::Zero();
+  // Calibration columns, as UpdaterMSCKF::linearize.
+  const CalibState &cal = state.calib;
+  out.calib_cols.clear();
+  const int n = (view.est_ext ? 6 : 0) + (view.est_intr ? 8 : 0) + (view.est_readout && has_vel ? 1 : 0);
+  out.H_calib.setZero(2, n);
+  int k = 0;
+  if (view.est_ext) {
+    out.H_calib.middleCols<3>(k) = Jd * J.H_ext_theta;
+    out.H_calib.middleCols<3>(k + 3) = Jd * J.H_ext_p;
+    for (int j = 0; j < 6; ++j)
+      out.calib_cols.push_back(cal.extrinsics_index + j);
+    k += 6;
+  }
+  if (view.est_intr) {
+    out.H_calib.middleCols<8>(k) = view.cam->intrinsics_jacobian(zs);
+    for (int j = 0; j < 8; ++j)
+      out.calib_cols.push_back(cal.intrinsics_index + j);
+    k += 8;
+  }
+  if (view.est_readout && has_vel) {
+    out.H_calib.col(k) = Jd * vel * rho;
+    out.calib_cols.push_back(cal.readout_index);
+  }
+  return true;
+}
+
+void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64_t t_cam_ns, TdObservation td_obs,
+                         const VelocityProvider &velocities, SlamStats &stats, std::vector<size_t> &drop) {
+  const auto clone_it = state.clones.find(t_cam_ns);
+  if (clone_it == state.clones.end() || state.landmarks.empty())
+    return;
+  const CloneState &c = clone_it->second;
+  const UpdaterMSCKF::CameraView view = msckf_.camera_view(state);
+  const double sigma2 = opt_.sigma_px * opt_.sigma_px;
+  const double thr = opt_.chi2_multiplier / msckf_.options().chi2_multiplier * msckf_.chi2_threshold(2);
+  const int n = state.dim();
+  std::vector<Eigen::Matrix<double, 2, Eigen::Dynamic>> rows_H;
+  std::vector<Eigen::Vector2d> rows_r;
+  LandmarkLinearization lin;
+  for (auto &[id, l] : state.landmarks) {
+    const ov_core::Feature *f = db.get(id);
+    if (!f || f->obs.empty() || f->newest().t_cam_ns != t_cam_ns)
+      continue; // not seen in this image: the caller marginalises it
+    if (!linearize(view, state, l, c, *f, f->obs.size() - 1, td_obs, velocities, lin)) {
+      drop.push_back(id);
+      continue;
+    }
+    // S over the involved columns only: the clone, the landmark, t_d.
+    const int cols[] = {c.index, l.index, state.td_index};
+    Eigen::Matrix<double, 2, Eigen::Dynamic> H = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, n);
+    H.block<2, 6>(0, cols[0]) = lin.H_clone;
+    H.block<2, 3>(0, cols[1]) = lin.H_f;
+    if (lin.td_column)
+      H.col(cols[2]) += lin.H_td;
+    for (size_t j = 0; j < lin.calib_cols.size(); ++j)
+      H.col(lin.calib_cols[j]) += lin.H_calib.col(static_cast<Eigen::Index>(j));
+    Eigen::Matrix2d S = H * state.P * H.transpose();
+    S.diagonal().array() += sigma2;
+    const double chi2 = lin.r.dot(S.ldlt().solve(lin.r));
+    if (!std::isfinite(chi2) || chi2 > thr) {
+      ++stats.gated;
+      continue;
+    }
+    rows_H.push_back(H);
+    rows_r.push_back(lin.r);
+    ++l.updates;
+  }
+  if (rows_r.empty())
+    return;
+  Eigen::MatrixXd H(2 * rows_r.size(), n);
+  Eigen::VectorXd r(2 * rows_r.size());
+  for (size_t k = 0; k < rows_r.size(); ++k) {
+    H.middleRows<2>(2 * k) = rows_H[k];
+    r.segment<2>(2 * k) = rows_r[k];
+  }
+  UpdaterMSCKF::compress(H, r);
+  state_helper::ekf_update(state, H, r, sigma2);
+  stats.updated += static_cast<int>(rows_r.size());
+}
+
+} // namespace ov_msckf_ton

@@ -1,0 +1,84 @@
+#pragma once
+// SLAM features (as OpenVINS): long-lived landmarks kept in the state next to the MSCKF window. A feature tracked
+// through the whole window is, instead of being used once by the MSCKF and forgotten, initialised into the state by
+// delayed initialisation (its window observations fix it; the rest of their information updates the state), then
+// updated by every new observation, and marginalised when the tracker loses it. Its information then carries past
+// the window's 1 s instead of being cut at the window's edge.
+#include "ov_core/cam/camera_calib.h"
+#include "ov_core/track/feature_database.h"
+#include "ov_msckf_ton/state/state.h"
+#include "ov_msckf_ton/update/td_observation.h"
+#include "ov_msckf_ton/update/updater_msckf.h"
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace ov_msckf_ton {
+
+struct UpdaterSlamOptions {
+  double sigma_px = 1.0;
+  double chi2_multiplier = 1.0;
+  double min_depth = 0.1, max_depth = 60.0; ///< [m]: a landmark leaving this range is marginalised
+};
+
+struct SlamStats {
+  int initialised = 0, init_rejected = 0; ///< delayed initialisations done / refused (triangulation or chi2)
+  int updated = 0, gated = 0;             ///< landmark observations used / refused by the chi2 gate this frame
+  int marginalised = 0;
+};
+
+/// The measurement of one landmark in one clone: residual r = Jd (z − V·(t_d − td_ref) − π(clone, p_f)) in pixels
+/// (the V term in image-plane modes only), Jacobians w.r.t. the clone's [δθ δp] (at its first estimate), the
+/// landmark's δp_f (at its first estimate) and t_d (+Jd·V, as UpdaterMSCKF::linearize).
+struct LandmarkLinearization {
+  Eigen::Vector2d r = Eigen::Vector2d::Zero();
+  Eigen::Matrix<double, 2, 6> H_clone = Eigen::Matrix<double, 2, 6>::Zero();
+  Eigen::Matrix<double, 2, 3> H_f = Eigen::Matrix<double, 2, 3>::Zero();
+  Eigen::Vector2d H_td = Eigen::Vector2d::Zero();
+  bool td_column = false;
+  std::vector<int> calib_cols;                      ///< state indices of H_calib's columns
+  Eigen::Matrix<double, 2, Eigen::Dynamic> H_calib; ///< extrinsics, intrinsics, readout where estimated
+  double depth = 0.0;
+};
+
+class UpdaterSLAM {
+public:
+  /// `msckf` supplies the shared triangulation, linearisation, distortion Jacobian and chi-square table.
+  UpdaterSLAM(const ov_core::CameraCalib &calib, const UpdaterSlamOptions &opt, const UpdaterMSCKF &msckf);
+
+  /// Delayed initialisation (OpenVINS' StateHelper::initialize): each feature is triangulated and linearised over
+  /// its window observations as for an MSCKF update, r = H_x δx + H_f δp_f + n; the QR of H_f splits the rows
+  ///   top 3:       r₁ = H_x1 δx + R₁ δp_f + n₁   -> the landmark: p_f += R₁⁻¹ r₁,
+  ///                P_ff = R₁⁻¹ (H_x1 P H_x1ᵀ + σ²I) R₁⁻ᵀ,  P_xf = −P H_x1ᵀ R₁⁻ᵀ;
+  ///   remaining:   r₂ = H_x2 δx + n₂              -> an EKF update of the state (and, through P_xf, the landmark),
+  /// after a chi-square test of r₂. Features that fail either step stay out of the state.
+  void initialize(State &state, const std::vector<const ov_core::Feature *> &features, int64_t t_cam_ns,
+                  TdObservation td_obs, const VelocityProvider &velocities, SlamStats &stats);
+
+  /// Updates every landmark observed at t_cam_ns (the newest clone) with that observation: one chi-square test per
+  /// landmark (2 dof), the passing ones stacked into one EKF update. Landmarks that can no longer be linearised
+  /// (behind the camera, outside the depth range) are appended to `drop` for the caller to marginalise.
+  void update(State &state, const ov_core::FeatureDatabase &db, int64_t t_cam_ns, TdObservation td_obs,
+              const VelocityProvider &velocities, SlamStats &stats, std::vector<size_t> &drop);
+
+  /// Residual and Jacobians of landmark `l` seen at observation `obs_index` of `feature` in `clone`; false when
+  /// the landmark is behind the camera or outside the depth range.
+  bool linearize(const State &state, const LandmarkState &l, const CloneState &clone, const ov_core::Feature &feature,
+                 size_t obs_index, TdObservation td_obs, const VelocityProvider &velocities,
+                 LandmarkLinearization &out) const {
+    return linearize(msckf_.camera_view(state), state, l, clone, feature, obs_index, td_obs, velocities, out);
+  }
+  /// The same with the calibration view of the update (UpdaterMSCKF::camera_view), computed once per update. The
+  /// calibration columns (extrinsics, intrinsics, readout: those the state estimates) are H_calib, in the order of
+  /// `calib_cols`.
+  bool linearize(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
+                 const CloneState &clone, const ov_core::Feature &feature, size_t obs_index, TdObservation td_obs,
+                 const VelocityProvider &velocities, LandmarkLinearization &out) const;
+
+private:
+  UpdaterSlamOptions opt_;
+  const UpdaterMSCKF &msckf_;
+  FeatureLinearization lin_;
+};
+
+} // namespace ov_msckf_ton

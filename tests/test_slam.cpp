@@ -1,0 +1,184 @@
+// SLAM features (ov_msckf_ton/update/updater_slam.h): the landmark measurement Jacobians against finite differences
+// in the state's ⊞ convention, delayed initialisation consistent over Monte-Carlo trials, and a whole run.
+#include "fd_check.h"
+#include "ov_core/io/dataset.h"
+#include "ov_core/io/replay.h"
+#include "ov_core/math/so3.h"
+#include "ov_msckf_ton/core/vio_manager.h"
+#include "ov_msckf_ton/state/state_helper.h"
+#include "ov_msckf_ton/update/feature_jacobians.h"
+#include "ov_msckf_ton/update/updater_slam.h"
+#include "ov_sim/euroc_calib.h"
+#include "ov_sim/simulator.h"
+#include "test_util.h"
+
+#include <random>
+
+using namespace ov_msckf_ton;
+
+namespace {
+
+constexpr int64_t kT0 = 1403636579763555584;
+
+/// A state with `n` clones along a short arc looking at the origin region, and t_d in the state.
+struct SlamScene {
+  ov_core::CameraCalib calib = ov_sim::euroc_cam0_calib();
+  Eigen::Matrix3d R_BC = calib.T_BC.topLeftCorner<3, 3>();
+  Eigen::Vector3d p_BC = calib.T_BC.topRightCorner<3, 1>();
+  State state{true};
+
+  explicit SlamScene(int n) {
+    state.P = Eigen::MatrixXd::Identity(state.dim(), state.dim()) * 1e-6;
+    for (int k = 0; k < n; ++k) {
+      const double a = 0.05 * k;
+      // Body x forward-ish; the camera (R_BC) then looks roughly along world +x.
+      state.imu.R = ov_core::so3_exp(Eigen::Vector3d(0.02 * k, -0.01 * k, 0.03 * k)) *
+                    (Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished() * R_BC.transpose();
+      state.imu.p = Eigen::Vector3d(-3.0 + 0.1 * std::sin(a), 0.3 * a, 0.1 * a);
+      state.t_imu_ns = kT0 + 50000000LL * k;
+      state_helper::clone(state, kT0 + 50000000LL * k, false, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+    }
+  }
+  bool project(const CloneState &c, const Eigen::Vector3d &p_W, Eigen::Vector2d &xy) const {
+    return project_in_clone(c.R, c.p, R_BC, p_BC, p_W, xy);
+  }
+};
+
+ov_core::Feature feature_of(const SlamScene &sc, const Eigen::Vector3d &p_W, double noise, std::mt19937 &rng) {
+  std::normal_distribution<double> n(0, noise);
+  ov_core::CameraModel cam(sc.calib);
+  ov_core::Feature f;
+  f.id = 7;
+  for (const auto &[t, c] : sc.state.clones) {
+    Eigen::Vector2d xy;
+    EXPECT_TRUE(sc.project(c, p_W, xy));
+    // Noise where the tracker makes it: in distorted pixels.
+    ov_core::FeatureObservation o;
+    o.t_cam_ns = t;
+    o.uv = cam.distort(xy) + Eigen::Vector2d(n(rng), n(rng));
+    o.xy = cam.undistort(o.uv);
+    xy = o.xy;
+    if (!f.obs.empty()) {
+      o.vel_xy = (xy - f.obs.back().xy) / 0.05;
+      o.vel_valid = true;
+    }
+    f.obs.push_back(o);
+  }
+  return f;
+}
+
+} // namespace
+
+TEST(SlamJacobians, LandmarkMeasurementMatchesFiniteDifferences) {
+  SlamScene sc(4);
+  const Eigen::Vector3d p_f(0.4, -0.3, 0.2);
+  std::mt19937 rng(1);
+  const ov_core::Feature f = feature_of(sc, p_f, 0.5, rng);
+  LandmarkState l;
+  l.p_W = l.p_fej = p_f + Eigen::Vector3d(0.01, -0.02, 0.015);
+  l.index = sc.state.add_variable(Eigen::Matrix3d::Identity() * 1e-4);
+  sc.state.landmarks[l.id] = l;
+  sc.state.td = 0.004;
+  CloneState &c = sc.state.clones.rbegin()->second;
+  c.td_ref = 0.001;
+  c.has_fej = false; // Jacobians at the current estimate, so that finite differences of the residual match them
+  UpdaterMSCKF msckf(sc.calib);
+  UpdaterSLAM slam(sc.calib, UpdaterSlamOptions(), msckf);
+  const VelocityProvider tracked;
+  const size_t k = f.obs.size() - 1;
+  LandmarkLinearization lin;
+  ASSERT_TRUE(slam.linearize(sc.state, sc.state.landmarks.at(l.id), c, f, k, TdObservation::ImagePlane, tracked, lin));
+  ASSERT_TRUE(lin.td_column);
+  // r = z − h: H is −∂r/∂δx. Perturb the clone (⊞), the landmark and t_d one coordinate at a time.
+  const auto residual = [&](const Eigen::Matrix<double, 10, 1> &d) {
+    State s = sc.state;
+    CloneState &cc = s.clones.rbegin()->second;
+    cc.R = ov_core::so3_exp(d.segment<3>(0)) * cc.R;
+    cc.p += d.segment<3>(3);
+    LandmarkState &ll = s.landmarks.at(l.id);
+    ll.p_W += d.segment<3>(6);
+    ll.p_fej = ll.p_W;
+    s.td += d(9);
+    LandmarkLinearization out;
+    EXPECT_TRUE(slam.linearize(s, ll, cc, f, k, TdObservation::ImagePlane, tracked, out));
+    return out.r;
+  };
+  Eigen::Matrix<double, 2, 10> H;
+  H << lin.H_clone, lin.H_f, lin.H_td;
+  const Eigen::MatrixXd H_fd = -ovtest::numeric_jacobian(residual, Eigen::Matrix<double, 10, 1>::Zero().eval(), 1e-6);
+  EXPECT_LT((H - H_fd).cwiseAbs().maxCoeff(), 1e-5 * H.cwiseAbs().maxCoeff()) << "analytic\n"
+                                                                              << H << "\nnumeric\n"
+                                                                              << H_fd;
+}
+
+TEST(SlamInit, DelayedInitialisationIsConsistentOverMonteCarloTrials) {
+  // The same window, noisy observations: the initialised landmark's error against the truth, normalised by its
+  // covariance, averages 3 (its dimension) when the initialisation's covariance is right.
+  const Eigen::Vector3d p_true(0.3, 0.2, -0.1);
+  std::mt19937 rng(5);
+  double nees = 0;
+  int trials = 0;
+  for (int t = 0; t < 300; ++t) {
+    SlamScene sc(8);
+    sc.state.P *= 1e-8; // the clones are the truth: only the pixel noise is uncertain
+    const ov_core::Feature f = feature_of(sc, p_true, 1.0, rng);
+    UpdaterMSCKFOptions mo;
+    mo.chi2_multiplier = 100; // this test is about the covariance, not the gate
+    UpdaterMSCKF msckf(sc.calib, mo);
+    UpdaterSlamOptions so;
+    so.chi2_multiplier = 100;
+    UpdaterSLAM slam(sc.calib, so, msckf);
+    SlamStats st;
+    slam.initialize(sc.state, {&f}, sc.state.clones.rbegin()->first, TdObservation::None, VelocityProvider(), st);
+    if (st.initialised != 1)
+      continue;
+    const LandmarkState &l = sc.state.landmarks.at(f.id);
+    const Eigen::Vector3d e = p_true - l.p_W;
+    const Eigen::Matrix3d P = sc.state.P.block<3, 3>(l.index, l.index);
+    nees += e.dot(P.ldlt().solve(e));
+    ++trials;
+  }
+  ASSERT_GT(trials, 250);
+  nees /= trials;
+  std::cout << "[slam init] landmark NEES " << nees << " over " << trials << " trials (3 is ideal)\n";
+  EXPECT_GT(nees, 2.2);
+  EXPECT_LT(nees, 4.0);
+}
+
+TEST(SlamRun, LandmarksEnterLeaveAndKeepTheFilterConsistent) {
+  ovtest::TempDir tmp;
+  ov_sim::SimOptions so;
+  so.out_dir = tmp / "sim";
+  so.duration_s = 10.0;
+  so.seed = 4;
+  so.features_only = true;
+  so.features.pixel_noise = 0.5;
+  ov_sim::write_simulation(so);
+  const ov_core::Dataset data = ov_core::load_dataset(so.out_dir);
+  VioOptions opt;
+  opt.td.mode = TdMode::Sr;
+  opt.init.mode = InitMode::GroundTruth;
+  opt.update.sigma_px = 0.5;
+  opt.slam.max_features = 50;
+  VioManager vio(opt, data.cam, data.imu_calib);
+  vio.set_groundtruth(data.groundtruth);
+  size_t max_landmarks = 0;
+  vio.set_state_callback(
+      [&](const ov_core::StateSample &) { max_landmarks = std::max(max_landmarks, vio.state().landmarks.size()); });
+  ov_core::Replay(data).run(vio);
+  const VioCounters &c = vio.counters();
+  std::cout << "[slam run] " << c.slam_initialised << " landmarks initialised, " << c.slam_updates
+            << " observations used, " << c.slam_gated << " gated; at most " << max_landmarks << " in the state\n";
+  EXPECT_GT(c.slam_initialised, 50);
+  EXPECT_LE(max_landmarks, 50u);
+  EXPECT_GT(c.slam_updates, 5 * c.slam_initialised);
+  // Gated at 95 %: about 5 % of consistent observations fail the test.
+  EXPECT_LT(c.slam_gated, 0.15 * (c.slam_updates + c.slam_gated));
+  // Every landmark index is inside the covariance and distinct.
+  std::set<int> idx;
+  for (const auto &[id, l] : vio.state().landmarks) {
+    EXPECT_GE(l.index, 0);
+    EXPECT_LE(l.index + 3, vio.state().dim());
+    EXPECT_TRUE(idx.insert(l.index).second);
+  }
+}
