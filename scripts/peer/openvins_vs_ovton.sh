@@ -11,6 +11,8 @@
 #                          noslam  = harness defaults (11 clones, 1 px, no SLAM features, no online calibration)
 #                          default = max_slam=50 calib_ext=1 calib_int=1 (OpenVINS's own EuRoC choice)
 #                          matched = max_clones=20 sigma_px=0.5 (ovton's simulation config)
+#                        VARIANT@imuK (e.g. matched@imu4) runs VARIANT on a view of the folder whose imu0/sensor.yaml
+#                        noise densities and random walks are K times the folder's (as ovton's imu.noise_multiplier)
 #   --ovton-modes LIST   ovton modes (MODE[+PROCESS]), comma separated (default sr,drift)
 #   --ovton-config-sim F / --ovton-config-real F
 #                        ovton configs for simulated folders (those with mav0/td_truth) and real ones
@@ -87,7 +89,7 @@ fi
 XB=$BUILD/exchange/ov_track_exchange
 
 ov_args() {
-  case "$1" in
+  case "${1%@imu*}" in
   noslam) echo "" ;;
   default) echo "max_slam=50 calib_ext=1 calib_int=1" ;;
   matched) echo "max_clones=20 sigma_px=0.5" ;;
@@ -116,13 +118,26 @@ PY
 
 cpu_of() { awk '{print $1+$2}' "$1"; } # /usr/bin/time -f "%U %S" output
 
+# A view of folder $1 (symlinks) whose IMU noise parameters are $2 times the folder's; prints its path.
+imu_view() {
+  local f=$1 k=$2 v
+  v=$OUT/$(basename "$f")/view_imu$k
+  mkdir -p "$v/mav0/imu0"
+  for d in "$f"/mav0/*; do [ "$(basename "$d")" = imu0 ] || ln -sfn "$d" "$v/mav0/$(basename "$d")"; done
+  ln -sf "$f/mav0/imu0/data.csv" "$v/mav0/imu0/data.csv"
+  awk -v k="$k" '/^(gyroscope|accelerometer)_(noise_density|random_walk):/ {printf "%s %.6g\n", $1, $2 * k; next} {print}' \
+    "$f/mav0/imu0/sensor.yaml" > "$v/mav0/imu0/sensor.yaml"
+  echo "$v"
+}
+
 run_ov() { # folder variant repeat
-  local f=$1 var=$2 rep=$3 name pre
+  local f=$1 var=$2 rep=$3 name pre src=$1
   name=$(basename "$f")
-  pre=$OUT/$name/ov_${var}_r$rep
+  pre=$OUT/$name/ov_${var/@/_}_r$rep
   mkdir -p "$OUT/$name"
+  if [[ $var == *@imu* ]]; then src=$(imu_view "$f" "${var##*@imu}"); fi
   # shellcheck disable=SC2046
-  OV_ROOT=$OV_ROOT nice -n 10 /usr/bin/time -f "%U %S" -o "$pre.time" "$HB" "$f" "$pre" threads=1 $(ov_args "$var") \
+  OV_ROOT=$OV_ROOT nice -n 10 /usr/bin/time -f "%U %S" -o "$pre.time" "$HB" "$src" "$pre" threads=1 $(ov_args "$var") \
     >"$pre.log" 2>&1 || { echo "OpenVINS $var failed on $f (log $pre.log)" >&2; return 0; }
   cut -d, -f1-19 "$pre.csv" > "$pre.est.csv"
   local msf fpf
