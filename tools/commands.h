@@ -17,6 +17,7 @@ int cmd_compare(const Args &args);
 int cmd_benchmark(const Args &args);
 int cmd_diagnose(const Args &args);
 int cmd_velocities(const Args &args);
+int cmd_track(const Args &args);
 int cmd_trackstats(const Args &args);
 int cmd_export(const Args &args);
 

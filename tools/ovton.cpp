@@ -26,6 +26,7 @@ const std::map<std::string, Command> &commands() {
       {"perturb", {ovton::cmd_perturb, "rewrite a real folder's image stamps with a time-offset model"}},
       {"benchmark", {ovton::cmd_benchmark, "per-frame cost by stage, x real time and memory, mode by mode"}},
       {"diagnose", {ovton::cmd_diagnose, "rank candidate effects behind the residuals of `run --residual-log`"}},
+      {"track", {ovton::cmd_track, "the KLT front end alone: tracks as features.csv, scored against the truth"}},
       {"velocities", {ovton::cmd_velocities, "score the image velocities of `run --velocity-log` against the truth"}},
       {"trackstats", {ovton::cmd_trackstats, "how long a KLT keeps features on a folder's images; gradients, noise"}},
   };
