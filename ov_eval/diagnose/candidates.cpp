@@ -73,12 +73,6 @@ std::vector<EffectEstimate> gyro_axes(const Coefs &c, const DiagnoseReport &, co
   return out;
 }
 
-std::vector<EffectEstimate> gyro_misalignment(const Coefs &c, const DiagnoseReport &, const Design &) {
-  return {{"misalignment m_xy", "mrad", 1e3 * c.b(0), 1e3 * c.s(0)},
-          {"misalignment m_xz", "mrad", 1e3 * c.b(1), 1e3 * c.s(1)},
-          {"misalignment m_yz", "mrad", 1e3 * c.b(2), 1e3 * c.s(2)}};
-}
-
 /// The size of a vector estimate (first three coefficients) and its delta-method SE, scaled to `unit_per`.
 EffectEstimate vector_norm(const Coefs &c, const std::string &name, const std::string &unit, double unit_per) {
   const Eigen::Vector3d v(c.b(0), c.b(1), c.b(2));
@@ -223,10 +217,6 @@ const std::vector<CandidateDef> &candidate_table() {
        "per-axis gyro scale error (rates only)",
        "per-axis gyro scale error, from rates: ω_vis − ω̄_gyro = −diag(s)·ω̄_gyro − b (body axes)",
        "", "", "fitted gyro_scale_axes effect, / SE"},
-      {"gyro_misalignment", span(kGyroMis0, 3), {}, Needs::Rates, gyro_misalignment,
-       "gyro axis misalignment (rates only)",
-       "gyro axis misalignment, from rates: ω_vis − ω̄_gyro = −M·ω̄_gyro − b, M symmetric, zero diagonal",
-       "", "", "fitted gyro_misalignment effect, / SE"},
       // The antisymmetric part of the gyro's linear error: on rates a camera-body rotation and a gyro axis rotation
       // are the same thing (only the accelerometer could tell them apart); it is named as the extrinsic.
       {"extrinsic_rotation", span(kExtRot0, 3), {}, Needs::Rates, extrinsic_rotation,

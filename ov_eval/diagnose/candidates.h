@@ -29,10 +29,9 @@ enum Col : int {
   kGyro0,                  ///< 9 columns B(x,y)·e_i·Θ_j [px·rad/rad]
   kGyroScale = kGyro0 + 9, ///< with the camera: −B(x,y)·R_CB·Θ [px], the nine above contracted with R_CB
   // Rates only (the rows ω_vis − ω̄_gyro, body frame): the gyro's linear errors and the camera-body rotation.
-  kGyroAxY,                 ///< −e_y·ω̄_y: with kGyroScale, the y axis's own scale
-  kGyroAxZ,                 ///< −e_z·ω̄_z
-  kGyroMis0,                ///< 3 columns −(e_a·ω̄_b + e_b·ω̄_a), (a, b) = xy, xz, yz: symmetric misalignment
-  kExtRot0 = kGyroMis0 + 3, ///< 3 columns ω̄ × e_j: camera-body rotation error φ (R_BC true = Exp(φ)·R_BC)
+  kGyroAxY, ///< −e_y·ω̄_y: with kGyroScale, the y axis's own scale
+  kGyroAxZ, ///< −e_z·ω̄_z
+  kExtRot0, ///< 3 columns ω̄ × e_j: camera-body rotation error φ (R_BC true = Exp(φ)·R_BC)
   /// Residual only: 3 columns −f·J_π(x)·e_c/z, a camera-body translation error seen in the camera frame.
   kExtTrans0 = kExtRot0 + 3,
   /// α·1[time bin b] (rates) or V·1[bin b] (residual) for bins b = 1 .. kTdBins − 2; with kV and kVt, a piecewise

@@ -305,21 +305,18 @@ struct FrameRate {
 };
 
 /// The gyro's linear error columns beyond the isotropic scale, on ω_vis − ω̄_gyro (body frame), in the order
-/// kGyroAxY, kGyroAxZ, kGyroMis0..2, kExtRot0..2: the gyro reads (I + M)·ω, so the mismatch is −M·ω̄; a camera-body
-/// rotation φ (R_BC true = Exp(φ)·R_BC) makes R_BC·ω_vis = ω − φ × ω, a mismatch ω̄ × φ.
+/// kGyroAxY, kGyroAxZ, kExtRot0..2: the gyro reads (I + M)·ω, so the mismatch is −M·ω̄; a camera-body rotation φ
+/// (R_BC true = Exp(φ)·R_BC) makes R_BC·ω_vis = ω − φ × ω, a mismatch ω̄ × φ. M's symmetric off-diagonal (a gyro
+/// misalignment) was a candidate too, and dropped: on the plain built-in flight, clean, it was flagged on one seed of
+/// four (5.5σ, 6 % share, 8-9 mrad) - the rates' model error at low rotation rates, not the gyro.
 constexpr int kLinCols = kExtRot0 + 3 - kGyroAxY;
-static_assert(kGyroAxZ == kGyroAxY + 1 && kGyroMis0 == kGyroAxY + 2 && kExtRot0 == kGyroAxY + 5, "column order");
+static_assert(kGyroAxZ == kGyroAxY + 1 && kExtRot0 == kGyroAxY + 2, "column order");
 Eigen::Matrix<double, 3, kLinCols> gyro_linear_cols(const Eigen::Vector3d &w) {
   Eigen::Matrix<double, 3, kLinCols> L = Eigen::Matrix<double, 3, kLinCols>::Zero();
   L(1, 0) = -w.y();
   L(2, 1) = -w.z();
-  const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
-  for (int p = 0; p < 3; ++p) {
-    L(pairs[p][0], 2 + p) = -w(pairs[p][1]);
-    L(pairs[p][1], 2 + p) = -w(pairs[p][0]);
-  }
   for (int j = 0; j < 3; ++j)
-    L.col(5 + j) = w.cross(Eigen::Vector3d::Unit(j));
+    L.col(2 + j) = w.cross(Eigen::Vector3d::Unit(j));
   return L;
 }
 
