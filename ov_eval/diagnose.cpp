@@ -1,10 +1,14 @@
 // `ovton diagnose` as the list of its stages; each stage is a file in ov_eval/diagnose/ (docs/diagnose.md).
 #include "ov_eval/diagnose.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/diagnose/candidates.h"
+
 #include "ov_eval/diagnose/rate_design.h"
 #include "ov_eval/diagnose/residual_design.h"
 #include "ov_eval/diagnose/selection.h"
 #include "ov_eval/diagnose/tracks.h"
+#include "ov_eval/diagnose/unexplained.h"
+#include <algorithm>
 
 namespace ov_eval {
 
@@ -35,7 +39,18 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   const auto results = diag::test_candidates(d, rep.time_from_rates ? &dr : nullptr, rate_why, opt, rep, selected);
   rep.candidates = diag::rank_candidates(results, selected);
 
-  // 5. The offset error per time bin, on the design the time candidates were tested on.
+  // 5. What the residual keeps beyond its noise that no selected candidate explains, and where it shows.
+  {
+    std::vector<int> cols;
+    for (size_t c : selected)
+      if (results[c].explained && !(rep.time_from_rates && diag::candidate_table()[c].rate_capable()))
+        for (int col : diag::candidate_table()[c].columns(opt.have_camera))
+          if (std::find(cols.begin(), cols.end(), col) == cols.end())
+            cols.push_back(col);
+    rep.unexplained = diag::find_unexplained(d, cols, opt, rep);
+  }
+
+  // 6. The offset error per time bin, on the design the time candidates were tested on.
   rep.td_bins = diag::offset_per_time_bin(rep.time_from_rates ? dr : d, rep.time_from_rates, data, opt, rep);
   return rep;
 }

@@ -85,6 +85,15 @@ struct TimeBin {
   long observations = 0;
 };
 
+/// Structure the residual keeps after the selected candidates, binned by where it shows (unexplained.h).
+struct UnexplainedStructure {
+  std::string where;    ///< "time", "image region", "image speed"
+  double explained = 0; ///< share of the leftover's loss the bin means remove
+  double sigma = 0;     ///< Gaussian-equivalent significance of the bin means (Wald, cluster-robust)
+  bool flagged = false; ///< sigma and share pass the candidates' bars: the verdict UNEXPLAINED
+  std::string largest;  ///< the bin with the largest mean, and that mean (px, u and v)
+};
+
 struct DiagnoseReport {
   std::string log_file;
   long rows_read = 0, rows_used = 0, tracks_used = 0;
@@ -98,6 +107,9 @@ struct DiagnoseReport {
   std::vector<CandidateResult> candidates; ///< in rank order
   std::vector<TimeBin> td_bins;            ///< empty without velocities
   bool time_from_rates = false;            ///< time candidates fitted on vision vs gyro rates (else on the residual)
+  /// What the residual keeps beyond its noise after the selected candidates, by time, image region and image speed;
+  /// a flagged entry is the verdict UNEXPLAINED (an effect no candidate models).
+  std::vector<UnexplainedStructure> unexplained;
 };
 
 /// Runs every candidate on the log. Throws DataError when the log has too few usable rows to say anything.

@@ -46,8 +46,8 @@ ImuSynthResult synthesize_imu(const Trajectory &traj, const ImuSynthOptions &opt
       wg(i) = rng.normal();
     for (int i = 0; i < 3; ++i)
       wa(i) = rng.normal();
-    m.wm = (1.0 + opt.gyro_scale) * m.wm + bg;
-    m.am += ba;
+    m.wm = (1.0 + opt.gyro_scale) * (m.wm + opt.gyro_M * m.wm) + bg;
+    m.am += opt.accel_M * m.am + ba;
     if (opt.add_noise) {
       m.wm += sig_g * ng;
       m.am += sig_a * na;

@@ -15,6 +15,9 @@ struct ImuSynthOptions {
   bool add_noise = true;                                        ///< white noise
   bool add_bias_walk = true;                                    ///< bias random walk
   double gyro_scale = 0.0; ///< planted scale error: the gyro reads (1 + gyro_scale)·ω (+ bias + noise)
+  /// Planted per-axis scale and misalignment: the gyro reads (1 + gyro_scale)·(I + gyro_M)·ω, the accelerometer
+  /// (I + accel_M)·f (f the specific force), before bias and noise. Zero: none.
+  Eigen::Matrix3d gyro_M = Eigen::Matrix3d::Zero(), accel_M = Eigen::Matrix3d::Zero();
   uint64_t seed = 0;
 };
 

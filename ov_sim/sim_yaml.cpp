@@ -31,6 +31,13 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::Key << "noise" << YAML::Value << opt.imu_noise;
   e << YAML::Key << "bias_walk" << YAML::Value << opt.imu_bias_walk;
   e << YAML::Key << "gyro_scale_error" << YAML::Value << opt.gyro_scale; // planted: the gyro reads (1 + s)·ω
+  const auto mat = [&](const char *key, const Eigen::Matrix3d &M) {
+    e << YAML::Key << key << YAML::Value << YAML::Flow
+      << std::vector<double>{M(0, 0), M(0, 1), M(0, 2), M(1, 0), M(1, 1), M(1, 2), M(2, 0), M(2, 1), M(2, 2)};
+  };
+  // Planted: the gyro reads (1 + s)·(I + M_g)·ω, the accelerometer (I + M_a)·f (row-major).
+  mat("gyro_scale_misalignment_error", opt.gyro_M);
+  mat("accel_scale_misalignment_error", opt.accel_M);
   {
     const ImuErrorModel &m = opt.imu_errors;
     e << YAML::Key << "errors" << YAML::Value << YAML::BeginMap;
@@ -72,6 +79,11 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
     << "row v exposed at the image's IMU-clock instant + v/height * readout; the stamp belongs to row 0";
   e << YAML::Key << "focal_error" << YAML::Value << opt.focal_error;
   const ov_core::CameraCalib tc = true_camera(opt);
+  // Planted extrinsic error: the data use R_BC_true = Exp(rot)·R_BC, p_BC_true = p_BC + trans (body frame).
+  e << YAML::Key << "extrinsic_rotation_error_rad" << YAML::Value << YAML::Flow
+    << std::vector<double>{opt.extrinsic_rot.x(), opt.extrinsic_rot.y(), opt.extrinsic_rot.z()};
+  e << YAML::Key << "extrinsic_translation_error_m" << YAML::Value << YAML::Flow
+    << std::vector<double>{opt.extrinsic_trans.x(), opt.extrinsic_trans.y(), opt.extrinsic_trans.z()};
   e << YAML::Key << "true_intrinsics" << YAML::Value << YAML::Flow
     << std::vector<double>{tc.intrinsics(0), tc.intrinsics(1), tc.intrinsics(2), tc.intrinsics(3)};
   e << YAML::EndMap;
@@ -81,6 +93,8 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::Key << "td0_s" << YAML::Value << opt.td.td0_s;
   e << YAML::Key << "bias_s_per_s" << YAML::Value << opt.td.bias_s_per_s;
   e << YAML::Key << "noise_s_per_sqrt_s" << YAML::Value << opt.td.noise_s_per_sqrt_s;
+  e << YAML::Key << "wander_amplitude_s" << YAML::Value << opt.td.wander_amplitude_s;
+  e << YAML::Key << "wander_period_s" << YAML::Value << opt.td.wander_period_s;
   e << YAML::EndMap;
   e << YAML::Key << "scene" << YAML::Value << YAML::BeginMap;
   e << YAML::Key << "margin_xy_m" << YAML::Value << opt.scene.margin_xy_m;

@@ -1,6 +1,7 @@
 #include "ov_sim/simulator.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/trajectory_io.h"
+#include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
 #include "ov_sim/euroc_calib.h"
 #include "ov_sim/random.h"
@@ -118,6 +119,8 @@ std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt) {
 ov_core::CameraCalib true_camera(const SimOptions &opt) {
   ov_core::CameraCalib c = opt.cam;
   c.intrinsics.head<2>() *= 1.0 + opt.focal_error;
+  c.T_BC.block<3, 3>(0, 0) = ov_core::so3_exp(opt.extrinsic_rot) * opt.cam.T_BC.block<3, 3>(0, 0);
+  c.T_BC.block<3, 1>(0, 3) += opt.extrinsic_trans;
   return c;
 }
 
@@ -127,9 +130,9 @@ int64_t row_time_ns(int64_t t_imu_ns, double row, int height, double readout_s) 
 
 FramePose frame_pose(const Trajectory &traj, const SimOptions &opt, int64_t t_imu_ns) {
   FramePose fp;
-  camera_pose(traj.sample(t_imu_ns), opt.cam.T_BC, fp.R_WC, fp.p_WC);
+  const Eigen::Matrix4d T_BC = true_camera(opt).T_BC; // the data's extrinsics (the yaml keeps opt.cam's)
+  camera_pose(traj.sample(t_imu_ns), T_BC, fp.R_WC, fp.p_WC);
   if (opt.readout_s > 0.0) {
-    const Eigen::Matrix4d T_BC = opt.cam.T_BC;
     const int height = opt.cam.height;
     const double readout = opt.readout_s;
     fp.at_row = [&traj, T_BC, height, readout, t_imu_ns](double row, Eigen::Matrix3d &R_WC, Eigen::Vector3d &p_WC) {
@@ -167,8 +170,12 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     throw ov_core::UsageError("focal error must lie in (-0.5, 0.5) (relative)");
   if (!(std::abs(opt.gyro_scale) < 0.5))
     throw ov_core::UsageError("gyro scale error must lie in (-0.5, 0.5) (relative)");
-  if (opt.gyro_scale != 0.0 && !opt.imu_from.empty())
-    throw ov_core::UsageError("a gyro scale error is planted in the synthetic IMU, not in a copied one (--imu-from)");
+  if ((opt.gyro_scale != 0.0 || !opt.gyro_M.isZero() || !opt.accel_M.isZero()) && !opt.imu_from.empty())
+    throw ov_core::UsageError("IMU scale errors are planted in the synthetic IMU, not in a copied one (--imu-from)");
+  if (!(opt.gyro_M.cwiseAbs().maxCoeff() < 0.5 && opt.accel_M.cwiseAbs().maxCoeff() < 0.5))
+    throw ov_core::UsageError("IMU per-axis scale and misalignment must lie in (-0.5, 0.5) (relative)");
+  if (!(opt.extrinsic_rot.norm() < 0.5 && opt.extrinsic_trans.norm() < 1.0))
+    throw ov_core::UsageError("extrinsic error: rotation must be below 0.5 rad and translation below 1 m");
   const auto wall0 = std::chrono::steady_clock::now();
   SimReport rep;
   const std::unique_ptr<Trajectory> traj = make_trajectory(opt);
@@ -191,6 +198,8 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   io.add_noise = opt.imu_noise;
   io.add_bias_walk = opt.imu_bias_walk;
   io.gyro_scale = opt.gyro_scale;
+  io.gyro_M = opt.gyro_M;
+  io.accel_M = opt.accel_M;
   io.seed = derive_seed(opt.seed, kImu);
   ImuSynthResult imu = synthesize_imu(*traj, io);
   if (opt.imu_errors.enabled && opt.imu_from.empty())

@@ -40,6 +40,13 @@ struct SimOptions {
   double focal_error = 0.0;
   /// Gyro scale error: imu0/data.csv reads (1 + gyro_scale)·ω; imu0/sensor.yaml does not say so.
   double gyro_scale = 0.0;
+  /// Per-axis scale (diagonal) and misalignment (off-diagonal) of the gyro and the accelerometer: they read
+  /// (1 + gyro_scale)·(I + gyro_M)·ω and (I + accel_M)·f (ImuSynthOptions); imu0/sensor.yaml does not say so.
+  Eigen::Matrix3d gyro_M = Eigen::Matrix3d::Zero(), accel_M = Eigen::Matrix3d::Zero();
+  /// Camera-IMU extrinsic error: the data are made with R_BC_true = Exp(extrinsic_rot)·R_BC and p_BC_true = p_BC +
+  /// extrinsic_trans (both in the body frame), while cam0/sensor.yaml keeps `cam`'s T_BC.
+  Eigen::Vector3d extrinsic_rot = Eigen::Vector3d::Zero();   ///< rotation vector [rad]
+  Eigen::Vector3d extrinsic_trans = Eigen::Vector3d::Zero(); ///< [m]
   /// Realism preset the options below came from (realism.h): "clean" (these defaults), "euroc", "harsh", or
   /// "custom" once an option was changed by hand. Recorded in sim.yaml.
   std::string realism = "clean";
@@ -73,7 +80,8 @@ std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt);
 /// Camera pose in the world at a body sample: R_WC = R_WB R_BC, p_WC = p_WB + R_WB p_BC.
 void camera_pose(const TrajectorySample &s, const Eigen::Matrix4d &T_BC, Eigen::Matrix3d &R_WC, Eigen::Vector3d &p_WC);
 
-/// The intrinsics the data are made with: `cam` with its focal lengths scaled by 1 + focal_error.
+/// The camera the data are made with: `cam` with its focal lengths scaled by 1 + focal_error and its T_BC moved by
+/// the extrinsic error.
 ov_core::CameraCalib true_camera(const SimOptions &opt);
 
 /// IMU-clock instant at which image row `row` of a frame whose row 0 is exposed at t_imu_ns is exposed.

@@ -10,14 +10,18 @@ TdModelKind parse_td_model(const std::string &name) {
     return TdModelKind::Constant;
   if (name == "drift")
     return TdModelKind::Drift;
-  throw ov_core::UsageError("unknown time-offset model '" + name + "' (expected constant or drift)");
+  if (name == "wander")
+    return TdModelKind::Wander;
+  throw ov_core::UsageError("unknown time-offset model '" + name + "' (expected constant, drift or wander)");
 }
 
 std::string to_string(TdModelKind k) {
-  return k == TdModelKind::Constant ? "constant" : "drift";
+  return k == TdModelKind::Constant ? "constant" : k == TdModelKind::Drift ? "drift" : "wander";
 }
 
 std::vector<TimedImage> apply_td_model(const std::vector<int64_t> &t_imu_ns, const TdModelOptions &opt) {
+  if (opt.kind == TdModelKind::Wander && !(opt.wander_period_s > 0.0 && std::isfinite(opt.wander_amplitude_s)))
+    throw ov_core::UsageError("time-offset model wander: the period must be positive and the amplitude finite");
   Rng rng(opt.seed);
   std::vector<TimedImage> out;
   out.reserve(t_imu_ns.size());
@@ -29,6 +33,9 @@ std::vector<TimedImage> apply_td_model(const std::vector<int64_t> &t_imu_ns, con
         throw ov_core::UsageError("time-offset model: image times must be strictly increasing");
       if (opt.kind == TdModelKind::Drift)
         td += opt.bias_s_per_s * dt + opt.noise_s_per_sqrt_s * std::sqrt(dt) * rng.normal();
+      if (opt.kind == TdModelKind::Wander)
+        td = opt.td0_s + opt.wander_amplitude_s *
+                             std::sin(2.0 * M_PI * ov_core::ns_to_s(t_imu_ns[k] - t_imu_ns[0]) / opt.wander_period_s);
     }
     TimedImage im;
     im.t_imu_ns = t_imu_ns[k];

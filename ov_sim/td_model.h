@@ -8,9 +8,9 @@
 
 namespace ov_sim {
 
-enum class TdModelKind { Constant, Drift };
+enum class TdModelKind { Constant, Drift, Wander };
 
-TdModelKind parse_td_model(const std::string &name); ///< "constant" | "drift"; throws ov_core::UsageError
+TdModelKind parse_td_model(const std::string &name); ///< "constant" | "drift" | "wander"; throws ov_core::UsageError
 std::string to_string(TdModelKind k);
 
 struct TdModelOptions {
@@ -18,6 +18,10 @@ struct TdModelOptions {
   double td0_s = 0.010;             ///< offset at the first image
   double bias_s_per_s = 1e-4;       ///< drift: deterministic growth per second (scaled to each frame interval)
   double noise_s_per_sqrt_s = 1e-4; ///< drift: random-walk density, step sigma = this * sqrt(frame interval)
+  /// wander: back and forth without a trend, td(t) = td0 + A·sin(2π·t/P), t from the first image (what a camera
+  /// whose clock is disciplined to the IMU's by a slow control loop does; the mean over whole periods is td0).
+  double wander_amplitude_s = 0.004;
+  double wander_period_s = 10.0;
   uint64_t seed = 0;
 };
 
@@ -29,7 +33,8 @@ struct TimedImage {
   double td_s() const { return static_cast<double>(td_ns) * 1e-9; }
 };
 
-/// td(0) = td0; drift: td(k) = td(k-1) + bias * dt_k + noise * sqrt(dt_k) * N(0,1), dt_k = t_k - t_{k-1}.
+/// td(0) = td0; drift: td(k) = td(k-1) + bias * dt_k + noise * sqrt(dt_k) * N(0,1), dt_k = t_k - t_{k-1};
+/// wander: td(k) = td0 + A·sin(2π·(t_k − t_0)/P).
 /// The offset is kept in integer ns so that t_cam + td = t_imu holds exactly in the written files.
 /// Throws UsageError if the resulting camera stamps would not be strictly increasing.
 std::vector<TimedImage> apply_td_model(const std::vector<int64_t> &t_imu_ns, const TdModelOptions &opt);

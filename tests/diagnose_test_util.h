@@ -32,9 +32,12 @@ inline void expect_top(const ov_eval::DiagnoseReport &r, const std::string &key,
   }
 }
 
+/// No candidate selected and no structure left that none explains (the UNEXPLAINED verdict).
 inline void expect_nothing_flagged(const ov_eval::DiagnoseReport &r) {
   for (const auto &c : r.candidates)
     EXPECT_FALSE(c.explained) << ov_eval::format_ranking(r);
+  for (const auto &u : r.unexplained)
+    EXPECT_FALSE(u.flagged) << ov_eval::format_ranking(r);
 }
 
 } // namespace ovtest

@@ -142,3 +142,25 @@ TEST(SimImu, NoiseLevelsFollowTheContinuousDensities) {
   const ImuData ideal = ideal_imu(s, 0, Eigen::Vector3d(0, 0, -9.81));
   EXPECT_NEAR((s.q_WB * ideal.am - s.a_W).z(), 9.81, 1e-9);
 }
+
+// Issue 16's planted IMU errors: the gyro reads (1 + s)·(I + M_g)·ω and the accelerometer (I + M_a)·f, exactly (no
+// noise), and the truth's biases stay untouched.
+TEST(SimImu, PlantedScaleAndMisalignmentMultiplyTheTrueReadings) {
+  LissajousTrajectory traj(2.0, LissajousTrajectory::kDefaultBeginNs, 1.0);
+  ImuSynthOptions o;
+  o.calib = euroc_imu0_calib();
+  o.add_noise = o.add_bias_walk = false;
+  const ImuSynthResult ref = synthesize_imu(traj, o);
+  o.gyro_scale = 0.01;
+  o.gyro_M << 0.0, 0.002, 0.0, 0.002, 0.0, 0.0, 0.0, 0.0, 0.03;
+  o.accel_M = Eigen::Vector3d(0.03, -0.02, 0.01).asDiagonal();
+  const ImuSynthResult r = synthesize_imu(traj, o);
+  ASSERT_EQ(r.imu.size(), ref.imu.size());
+  const Eigen::Matrix3d G = 1.01 * (Eigen::Matrix3d::Identity() + o.gyro_M),
+                        A = Eigen::Matrix3d::Identity() + o.accel_M;
+  for (size_t i = 0; i < r.imu.size(); i += 37) {
+    EXPECT_LT((r.imu[i].wm - G * ref.imu[i].wm).norm(), 1e-12);
+    EXPECT_LT((r.imu[i].am - A * ref.imu[i].am).norm(), 1e-12);
+    EXPECT_EQ(r.truth[i].bg, ref.truth[i].bg);
+  }
+}

@@ -2,6 +2,7 @@
 // focal-length error (data made with other intrinsics than cam0/sensor.yaml says). The observations and images must
 // carry exactly the planted effect, so that `diagnose` tests can hold it to a known size.
 #include "ov_core/io/dataset.h"
+#include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
 #include "ov_sim/euroc_calib.h"
 #include "ov_sim/random.h"
@@ -165,4 +166,42 @@ TEST(SimPlanted, RollingShutterRenderDrawsEachRowFromItsPose) {
     EXPECT_GT((uv - uv0).norm(), 3.0);
     EXPECT_LT((got - uv).norm(), 0.35);
   }
+}
+
+// A camera-IMU extrinsic error: the data's camera pose uses the moved T_BC, the written sensor.yaml the nominal one.
+TEST(SimPlanted, ExtrinsicErrorMovesTheDataCameraNotTheYaml) {
+  SimOptions o;
+  o.extrinsic_rot = Eigen::Vector3d(0.003, -0.004, 0.005);
+  o.extrinsic_trans = Eigen::Vector3d(0.02, -0.01, 0.005);
+  const auto traj = make_trajectory(o);
+  const int64_t t = traj->t_begin_ns() + 500000000;
+  Eigen::Matrix3d R_nom;
+  Eigen::Vector3d p_nom;
+  camera_pose(traj->sample(t), o.cam.T_BC, R_nom, p_nom);
+  const FramePose fp = frame_pose(*traj, o, t);
+  const Eigen::Matrix3d R_WB = traj->sample(t).q_WB.toRotationMatrix();
+  // R_WC = R_WB·Exp(φ)·R_BC: the camera turned by φ in the body frame; p_WC moved by R_WB·δp.
+  EXPECT_LT((R_WB.transpose() * fp.R_WC * R_nom.transpose() * R_WB - so3_exp(o.extrinsic_rot)).norm(), 1e-12);
+  EXPECT_LT((R_WB.transpose() * (fp.p_WC - p_nom) - o.extrinsic_trans).norm(), 1e-12);
+  EXPECT_EQ(true_camera(o).intrinsics, o.cam.intrinsics); // the intrinsics untouched
+}
+
+// A wandering offset: td0 + A·sin(2π·t/P) at every image, no trend over whole periods.
+TEST(SimPlanted, WanderingOffsetFollowsItsSine) {
+  TdModelOptions o;
+  o.kind = TdModelKind::Wander;
+  o.td0_s = 0.010;
+  o.wander_amplitude_s = 0.004;
+  o.wander_period_s = 10.0;
+  std::vector<int64_t> t;
+  for (int k = 0; k < 400; ++k) // 20 s at 20 Hz: two whole periods
+    t.push_back(1000000000 + 50000000LL * k);
+  const auto im = apply_td_model(t, o);
+  double mean = 0;
+  for (size_t k = 0; k < im.size(); ++k) {
+    EXPECT_NEAR(im[k].td_s(), 0.010 + 0.004 * std::sin(2 * M_PI * 0.05 * k / 10.0), 1e-9);
+    mean += im[k].td_s() / im.size();
+  }
+  EXPECT_NEAR(mean, 0.010, 1e-6);
+  EXPECT_EQ(parse_td_model("wander"), TdModelKind::Wander);
 }

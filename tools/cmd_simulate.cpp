@@ -16,6 +16,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <sstream>
 
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
@@ -50,6 +51,27 @@ private:
   std::string stage_;
 };
 
+/// "x,y,z" -> vector (three numbers); a UsageError naming the option otherwise.
+Eigen::Vector3d parse_xyz(const std::string &text, const char *option) {
+  Eigen::Vector3d v;
+  char c1 = 0, c2 = 0;
+  std::istringstream in(text);
+  if (!(in >> v.x() >> c1 >> v.y() >> c2 >> v.z()) || c1 != ',' || c2 != ',' || !(in >> std::ws).eof())
+    throw ov_core::UsageError(std::string("--") + option + " expects three numbers 'x,y,z', got '" + text + "'");
+  return v;
+}
+
+/// Per-axis scale (diagonal, %) and symmetric misalignment (off-diagonal xy, xz, yz, mrad) as the matrix M of a
+/// sensor that reads (I + M)·x. The antisymmetric part is left out: for the gyro it is a camera-IMU rotation
+/// (--extrinsic-rot-deg plants that).
+Eigen::Matrix3d scale_misalignment(const Eigen::Vector3d &scale_pct, const Eigen::Vector3d &mis_mrad) {
+  Eigen::Matrix3d M = (scale_pct * 1e-2).asDiagonal();
+  M(0, 1) = M(1, 0) = mis_mrad.x() * 1e-3;
+  M(0, 2) = M(2, 0) = mis_mrad.y() * 1e-3;
+  M(1, 2) = M(2, 1) = mis_mrad.z() * 1e-3;
+  return M;
+}
+
 std::map<std::string, uintmax_t> sizes_by_part(const fs::path &mav0) {
   std::map<std::string, uintmax_t> s;
   for (const auto &e : fs::recursive_directory_iterator(mav0))
@@ -75,6 +97,9 @@ int cmd_simulate(const Args &args) {
   int bench_frames = 100;
   std::string realism = "euroc", texture;
   double exposure_ms = 0.0;
+  double td_wander_ms = 4.0, td_wander_period_s = 10.0;
+  std::string gyro_axes = "0,0,0", gyro_mis = "0,0,0", accel_axes = "0,0,0", accel_mis = "0,0,0";
+  std::string ext_rot = "0,0,0", ext_trans = "0,0,0";
   desc.add_options()("help,h", "this help")                                                               //
       ("out,o", po::value(&out), "output folder (mav0/ and sim.yaml are written inside)")                 //
       ("gt", po::value(&gt), "ground-truth trajectory to follow (EuRoC .txt/.csv, project CSV)")          //
@@ -84,16 +109,31 @@ int cmd_simulate(const Args &args) {
       ("start-s", po::value(&o.start_s)->default_value(0.0), "start, seconds after the first gt pose")        //
       ("duration-s", po::value(&o.duration_s)->default_value(20.0), "length [s]")                             //
       ("seed", po::value(&o.seed)->default_value(1), "random seed (same seed, same bytes)")                   //
-      ("td-model", po::value(&td_model)->default_value("constant"), "constant | drift")                       //
+      ("td-model", po::value(&td_model)->default_value("constant"), "constant | drift | wander")              //
       ("td0-ms", po::value(&td0_ms)->default_value(10.0), "offset at the first image [ms]")                   //
       ("td-bias-ms-per-s", po::value(&td_bias)->default_value(0.1), "drift: growth [ms/s]")                   //
       ("td-noise-ms-per-sqrt-s", po::value(&td_noise)->default_value(0.1), "drift: random walk [ms/sqrt(s)]") //
+      ("td-wander-ms", po::value(&td_wander_ms)->default_value(4.0),
+       "wander: td = td0 + A sin(2 pi t / P), no trend; amplitude A [ms]")                                //
+      ("td-wander-period-s", po::value(&td_wander_period_s)->default_value(10.0), "wander: period P [s]") //
       ("readout-ms", po::value(&readout_ms)->default_value(0.0),
        "rolling shutter: row v is exposed at the image's instant + v/height * readout; stamp = row 0 [ms]") //
       ("focal-error-pct", po::value(&focal_error_pct)->default_value(0.0),
        "data made with focal lengths (1 + P/100) x those written to cam0/sensor.yaml [%]") //
       ("gyro-scale-pct", po::value(&gyro_scale_pct)->default_value(0.0),
-       "the gyro reads (1 + P/100) x the true rate; imu0/sensor.yaml does not say so [%]")         //
+       "the gyro reads (1 + P/100) x the true rate; imu0/sensor.yaml does not say so [%]") //
+      ("gyro-scale-axes-pct", po::value(&gyro_axes)->default_value("0,0,0"),
+       "per-axis gyro scale error 'x,y,z': the gyro reads (I + M) w, M's diagonal [%]") //
+      ("gyro-misalignment-mrad", po::value(&gyro_mis)->default_value("0,0,0"),
+       "gyro axis misalignment 'xy,xz,yz': M's symmetric off-diagonal [mrad]") //
+      ("accel-scale-axes-pct", po::value(&accel_axes)->default_value("0,0,0"),
+       "per-axis accelerometer scale error 'x,y,z': it reads (I + M) f, f the specific force [%]") //
+      ("accel-misalignment-mrad", po::value(&accel_mis)->default_value("0,0,0"),
+       "accelerometer axis misalignment 'xy,xz,yz': M's symmetric off-diagonal [mrad]") //
+      ("extrinsic-rot-deg", po::value(&ext_rot)->default_value("0,0,0"),
+       "camera-IMU rotation error 'x,y,z': data made with R_BC = Exp(r) R_BC(yaml), r in the body frame [deg]") //
+      ("extrinsic-trans-mm", po::value(&ext_trans)->default_value("0,0,0"),
+       "camera-IMU translation error 'x,y,z': data made with p_BC(yaml) + d, body frame [mm]")     //
       ("imu-from", po::value(&o.imu_from), "semi-real: take imu0/data.csv from this EuRoC folder") //
       ("realism", po::value(&realism)->default_value("euroc"),
        "clean (blotch texture, instantaneous images, datasheet IMU) | euroc (room texture, auto-exposure with "
@@ -215,6 +255,14 @@ int cmd_simulate(const Args &args) {
   o.td.td0_s = td0_ms * 1e-3;
   o.td.bias_s_per_s = td_bias * 1e-3;
   o.td.noise_s_per_sqrt_s = td_noise * 1e-3;
+  o.td.wander_amplitude_s = td_wander_ms * 1e-3;
+  o.td.wander_period_s = td_wander_period_s;
+  o.gyro_M =
+      scale_misalignment(parse_xyz(gyro_axes, "gyro-scale-axes-pct"), parse_xyz(gyro_mis, "gyro-misalignment-mrad"));
+  o.accel_M = scale_misalignment(parse_xyz(accel_axes, "accel-scale-axes-pct"),
+                                 parse_xyz(accel_mis, "accel-misalignment-mrad"));
+  o.extrinsic_rot = parse_xyz(ext_rot, "extrinsic-rot-deg") * M_PI / 180.0;
+  o.extrinsic_trans = parse_xyz(ext_trans, "extrinsic-trans-mm") * 1e-3;
   o.readout_s = readout_ms * 1e-3;
   o.focal_error = focal_error_pct * 1e-2;
   o.gyro_scale = gyro_scale_pct * 1e-2;

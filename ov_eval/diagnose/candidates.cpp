@@ -61,6 +61,99 @@ std::vector<EffectEstimate> gyro_scale(const Coefs &c, const DiagnoseReport &, c
            100 * std::sqrt(std::max(0.0, double(g.transpose() * C * g)))}};
 }
 
+/// Per-axis gyro scale: kGyroScale's coefficient is s_x, kGyroAxY's and kGyroAxZ's add to it for s_y and s_z.
+std::vector<EffectEstimate> gyro_axes(const Coefs &c, const DiagnoseReport &, const Design &) {
+  std::vector<EffectEstimate> out;
+  const char *names[3] = {"gyro scale error s_x", "gyro scale error s_y", "gyro scale error s_z"};
+  for (int a = 0; a < 3; ++a) {
+    const double v = a == 0 ? c.b(0) : c.b(0) + c.b(a);
+    const double var = a == 0 ? c.cov(0, 0) : c.cov(0, 0) + c.cov(a, a) + 2 * c.cov(0, a);
+    out.push_back({names[a], "%", 100 * v, 100 * std::sqrt(std::max(0.0, var))});
+  }
+  return out;
+}
+
+/// The size of a vector estimate (first three coefficients) and its delta-method SE, scaled to `unit_per`.
+EffectEstimate vector_norm(const Coefs &c, const std::string &name, const std::string &unit, double unit_per) {
+  const Eigen::Vector3d v(c.b(0), c.b(1), c.b(2));
+  Eigen::Matrix3d C;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      C(i, j) = c.cov(i, j);
+  const double n = v.norm();
+  const Eigen::Vector3d g = n > 0 ? (v / n).eval() : Eigen::Vector3d::Zero();
+  return {name, unit, unit_per * n, unit_per * std::sqrt(std::max(0.0, double(g.transpose() * C * g)))};
+}
+
+std::vector<EffectEstimate> extrinsic_rotation(const Coefs &c, const DiagnoseReport &, const Design &) {
+  const double deg = 180.0 / M_PI;
+  return {vector_norm(c, "rotation error |φ|", "deg", deg),
+          {"φ_x (body)", "deg", deg * c.b(0), deg * c.s(0)},
+          {"φ_y (body)", "deg", deg * c.b(1), deg * c.s(1)},
+          {"φ_z (body)", "deg", deg * c.b(2), deg * c.s(2)}};
+}
+
+/// Fitted in the camera frame; with the dataset's camera also shown in the body frame (δp_B = R_BC·δp_C).
+std::vector<EffectEstimate> extrinsic_translation(const Coefs &c, const DiagnoseReport &rep, const Design &) {
+  std::vector<EffectEstimate> out = {vector_norm(c, "translation error |δp|", "mm", 1e3)};
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  const bool body = rep.options.have_camera;
+  if (body)
+    R = rep.options.camera.T_BC.block<3, 3>(0, 0);
+  Eigen::Matrix3d C;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      C(i, j) = c.cov(i, j);
+  const Eigen::Vector3d v = R * Eigen::Vector3d(c.b(0), c.b(1), c.b(2));
+  const Eigen::Matrix3d Cv = R * C * R.transpose();
+  const char *axes[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a)
+    out.push_back({std::string("δp_") + axes[a] + (body ? " (body)" : " (camera)"), "mm", 1e3 * v(a),
+                   1e3 * std::sqrt(std::max(0.0, Cv(a, a)))});
+  return out;
+}
+
+/// Per-bin offsets at the bins' centres, δ_b = β_V + β_Vt·(t_b − t_mid) (+ β_b for the inner bins): their mean,
+/// their spread about it (RMS, the size of a wander) and their range; delta-method SEs.
+std::vector<EffectEstimate> td_piecewise(const Coefs &c, const DiagnoseReport &, const Design &d) {
+  const int K = kTdBins, p = kTdBins; // kV, kVt and K − 2 inner bins
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(K, p), C(p, p);
+  Eigen::VectorXd beta(p);
+  for (int k = 0; k < K; ++k) {
+    T(k, 0) = 1.0;
+    T(k, 1) = (k + 0.5) * 2 * d.t_mid / K - d.t_mid;
+    if (k > 0 && k < K - 1)
+      T(k, k + 1) = 1.0;
+  }
+  for (int i = 0; i < p; ++i) {
+    beta(i) = c.b(i);
+    for (int j = 0; j < p; ++j)
+      C(i, j) = c.cov(i, j);
+  }
+  const Eigen::VectorXd delta = T * beta;
+  const Eigen::MatrixXd Cd = T * C * T.transpose();
+  const double mean = delta.mean();
+  const Eigen::VectorXd dev = delta.array() - mean;
+  const double rms = std::sqrt(dev.squaredNorm() / K);
+  const Eigen::VectorXd g_rms = rms > 0 ? (dev / (K * rms)).eval() : Eigen::VectorXd::Zero(K);
+  const Eigen::VectorXd g_mean = Eigen::VectorXd::Constant(K, 1.0 / K);
+  Eigen::Index lo = 0, hi = 0;
+  delta.minCoeff(&lo);
+  delta.maxCoeff(&hi);
+  const double var_range = Cd(hi, hi) + Cd(lo, lo) - 2 * Cd(hi, lo);
+  const auto se = [&](const Eigen::VectorXd &g) { return 1e3 * std::sqrt(std::max(0.0, double(g.dot(Cd * g)))); };
+  return {{"offset error spread (RMS over bins)", "ms", 1e3 * rms, se(g_rms)},
+          {"offset error, mean over bins", "ms", 1e3 * mean, se(g_mean)},
+          {"offset error range (max − min bin)", "ms", 1e3 * (delta(hi) - delta(lo)),
+           1e3 * std::sqrt(std::max(0.0, var_range))}};
+}
+
+std::vector<int> span(int first, int count, std::vector<int> head = {}) {
+  for (int i = 0; i < count; ++i)
+    head.push_back(first + i);
+  return head;
+}
+
 std::vector<int> gyro_columns() {
   std::vector<int> gyro;
   for (int i = 0; i < 9; ++i)
@@ -119,6 +212,32 @@ const std::vector<CandidateDef> &candidate_table() {
        kAbsorbedFallback,
        "fitted gyro_scale effect [px]",
        "-w_gyro through the images' estimator, bias removed, / SE [rad/s]"},
+      // Contains gyro_scale: selected only when the axes differ beyond one common scale.
+      {"gyro_scale_axes", {kGyroScale, kGyroAxY, kGyroAxZ}, {}, Needs::Rates, gyro_axes,
+       "per-axis gyro scale error (rates only)",
+       "per-axis gyro scale error, from rates: ω_vis − ω̄_gyro = −diag(s)·ω̄_gyro − b (body axes)",
+       "", "", "fitted gyro_scale_axes effect, / SE"},
+      // The antisymmetric part of the gyro's linear error: on rates a camera-body rotation and a gyro axis rotation
+      // are the same thing (only the accelerometer could tell them apart); it is named as the extrinsic.
+      {"extrinsic_rotation", span(kExtRot0, 3), {}, Needs::Rates, extrinsic_rotation,
+       "camera-IMU rotation error (rates only)",
+       "camera-IMU rotation error, from rates: ω_vis − ω̄_gyro = ω̄_gyro × φ − b (R_BC true = Exp(φ)·R_BC)",
+       "", "", "fitted extrinsic_rotation effect, / SE"},
+      {"extrinsic_translation", span(kExtTrans0, 3), {}, Needs::Nothing, extrinsic_translation,
+       "camera-IMU translation error: r = −f·J_π(x)·δp_C/z (what the rotation along a track leaves of it)",
+       "", "",
+       "fitted extrinsic_translation effect [px]",
+       ""},
+      // Contains td_drift (and td_const): selected only when the offset varies beyond one slope. Against td_const
+      // its added columns test whether the offset varies at all over the log. As a sibling of the drift (8 bins, no
+      // slope) it took the drift's place on a pure 1 ms/s drift: the bins also fit the rates' per-bin floor.
+      {"td_piecewise", span(kTdBin0, kTdBins - 2, {kV, kVt}), {}, Needs::Velocity, td_piecewise,
+       "time-offset error of any shape: r = V·(δt + ḋ·(t − t_mid) + δt_b), δt_b per inner time bin",
+       "time-offset error of any shape, from rates: ω_vis − ω_gyro = α·(δt + ḋ·(t − t_mid) + δt_b) − b, δt_b per inner "
+       "time bin",
+       kOffsetFallback,
+       "fitted td_piecewise effect [px]",
+       "fitted alpha * dt_b, bias removed, / SE"},
   };
   // clang-format on
   return table;

@@ -10,6 +10,11 @@
 
 namespace ov_eval::diag {
 
+/// Time bins of the piecewise offset candidate (td_piecewise): a drift (kV, kVt) and, for the inner bins
+/// b = 1 .. kTdBins − 2, their own offset beyond it (kTdBin0 + b − 1). The first and last bins carry none: with the
+/// drift's two terms the offset per bin is free. So td_piecewise contains td_drift, which contains td_const.
+constexpr int kTdBins = 8;
+
 /// Columns of the design matrix; a candidate is a list of them, so nested candidates share columns. On the residual
 /// design (pixels) they are as below; the rate design fills kV (α), kVt (α·(t − t_mid)), kVrow (α, on ψ rows), kFocal
 /// (ω_vis's response to a unit focal error) and kGyroScale (−ω̄_gyro), whitened by each row's standard error.
@@ -23,8 +28,23 @@ enum Col : int {
   kRadial,                 ///< r²·(fu·x, fv·y) [px]
   kGyro0,                  ///< 9 columns B(x,y)·e_i·Θ_j [px·rad/rad]
   kGyroScale = kGyro0 + 9, ///< with the camera: −B(x,y)·R_CB·Θ [px], the nine above contracted with R_CB
-  kNumCols
+  // Rates only (the rows ω_vis − ω̄_gyro, body frame): the gyro's linear errors and the camera-body rotation.
+  kGyroAxY, ///< −e_y·ω̄_y: with kGyroScale, the y axis's own scale
+  kGyroAxZ, ///< −e_z·ω̄_z
+  kExtRot0, ///< 3 columns ω̄ × e_j: camera-body rotation error φ (R_BC true = Exp(φ)·R_BC)
+  /// Residual only: 3 columns −f·J_π(x)·e_c/z, a camera-body translation error seen in the camera frame.
+  kExtTrans0 = kExtRot0 + 3,
+  /// α·1[time bin b] (rates) or V·1[bin b] (residual) for bins b = 1 .. kTdBins − 2; with kV and kVt, a piecewise
+  /// offset.
+  kTdBin0 = kExtTrans0 + 3,
+  kNumCols = kTdBin0 + kTdBins - 2
 };
+
+/// The piecewise offset's bin of a row at t seconds into a log of `duration_s`.
+inline int td_bin(double t, double duration_s) {
+  const int b = static_cast<int>(kTdBins * t / (duration_s > 0 ? duration_s : 1.0));
+  return b < 0 ? 0 : b >= kTdBins ? kTdBins - 1 : b;
+}
 
 /// A candidate's coefficients in the fit that estimated them (at: their positions in fit.beta, in column order).
 struct Coefs {
@@ -38,8 +58,9 @@ struct Coefs {
 /// The estimates shown for a candidate, in the user's units, from its coefficients.
 using EstimatesFn = std::vector<EffectEstimate> (*)(const Coefs &c, const DiagnoseReport &rep, const Design &d);
 
-/// What a candidate needs of the residual log's rows to be tested on the residual (the rate design has both).
-enum class Needs { Nothing, Velocity, BodyRates };
+/// What a candidate needs of the residual log's rows to be tested on the residual (the rate design has both); Rates:
+/// it has no model on the residual and is tested on rates only (--dataset).
+enum class Needs { Nothing, Velocity, BodyRates, Rates };
 
 struct CandidateDef {
   std::string key;              ///< td_const, td_drift, rolling_shutter, focal, principal_point, radial_k1, gyro_scale

@@ -23,6 +23,9 @@ struct Design {
   double scale = 1; ///< robust σ of r (fixed, so that the losses of different candidates compare)
   double t_mid = 0; ///< centre of the drift term
   bool have_velocity = false, have_rate = false;
+  /// Where each row lies, for the test of structure no candidate explains (unexplained.h); empty: not tested.
+  std::vector<int> region;    ///< image region 0..8 (3 × 3 grid, row-major), −1 unknown
+  std::vector<double> motion; ///< image speed [px/s]
 };
 
 struct Fit {

@@ -230,6 +230,14 @@ std::string json_text(const DiagnoseReport &rep) {
        << ", \"td_filter_ms\": " << ov_core::json_number(tb.td_filter_ms) << ", \"observations\": " << tb.observations
        << "}";
   }
+  js << "\n  ],\n  \"unexplained\": [";
+  for (size_t u = 0; u < rep.unexplained.size(); ++u) {
+    const auto &ue = rep.unexplained[u];
+    js << (u ? "," : "") << "\n    {\"where\": " << ov_core::json_string(ue.where)
+       << ", \"flagged\": " << (ue.flagged ? "true" : "false")
+       << ", \"explained\": " << ov_core::json_number(ue.explained) << ", \"sigma\": " << ov_core::json_number(ue.sigma)
+       << ", \"largest\": " << ov_core::json_string(ue.largest) << "}";
+  }
   js << "\n  ]\n}\n";
   return js.str();
 }
@@ -238,14 +246,20 @@ std::string json_text(const DiagnoseReport &rep) {
 
 std::string format_ranking(const DiagnoseReport &rep) {
   std::ostringstream os;
-  os << "rank  candidate         verdict        alone[%]  added[%]   sigma  estimate\n";
+  os << "rank  candidate              verdict        alone[%]  added[%]   sigma  estimate\n";
   for (const auto &c : rep.candidates) {
-    os << std::left << std::setw(6) << c.rank << std::setw(18) << c.key << std::setw(15)
+    os << std::left << std::setw(6) << c.rank << std::setw(23) << c.key << std::setw(15)
        << (c.explained ? "EXPLAINED" : "not explained") << std::right << std::setw(8)
        << ov_core::format_fixed(100 * c.explained_alone, 2) << std::setw(10)
        << ov_core::format_fixed(100 * c.explained_added, 2) << std::setw(8) << ov_core::format_fixed(c.sigma, 1) << "  "
        << estimates_text(c) << (c.note.empty() ? "" : "  [" + c.note + "]") << "\n";
   }
+  // Structure no candidate explains: the verdict UNEXPLAINED, with its size and where it shows.
+  for (const auto &u : rep.unexplained)
+    os << "      " << std::left << std::setw(23) << ("by " + u.where) << std::setw(15)
+       << (u.flagged ? "UNEXPLAINED" : "noise") << std::right << std::setw(8)
+       << ov_core::format_fixed(100 * u.explained, 2) << std::setw(10) << "" << std::setw(8)
+       << ov_core::format_fixed(u.sigma, 1) << "  leftover's bin means; largest " << u.largest << "\n";
   return os.str();
 }
 

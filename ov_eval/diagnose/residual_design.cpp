@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -56,6 +57,8 @@ Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, D
   d.r.resize(n);
   d.cluster.resize(n);
   d.t_s.resize(n);
+  d.region.assign(n, -1);
+  d.motion.assign(n, 0.0);
   d.n_clusters = static_cast<int>(data.tracks.size());
   d.have_velocity = data.use_velocity;
   d.t_mid = 0.5 * rep.duration_s;
@@ -128,6 +131,14 @@ Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, D
         d.r(i) = a == 0 ? r->res_u_px : r->res_v_px;
         d.cluster[i] = g;
         d.t_s[i] = t;
+        {
+          // The predicted pixel's cell of a 3 × 3 grid (width ≈ 2·cu), for the test of unexplained structure.
+          const double u = rep.fu * xh[j].x() + rep.cu, v = rep.fv * xh[j].y() + rep.cv;
+          const int cx = std::clamp(static_cast<int>(3 * u / std::max(1.0, 2 * rep.cu)), 0, 2);
+          const int cy = std::clamp(static_cast<int>(3 * v / std::max(1, rep.image_height)), 0, 2);
+          d.region[i] = 3 * cy + cx;
+          d.motion[i] = V.norm();
+        }
         d.D(i, kV) = V(a);
         d.D(i, kVt) = V(a) * (t - d.t_mid);
         d.D(i, kVrow) = V(a) * row_frac;
@@ -135,6 +146,14 @@ Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, D
         d.D(i, kPpU) = a == 0 ? 1.0 : 0.0;
         d.D(i, kPpV) = a == 1 ? 1.0 : 0.0;
         d.D(i, kRadial) = fa * dirs.k1(a);
+        const int tb = td_bin(t, rep.duration_s);
+        if (tb > 0 && tb < kTdBins - 1)
+          d.D(i, kTdBin0 + tb - 1) = V(a);
+        // A camera-body translation error δp moves every point by −R_CB·δp in the camera frame: constant there, so
+        // only the camera's rotation along the track keeps the point from absorbing it. Needs the depths.
+        if (depths)
+          d.D(i, kExtTrans0) = -fa * (a == 0 ? inv_z : 0.0), d.D(i, kExtTrans0 + 1) = -fa * (a == 1 ? inv_z : 0.0),
+                 d.D(i, kExtTrans0 + 2) = fa * xh[j](a) * inv_z;
         if (rates)
           for (int c = 0; c < 3; ++c)
             for (int q = 0; q < 3; ++q)

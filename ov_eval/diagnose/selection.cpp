@@ -21,6 +21,8 @@ std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &fami
     if (def.needs == Needs::Velocity && !d.have_velocity)
       sc.skip = "skipped: fewer than " + std::to_string(int(100 * opt.min_velocity_share)) +
                 "% of rows carry an image velocity";
+    if (!on_rates && def.needs == Needs::Rates)
+      sc.skip = "skipped: tested on rates only (needs --dataset: the raw gyro and the camera)";
     if (!on_rates && def.needs == Needs::BodyRates && !d.have_rate)
       sc.skip = "skipped: most tracks lack body rates (w_valid)";
     cands.push_back(sc);
