@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <tuple>
 
 namespace ov_msckf_ton {
 
@@ -319,6 +320,13 @@ bool state_jacobian(const Problem &pb, const Params &x, Eigen::Matrix<double, 15
   return true;
 }
 
+/// Largest sigmas of roll/pitch [deg] and of the world velocity [m/s] in a covariance of the state error.
+std::pair<double, double> tilt_velocity_sigmas(const Eigen::Matrix<double, 15, 15> &P) {
+  const double tilt = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P.block<2, 2>(0, 0)).eigenvalues()(1);
+  const double vel = Eigen::SelfAdjointEigenSolver<Mat3>(P.block<3, 3>(6, 6)).eigenvalues()(2);
+  return {std::sqrt(std::max(0.0, tilt)) * 180.0 / M_PI, std::sqrt(std::max(0.0, vel))};
+}
+
 } // namespace
 
 bool preintegrate(const std::deque<ImuData> &imu, int64_t t0_ns, const std::vector<int64_t> &t_ns, const Vec3 &bg,
@@ -483,10 +491,16 @@ DynamicInitResult dynamic_initialize(const std::vector<InitFrame> &frames, const
     return fail("IMU readings do not cover the window");
   Eigen::Matrix<double, 15, 15> P = J * cov * J.transpose();
   P = 0.5 * (P + P.transpose()).eval();
-  res.sigma_rollpitch_deg =
-      std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P.block<2, 2>(0, 0)).eigenvalues()(1))) *
-      180.0 / M_PI;
-  res.sigma_vel = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(P.block<3, 3>(6, 6)).eigenvalues()(2)));
+  // What the window itself determined: the same sigmas with the accelerometer bias held. Over a window with little
+  // rotation a constant b_a and a tilt of gravity move every position alike (½ t² R b_a vs ½ t² δg), so the marginal
+  // roll/pitch sigma cannot fall below sigma_ba_prior / g (1.2 deg for 0.2 m/s²), nor the world velocity's below
+  // that times the speed, however good the images: a gate on the marginals refuses every such window. The filter
+  // still gets the marginal covariance with its tilt-b_a correlation, which is what its estimate is uncertain by.
+  MatG cov_given_ba = MatG::Zero();
+  cov_given_ba.topLeftCorner<8, 8>() = S.topLeftCorner<8, 8>().ldlt().solve(Eigen::Matrix<double, 8, 8>::Identity());
+  const Eigen::Matrix<double, 15, 15> P_given_ba = J * cov_given_ba * J.transpose();
+  std::tie(res.sigma_rollpitch_deg, res.sigma_vel) = tilt_velocity_sigmas(P);
+  std::tie(res.sigma_rollpitch_given_ba_deg, res.sigma_vel_given_ba) = tilt_velocity_sigmas(P_given_ba);
   const StateAtK s = state_at_newest(pb, x, pre);
   res.R_WB = s.R;
   res.p_W = s.p;
@@ -496,19 +510,20 @@ DynamicInitResult dynamic_initialize(const std::vector<InitFrame> &frames, const
   res.P = opt.sigma_inflation * opt.sigma_inflation * P;
   res.P(2, 2) += sigma_yaw * sigma_yaw;
   res.P.block<3, 3>(3, 3) += sigma_pos * sigma_pos * Mat3::Identity();
-  char buf[256];
+  char buf[320];
   std::snprintf(buf, sizeof buf,
-                "%d features over %d frames (%.2f s), %d iterations, rms %.2f px, sigma roll/pitch %.2f deg, "
-                "velocity %.3f m/s, |v| %.3f m/s, disparity %.1f px",
+                "%d features over %d frames (%.2f s), %d iterations, rms %.2f px, sigma roll/pitch %.2f deg "
+                "(%.2f with b_a held), velocity %.3f m/s (%.3f), |v| %.3f m/s, disparity %.1f px",
                 res.features, res.frames, pb.t.back(), res.iterations, res.rms_px, res.sigma_rollpitch_deg,
-                res.sigma_vel, res.v_W.norm(), res.disparity_px);
+                res.sigma_rollpitch_given_ba_deg, res.sigma_vel, res.sigma_vel_given_ba, res.v_W.norm(),
+                res.disparity_px);
   res.why = buf;
   if (res.rms_px > opt.max_rms_px)
     return fail("reprojection rms too large: " + res.why);
   if (static_cast<double>(inliers) < 0.8 * static_cast<double>(pb.obs.size()))
     return fail("too many outliers (" + std::to_string(pb.obs.size() - inliers) + " of " +
                 std::to_string(pb.obs.size()) + "): " + res.why);
-  if (res.sigma_rollpitch_deg > opt.max_sigma_rollpitch_deg || res.sigma_vel > opt.max_sigma_vel)
+  if (res.sigma_rollpitch_given_ba_deg > opt.max_sigma_rollpitch_deg || res.sigma_vel_given_ba > opt.max_sigma_vel)
     return fail("not determined well enough yet: " + res.why);
   res.ok = true;
   return res;

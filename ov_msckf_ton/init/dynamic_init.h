@@ -37,7 +37,8 @@ struct DynamicInitOptions {
   double sigma_bg_prior = 0.1;   ///< rad/s, prior of the gyro bias around zero (weak: the data decide)
   double sigma_ba_prior = 0.2;   ///< m/s^2, prior of the accelerometer bias around zero
   double max_rms_px = 1.5;       ///< reprojection RMS after the refinement (inliers)
-  /// Accept only a well-determined solution: gravity direction and velocity sigmas from the refinement's covariance.
+  /// Accept only a well-determined solution: gravity direction and velocity sigmas from the refinement's covariance,
+  /// with the accelerometer bias held (what the window determines; the marginals add the b_a prior's share).
   double max_sigma_rollpitch_deg = 0.5;
   double max_sigma_vel = 0.04;
   double sigma_inflation = 2.0; ///< the covariance handed to the filter is this factor (on sigmas) above the fit's
@@ -54,7 +55,9 @@ struct DynamicInitResult {
   /// Covariance of [δθ δp δv δb_g δb_a] in the filter's error convention (state.h).
   Eigen::Matrix<double, 15, 15> P = Eigen::Matrix<double, 15, 15>::Zero();
   int features = 0, frames = 0, iterations = 0;
-  double rms_px = 0.0, sigma_rollpitch_deg = 0.0, sigma_vel = 0.0, disparity_px = 0.0;
+  double rms_px = 0.0, disparity_px = 0.0;
+  double sigma_rollpitch_deg = 0.0, sigma_vel = 0.0;                   ///< marginal, from P before the inflation
+  double sigma_rollpitch_given_ba_deg = 0.0, sigma_vel_given_ba = 0.0; ///< with b_a held: what the gate checks
 };
 
 /// `frames` oldest first (the newest is the state's time); `imu` must cover them. T_BC camera -> body; focal_px
