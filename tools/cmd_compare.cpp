@@ -54,7 +54,7 @@ int cmd_compare(const Args &args) {
       ("modes,m", po::value(&modes)->default_value(modes), "comma-separated time-offset modes to run")           //
       ("out,o", po::value(&req.out_dir)->required(), "results folder (created if needed)")                       //
       ("config,c", po::value(&config), "estimator config YAML shared by all modes (default: built-in defaults)") //
-      ("init", po::value(&init), "static|groundtruth (overrides the config)")                                    //
+      ("init", po::value(&init), "static|groundtruth|auto|dynamic (overrides the config)")                       //
       ("jobs,j", po::value(&req.jobs)->default_value(2), "runs at a time")                                       //
       ("max-images", po::value(&req.max_images), "stop each run after this many images")                         //
       ("align", po::value(&align)->default_value(align), "trajectory alignment for APE/ARE: posyaw|se3");
