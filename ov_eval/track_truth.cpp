@@ -3,8 +3,8 @@
 #include "ov_core/io/csv.h"
 #include "ov_core/io/text_format.h"
 #include "ov_core/types/errors.h"
-#include "ov_core/types/state_interpolation.h"
 #include "ov_eval/metrics.h"
+#include "ov_eval/truth_camera.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -18,37 +18,8 @@ namespace ov_eval {
 
 namespace {
 
-struct Cam {
-  Eigen::Matrix3d R_WC;
-  Eigen::Vector3d p_WC;
-};
-
-/// Ground-truth camera pose at the instant an image stamped t_cam shows.
-class TruthPoses {
-public:
-  explicit TruthPoses(const ov_core::Dataset &d) : d_(d) {
-    R_BC_ = d.cam.T_BC.topLeftCorner<3, 3>();
-    p_BC_ = d.cam.T_BC.topRightCorner<3, 1>();
-  }
-  bool at(int64_t t_cam, Cam &c) const {
-    const int64_t t = t_cam + ov_core::s_to_ns(d_.has_td_truth() ? td_truth_at(d_.td_truth, t_cam) : d_.td_prior_s);
-    ov_core::StateSample s;
-    if (!ov_core::interpolate_state(d_.groundtruth, t, s))
-      return false;
-    const Eigen::Matrix3d R_WB = s.q_WB.toRotationMatrix();
-    c.R_WC = R_WB * R_BC_;
-    c.p_WC = s.p + R_WB * p_BC_;
-    return true;
-  }
-
-private:
-  const ov_core::Dataset &d_;
-  Eigen::Matrix3d R_BC_;
-  Eigen::Vector3d p_BC_;
-};
-
 struct Obs {
-  Cam cam;
+  CameraPose cam;
   Eigen::Vector2d uv;
   int age; ///< index in the whole track
 };
@@ -165,7 +136,7 @@ TrackTruthResult score_tracks(const std::vector<TrackPoint> &points, const ov_co
   if (opt.min_obs < 3 || opt.max_segment < opt.min_obs)
     throw ov_core::UsageError("score_tracks: need 3 <= min_obs <= max_segment");
   const ov_core::CameraModel cm(data.cam);
-  const TruthPoses truth(data);
+  const TruthCamera truth(data);
   TrackTruthResult r;
   r.observations = static_cast<long>(points.size());
   const auto tracks = group_tracks(points);
@@ -198,7 +169,7 @@ TrackTruthResult score_tracks(const std::vector<TrackPoint> &points, const ov_co
       seg_t.clear();
       for (size_t k = s0; k < s1; ++k) {
         Obs o;
-        if (!truth.at(obs[k]->t_cam_ns, o.cam))
+        if (!truth.at_image(obs[k]->t_cam_ns, o.cam))
           continue;
         o.uv = obs[k]->uv;
         o.age = static_cast<int>(k);
@@ -307,7 +278,7 @@ std::vector<TrackPoint> rewrite_tracks(const std::vector<TrackPoint> &points, co
   if (!(sigma_px >= 0) || !(rho >= 0 && rho < 1))
     throw ov_core::UsageError("rewrite_tracks: need sigma_px >= 0 and 0 <= rho < 1");
   const ov_core::CameraModel cm(data.cam);
-  const TruthPoses truth(data);
+  const TruthCamera truth(data);
   const auto tracks = group_tracks(points);
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> n01(0.0, 1.0);
@@ -323,7 +294,7 @@ std::vector<TrackPoint> rewrite_tracks(const std::vector<TrackPoint> &points, co
         seg.clear();
         for (size_t k = s0; k < s1; ++k) {
           Obs o;
-          if (truth.at(obs[k]->t_cam_ns, o.cam)) {
+          if (truth.at_image(obs[k]->t_cam_ns, o.cam)) {
             o.uv = obs[k]->uv;
             seg.push_back(o);
           }
@@ -345,7 +316,7 @@ std::vector<TrackPoint> rewrite_tracks(const std::vector<TrackPoint> &points, co
     std::vector<const TrackPoint *> kept;
     for (const TrackPoint *p : obs) {
       Obs o;
-      if (truth.at(p->t_cam_ns, o.cam)) {
+      if (truth.at_image(p->t_cam_ns, o.cam)) {
         o.uv = p->uv;
         seg.push_back(o);
         kept.push_back(p);

@@ -1,8 +1,8 @@
 #include "ov_eval/velocity_truth.h"
 #include "ov_core/io/text_format.h"
 #include "ov_core/types/errors.h"
-#include "ov_core/types/state_interpolation.h"
 #include "ov_eval/metrics.h"
+#include "ov_eval/truth_camera.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -14,37 +14,19 @@ namespace ov_eval {
 
 namespace {
 
-struct CameraAt {
-  Eigen::Matrix3d R_WC;
-  Eigen::Vector3d p_WC;
-};
-
-class TruthCamera {
+/// The truth camera, and the image-plane motion of a world point it sees.
+class TruthProjection {
 public:
-  explicit TruthCamera(const ov_core::Dataset &d) : d_(d) {
-    R_BC_ = d.cam.T_BC.topLeftCorner<3, 3>();
-    p_BC_ = d.cam.T_BC.topRightCorner<3, 1>();
+  explicit TruthProjection(const ov_core::Dataset &d) : cam_(d) {
     const auto &gt = d.groundtruth;
     // Central differences over one ground-truth step: the poses are interpolated linearly between samples.
     h_ns_ = std::max<int64_t>(2500000, (gt.back().t_ns - gt.front().t_ns) / static_cast<int64_t>(gt.size() - 1));
   }
-  /// IMU-clock time the image stamped t_cam shows.
-  int64_t t_imu(int64_t t_cam) const {
-    return t_cam + ov_core::s_to_ns(d_.has_td_truth() ? td_truth_at(d_.td_truth, t_cam) : d_.td_prior_s);
-  }
-  bool at(int64_t t_imu_ns, CameraAt &c) const {
-    ov_core::StateSample s;
-    if (!ov_core::interpolate_state(d_.groundtruth, t_imu_ns, s))
-      return false;
-    const Eigen::Matrix3d R_WB = s.q_WB.toRotationMatrix();
-    c.R_WC = R_WB * R_BC_;
-    c.p_WC = s.p + R_WB * p_BC_;
-    return true;
-  }
+  const TruthCamera &camera() const { return cam_; }
   /// Normalised projection of p_W at IMU time t; false behind the camera or outside the truth.
   bool project(int64_t t, const Eigen::Vector3d &p_W, Eigen::Vector2d &xy) const {
-    CameraAt c;
-    if (!at(t, c))
+    CameraPose c;
+    if (!cam_.at_imu(t, c))
       return false;
     const Eigen::Vector3d p_C = c.R_WC.transpose() * (p_W - c.p_WC);
     if (p_C.z() <= 0)
@@ -54,7 +36,7 @@ public:
   }
   /// d(normalised projection)/dt at camera stamp t_cam.
   bool velocity(int64_t t_cam, const Eigen::Vector3d &p_W, Eigen::Vector2d &v) const {
-    const int64_t t = t_imu(t_cam);
+    const int64_t t = cam_.t_imu(t_cam);
     Eigen::Vector2d a, b;
     if (!project(t - h_ns_, p_W, a) || !project(t + h_ns_, p_W, b))
       return false;
@@ -63,9 +45,7 @@ public:
   }
 
 private:
-  const ov_core::Dataset &d_;
-  Eigen::Matrix3d R_BC_;
-  Eigen::Vector3d p_BC_;
+  TruthCamera cam_;
   int64_t h_ns_;
 };
 
@@ -76,8 +56,8 @@ bool triangulate(const TruthCamera &cam, const std::vector<const ov_core::Veloci
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
   int used = 0;
   for (const auto *o : obs) {
-    CameraAt c;
-    if (!cam.at(cam.t_imu(o->t_cam_ns), c))
+    CameraPose c;
+    if (!cam.at_image(o->t_cam_ns, c))
       continue;
     const Eigen::Vector3d d = (c.R_WC * Eigen::Vector3d(o->x_norm, o->y_norm, 1.0)).normalized();
     const Eigen::Matrix3d M = Eigen::Matrix3d::Identity() - d * d.transpose();
@@ -92,8 +72,8 @@ bool triangulate(const TruthCamera &cam, const std::vector<const ov_core::Veloci
     return false;
   p_W = A.ldlt().solve(b);
   for (const auto *o : obs) {
-    CameraAt c;
-    if (cam.at(cam.t_imu(o->t_cam_ns), c) && (c.R_WC.transpose() * (p_W - c.p_WC)).z() < min_depth)
+    CameraPose c;
+    if (cam.at_image(o->t_cam_ns, c) && (c.R_WC.transpose() * (p_W - c.p_WC)).z() < min_depth)
       return false;
   }
   return true;
@@ -118,7 +98,8 @@ VelocityEvalResult evaluate_velocities(const std::vector<ov_core::VelocityLogRow
                                        const VelocityEvalOptions &opt) {
   if (!data.has_groundtruth() || !data.groundtruth.front().has_orientation || data.groundtruth.size() < 2)
     throw ov_core::UsageError("scoring velocities needs full-pose ground truth in " + data.root);
-  const TruthCamera cam(data);
+  const TruthProjection proj(data);
+  const TruthCamera &cam = proj.camera();
   VelocityEvalResult r;
   r.rows = static_cast<long>(rows.size());
   std::map<uint64_t, std::vector<const ov_core::VelocityLogRow *>> tracks;
@@ -135,7 +116,7 @@ VelocityEvalResult evaluate_velocities(const std::vector<ov_core::VelocityLogRow
     int n = 0;
     for (const auto *o : obs) {
       Eigen::Vector2d xy;
-      if (cam.project(cam.t_imu(o->t_cam_ns), p_W, xy)) {
+      if (proj.project(cam.t_imu(o->t_cam_ns), p_W, xy)) {
         sq += (xy - Eigen::Vector2d(o->x_norm, o->y_norm)).squaredNorm() * o->focal_px * o->focal_px;
         ++n;
       }
@@ -150,7 +131,7 @@ VelocityEvalResult evaluate_velocities(const std::vector<ov_core::VelocityLogRow
       by_index[o->obs_index] = o;
     for (const auto *o : obs) {
       Eigen::Vector2d v;
-      if (!cam.velocity(o->t_cam_ns, p_W, v))
+      if (!proj.velocity(o->t_cam_ns, p_W, v))
         continue;
       const Eigen::Vector2d truth = v * o->focal_px;
       const bool first = o->obs_index == 0 && !std::isfinite(o->eq2_x);
