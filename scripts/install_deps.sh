@@ -3,9 +3,10 @@
 # --sanitize adds clang and its runtime libraries (ASan, UBSan, libFuzzer) for scripts/sanitize.sh and scripts/fuzz.sh;
 # other arguments are extra packages a script needs (check_format.sh: clang-format).
 set -euo pipefail
-# librosbag-storage-dev + libsensor-msgs-dev: ROS 1 bags read and written without ROS (Debian's rosbag storage library).
+# librosbag-storage-dev + libsensor-msgs-dev: ROS 1 bags read and written without ROS (Debian's rosbag storage library);
+# libroscpp-core-dev (roscpp_serialization, rostime, cpp_common) and libconsole-bridge-dev are linked directly, so named.
 PKGS=(build-essential cmake ccache libeigen3-dev libopencv-dev libyaml-cpp-dev libboost-program-options-dev
-      libgtest-dev python3 librosbag-storage-dev libsensor-msgs-dev)
+      libgtest-dev python3 librosbag-storage-dev libsensor-msgs-dev libroscpp-core-dev libconsole-bridge-dev)
 for a in "$@"; do
   if [ "$a" = "--sanitize" ]; then
     PKGS+=(clang libclang-rt-14-dev)
