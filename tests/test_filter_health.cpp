@@ -79,6 +79,20 @@ TEST(FilterHealth, CollapsedAcceptanceAndGateRateBeyondChanceFail) {
   EXPECT_EQ(feed(recovered, 0.1, 4, stats(20, 1, 1)), "");
 }
 
+TEST(FilterHealth, StandingStillIsNotDivergence) {
+  // A machine-hall start: the vehicle sits on the floor, every feature fails triangulation for lack of parallax
+  // (MH_01_easy rendered from 5 s in was stopped as "diverged" before this).
+  UpdateStats still = stats(0, 0, 20);
+  still.low_parallax = 20;
+  FilterHealth standing;
+  EXPECT_EQ(feed(standing, 0, 5, still), "");
+  // The same count of failures with a depth or reprojection to blame is still a collapse.
+  UpdateStats bad = stats(0, 0, 20);
+  bad.low_parallax = 2;
+  FilterHealth diverged;
+  EXPECT_NE(feed(diverged, 0, 5, bad).find("diverged"), std::string::npos);
+}
+
 TEST(FilterHealth, TdRunningAwayFromItsCovarianceFails) {
   // The image-plane modes' fast-start divergence: updates moving t_d 4 ms/s with sigma 0.3 ms (docs/robustness.md).
   FilterHealth runaway;

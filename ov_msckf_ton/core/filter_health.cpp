@@ -27,7 +27,9 @@ void FilterHealth::on_update(int64_t t_ns, const UpdateStats &st) {
   Tally e{t_ns, {}};
   e.tally.used = st.features_used;
   e.tally.gated = st.gated_chi2;
-  e.tally.failed_triangulation = st.rejected_triangulation;
+  // Too little parallax is not a failure: a vehicle standing still (EuRoC's machine-hall starts) triangulates nothing
+  // and is not diverging. Those features are left out of the rates altogether.
+  e.tally.failed_triangulation = st.rejected_triangulation - st.low_parallax;
   total_.used += e.tally.used;
   total_.gated += e.tally.gated;
   total_.failed_triangulation += e.tally.failed_triangulation;

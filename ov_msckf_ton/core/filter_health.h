@@ -27,7 +27,7 @@ struct FilterHealthOptions {
   bool enabled = true;          ///< false: only count (VioOptions::health)
   double window_s = 3.0;        ///< acceptance and gate rate are judged over the updates of this last stretch
   int min_features = 60;        ///< features examined in the window before a rate is judged (fewer say little)
-  double min_acceptance = 0.25; ///< used / examined (triangulation failures included)
+  double min_acceptance = 0.25; ///< used / examined (triangulation failures included, too little parallax not)
   /// gated / (used + gated): ten times what a 95 % gate rejects by chance; over 60+ features no consistent filter
   /// gets there (binomial tail < 1e-30).
   double max_gate_rate = 0.5;

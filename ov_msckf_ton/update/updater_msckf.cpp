@@ -368,6 +368,8 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
     const TriangulationResult tri = triangulate_feature(state, f, td_obs, velocities);
     if (!tri.ok() || !linearize(state, f, tri.p_W, td_obs, velocities, lin_)) {
       ++st.rejected_triangulation;
+      if (tri.quality == TriangulationQuality::LowParallax)
+        ++st.low_parallax;
       if (log) {
         usable_observations(state, f, usable);
         append_records(state, f, nullptr, usable, td_obs, velocities, tri.p_W, ResidualRecord::kNaN,

@@ -36,6 +36,9 @@ struct UpdateStats {
   int too_few_observations = 0; ///< fewer than min_observations observations with a clone
   int over_limit = 0;           ///< dropped by max_features
   int rejected_triangulation = 0;
+  /// Of those, rejected for too little parallax: bearings that agree once rotation is undone carry no depth and say
+  /// nothing against the state (a camera standing still or only turning), unlike a bad depth or reprojection.
+  int low_parallax = 0;
   int gated_chi2 = 0;
   int features_used = 0;
   int rows_stacked = 0; ///< rows of the accepted features after nullspace projection
