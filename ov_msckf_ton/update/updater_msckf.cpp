@@ -368,7 +368,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
     const TriangulationResult tri = triangulate_feature(state, f, td_obs, velocities);
     if (!tri.ok() || !linearize(state, f, tri.p_W, td_obs, velocities, lin_)) {
       ++st.rejected_triangulation;
-      if (tri.quality == TriangulationQuality::LowParallax)
+      if (tri.quality == TriangulationQuality::LowParallax || tri.quality == TriangulationQuality::IllConditioned)
         ++st.low_parallax;
       if (log) {
         usable_observations(state, f, usable);

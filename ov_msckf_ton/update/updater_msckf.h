@@ -36,8 +36,9 @@ struct UpdateStats {
   int too_few_observations = 0; ///< fewer than min_observations observations with a clone
   int over_limit = 0;           ///< dropped by max_features
   int rejected_triangulation = 0;
-  /// Of those, rejected for too little parallax: bearings that agree once rotation is undone carry no depth and say
-  /// nothing against the state (a camera standing still or only turning), unlike a bad depth or reprojection.
+  /// Of those, rejected for too little parallax (LowParallax, or IllConditioned: the rays' spread too small in some
+  /// direction): bearings that agree once rotation is undone carry no depth and say nothing against the state (a
+  /// camera standing still or only turning), unlike a bad depth or reprojection.
   int low_parallax = 0;
   int gated_chi2 = 0;
   int features_used = 0;
