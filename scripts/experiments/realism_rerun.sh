@@ -25,7 +25,8 @@ case_run() {
     [ -d "$ds/mav0" ] || nice -n 10 "$BIN" simulate --realism "$r" --out "$ds" --gt "$GT/$seq.txt" --start-s 5 \
       --duration-s "$DUR" --seed 1 "$@" -q >/dev/null
     [ -f "$OUT/${name}_$r/results.csv" ] || nice -n 10 "$BIN" compare --dataset "$ds" --modes "$modes" \
-      --out "$OUT/${name}_$r" --config "$CONFIG" --jobs 2 >/dev/null
+      --out "$OUT/${name}_$r" --config "$CONFIG" --jobs 2 >/dev/null ||
+      echo "$name $r: some modes failed (their status is in results.csv)" # off fails by design on a drifting offset
   done
 }
 case_run V1_02_medium V1_02_medium off,sr,oracle --td0-ms 10
