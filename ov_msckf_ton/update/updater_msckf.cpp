@@ -385,12 +385,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
     nullspace_project(lin_.H_f, a.H, a.r);
 
     // S = H P Hᵀ + σ²I over the involved columns only.
-    const int nc = static_cast<int>(a.cols.size());
-    Eigen::MatrixXd P_sub(nc, nc);
-    for (int i = 0; i < nc; ++i)
-      for (int j = 0; j < nc; ++j)
-        P_sub(i, j) = state.P(a.cols[i], a.cols[j]);
-    Eigen::MatrixXd S = a.H * P_sub * a.H.transpose();
+    Eigen::MatrixXd S = a.H * state_helper::sub_covariance(state, a.cols) * a.H.transpose();
     S.diagonal().array() += sigma2;
     const double chi2 = a.r.dot(S.ldlt().solve(a.r));
     const int dof = static_cast<int>(a.r.size());
@@ -421,21 +416,30 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
   if (n_acc == 0)
     return st;
 
-  // Scatter the compact blocks into one dense system over the full state.
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(st.rows_stacked, dim);
+  // Scatter the compact blocks into one system over the union of their columns (in state order): the update never
+  // forms the landmarks' and IMU's zero columns.
+  cols_.clear();
+  for (size_t k = 0; k < n_acc; ++k)
+    cols_.insert(cols_.end(), accepted_[k].cols.begin(), accepted_[k].cols.end());
+  std::sort(cols_.begin(), cols_.end());
+  cols_.erase(std::unique(cols_.begin(), cols_.end()), cols_.end());
+  where_.assign(static_cast<size_t>(dim), -1);
+  for (size_t j = 0; j < cols_.size(); ++j)
+    where_[cols_[j]] = static_cast<int>(j);
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(st.rows_stacked, static_cast<Eigen::Index>(cols_.size()));
   Eigen::VectorXd r(st.rows_stacked);
   int row = 0;
   for (size_t k = 0; k < n_acc; ++k) {
     const Accepted &a = accepted_[k];
     const int rows = static_cast<int>(a.r.size());
     for (size_t j = 0; j < a.cols.size(); ++j)
-      H.block(row, a.cols[j], rows, 1) = a.H.col(static_cast<Eigen::Index>(j));
+      H.block(row, where_[a.cols[j]], rows, 1) = a.H.col(static_cast<Eigen::Index>(j));
     r.segment(row, rows) = a.r;
     row += rows;
   }
   compress(H, r);
   st.rows_update = static_cast<int>(r.size());
-  st.mahalanobis = state_helper::ekf_update(state, H, r, sigma2);
+  st.mahalanobis = state_helper::ekf_update(state, cols_, H, r, sigma2);
   st.td_after = state.td;
   return st;
 }

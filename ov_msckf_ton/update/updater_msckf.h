@@ -155,6 +155,7 @@ private:
     Eigen::VectorXd r;
   };
   std::vector<Accepted> accepted_;
+  std::vector<int> cols_, where_; ///< the stacked system's state columns, and each state column's place in it
 };
 
 } // namespace ov_msckf_ton
