@@ -262,6 +262,32 @@ void UpdaterMSCKF::compress(Eigen::MatrixXd &H, Eigen::VectorXd &r) {
   r = r.head(cols).eval();
 }
 
+Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &lin, const Eigen::MatrixXd &P_sub,
+                                                   double sigma2) {
+  const int m = static_cast<int>(lin.obs.size()), rows = 2 * m, nc = static_cast<int>(lin.H_x.cols());
+  const int nd = nc - 6 * m; // t_d and calibration columns, dense
+  if (m < 2 || nd < 0 || lin.H_x.rows() != rows || P_sub.rows() != nc || lin.H_f.rows() != rows)
+    throw ov_core::UsageError("projected_innovation: linearisation and covariance differ in size");
+  // T = H_x P, block row by block row.
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(rows, nc);
+  for (int k = 0; k < m; ++k)
+    T.middleRows<2>(2 * k).noalias() = lin.H_x.block<2, 6>(2 * k, 6 * k) * P_sub.middleRows<6>(6 * k);
+  if (nd > 0)
+    T.noalias() += lin.H_x.rightCols(nd) * P_sub.bottomRows(nd);
+  // S_full = T H_xᵀ, block column by block column.
+  Eigen::MatrixXd S(rows, rows);
+  for (int k = 0; k < m; ++k)
+    S.middleCols<2>(2 * k).noalias() = T.middleCols<6>(6 * k) * lin.H_x.block<2, 6>(2 * k, 6 * k).transpose();
+  if (nd > 0)
+    S.noalias() += T.rightCols(nd) * lin.H_x.rightCols(nd).transpose();
+  const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(lin.H_f);
+  S.applyOnTheLeft(qr.householderQ().adjoint());
+  S.applyOnTheRight(qr.householderQ());
+  Eigen::MatrixXd S2 = S.bottomRightCorner(rows - 3, rows - 3);
+  S2.diagonal().array() += sigma2;
+  return S2;
+}
+
 void UpdaterMSCKF::append_records(const State &state, const ov_core::Feature &feature, const FeatureLinearization *lin,
                                   const std::vector<std::pair<size_t, const CloneState *>> &usable,
                                   TdObservation td_obs, const VelocityProvider &velocities, const Eigen::Vector3d &p_f,
@@ -384,9 +410,8 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
     // Projected copies: lin_ keeps the pre-projection residuals that the log reports.
     nullspace_project(lin_.H_f, a.H, a.r);
 
-    // S = H P Hᵀ + σ²I over the involved columns only.
-    Eigen::MatrixXd S = a.H * state_helper::sub_covariance(state, a.cols) * a.H.transpose();
-    S.diagonal().array() += sigma2;
+    // S = H P Hᵀ + σ²I over the involved columns only, from the unprojected rows' block structure.
+    const Eigen::MatrixXd S = projected_innovation(lin_, state_helper::sub_covariance(state, a.cols), sigma2);
     const double chi2 = a.r.dot(S.ldlt().solve(a.r));
     const int dof = static_cast<int>(a.r.size());
     const double thr = chi2_threshold(dof);
