@@ -3,6 +3,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <string>
 #include <vector>
 
 namespace ov_msckf_ton {
@@ -84,20 +85,64 @@ void marginalize_landmark(State &s, size_t id) {
   s.remove_block(idx, LandmarkState::kSize);
 }
 
+namespace {
+
+/// The update once PHᵀ (n × m) and S = H P Hᵀ + σ²I (m × m) are known. P − K S Kᵀ = P − W Wᵀ with W = PHᵀ L⁻ᵀ
+/// (S = L Lᵀ): one symmetric rank-m downdate of the lower triangle, mirrored, so P stays exactly symmetric
+/// without forming K or a second n × n temporary.
+double apply_update(State &s, const Eigen::MatrixXd &PHt, const Eigen::MatrixXd &S, const Eigen::VectorXd &r) {
+  const Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success)
+    throw ov_core::UsageError("innovation covariance is not positive definite");
+  const Eigen::VectorXd Sinv_r = llt.solve(r);
+  const Eigen::VectorXd dx = PHt * Sinv_r;
+  Eigen::MatrixXd Wt = PHt.transpose(); // m × n, becomes L⁻¹ PHᵀᵀ = Wᵀ
+  llt.matrixL().solveInPlace(Wt);
+  s.P.selfadjointView<Eigen::Lower>().rankUpdate(Wt.transpose(), -1.0);
+  const Eigen::Index n = s.P.rows();
+  for (Eigen::Index j = 1; j < n; ++j)
+    for (Eigen::Index i = 0; i < j; ++i)
+      s.P(i, j) = s.P(j, i);
+  s.boxplus(dx);
+  return r.dot(Sinv_r);
+}
+
+} // namespace
+
 double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, double sigma2) {
   const Eigen::MatrixXd PHt = s.P * H.transpose();
   Eigen::MatrixXd S = H * PHt;
   S.diagonal().array() += sigma2;
-  const Eigen::LLT<Eigen::MatrixXd> llt(S);
-  if (llt.info() != Eigen::Success)
-    throw ov_core::UsageError("innovation covariance is not positive definite");
-  const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();
-  const Eigen::VectorXd dx = K * r;
-  // Joseph-free form with explicit symmetrisation; S is small after measurement compression.
-  s.P -= K * PHt.transpose();
-  s.P = 0.5 * (s.P + s.P.transpose());
-  s.boxplus(dx);
-  return r.dot(llt.solve(r));
+  return apply_update(s, PHt, S, r);
+}
+
+double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, const Eigen::VectorXd &r,
+                  double sigma2) {
+  const int n = s.dim(), nc = static_cast<int>(cols.size());
+  if (Hc.cols() != nc || Hc.rows() != r.size())
+    throw ov_core::UsageError("ekf_update: Jacobian, columns and residual differ in size");
+  Eigen::MatrixXd Pc(n, nc);
+  for (int j = 0; j < nc; ++j) {
+    if (cols[j] < 0 || cols[j] >= n)
+      throw ov_core::UsageError("ekf_update: column " + std::to_string(cols[j]) + " outside the state");
+    Pc.col(j) = s.P.col(cols[j]);
+  }
+  const Eigen::MatrixXd PHt = Pc * Hc.transpose(); // n × m
+  Eigen::MatrixXd PHt_c(nc, Hc.rows());
+  for (int j = 0; j < nc; ++j)
+    PHt_c.row(j) = PHt.row(cols[j]);
+  Eigen::MatrixXd S = Hc * PHt_c;
+  S.diagonal().array() += sigma2;
+  return apply_update(s, PHt, S, r);
+}
+
+Eigen::MatrixXd sub_covariance(const State &s, const std::vector<int> &cols) {
+  const int nc = static_cast<int>(cols.size());
+  Eigen::MatrixXd P(nc, nc);
+  for (int j = 0; j < nc; ++j)
+    for (int i = 0; i < nc; ++i)
+      P(i, j) = s.P(cols[i], cols[j]);
+  return P;
 }
 
 double min_eigenvalue(const State &s) {

@@ -2,6 +2,8 @@
 // Stateless operations on a State's covariance: propagation, stochastic cloning, marginalisation, EKF update.
 #include "ov_msckf_ton/state/state.h"
 
+#include <vector>
+
 namespace ov_msckf_ton {
 namespace state_helper {
 
@@ -26,6 +28,14 @@ void marginalize_landmark(State &s, size_t id);
 /// EKF update with a dense Jacobian H (m × dim), residual r = z − h(x̂), and isotropic noise sigma².
 /// Keeps P symmetric; returns the Mahalanobis distance rᵀS⁻¹r.
 double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, double sigma2);
+/// The same with a compact Jacobian: column j of Hc is state column cols[j], every other column of H is zero. Costs
+/// O(n·|cols|·m + n²·m) instead of O(n³): the MSCKF and SLAM Jacobians involve the clones but not the landmarks
+/// (or the reverse), so most of the state's columns are zero.
+double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, const Eigen::VectorXd &r,
+                  double sigma2);
+
+/// P restricted to the rows and columns `cols`, in that order.
+Eigen::MatrixXd sub_covariance(const State &s, const std::vector<int> &cols);
 
 /// Forces symmetry and reports whether P is positive semi-definite within tolerance (smallest eigenvalue).
 double min_eigenvalue(const State &s);

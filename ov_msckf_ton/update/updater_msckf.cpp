@@ -262,6 +262,32 @@ void UpdaterMSCKF::compress(Eigen::MatrixXd &H, Eigen::VectorXd &r) {
   r = r.head(cols).eval();
 }
 
+Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &lin, const Eigen::MatrixXd &P_sub,
+                                                   double sigma2) {
+  const int m = static_cast<int>(lin.obs.size()), rows = 2 * m, nc = static_cast<int>(lin.H_x.cols());
+  const int nd = nc - 6 * m; // t_d and calibration columns, dense
+  if (m < 2 || nd < 0 || lin.H_x.rows() != rows || P_sub.rows() != nc || lin.H_f.rows() != rows)
+    throw ov_core::UsageError("projected_innovation: linearisation and covariance differ in size");
+  // T = H_x P, block row by block row.
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(rows, nc);
+  for (int k = 0; k < m; ++k)
+    T.middleRows<2>(2 * k).noalias() = lin.H_x.block<2, 6>(2 * k, 6 * k) * P_sub.middleRows<6>(6 * k);
+  if (nd > 0)
+    T.noalias() += lin.H_x.rightCols(nd) * P_sub.bottomRows(nd);
+  // S_full = T H_xᵀ, block column by block column.
+  Eigen::MatrixXd S(rows, rows);
+  for (int k = 0; k < m; ++k)
+    S.middleCols<2>(2 * k).noalias() = T.middleCols<6>(6 * k) * lin.H_x.block<2, 6>(2 * k, 6 * k).transpose();
+  if (nd > 0)
+    S.noalias() += T.rightCols(nd) * lin.H_x.rightCols(nd).transpose();
+  const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(lin.H_f);
+  S.applyOnTheLeft(qr.householderQ().adjoint());
+  S.applyOnTheRight(qr.householderQ());
+  Eigen::MatrixXd S2 = S.bottomRightCorner(rows - 3, rows - 3);
+  S2.diagonal().array() += sigma2;
+  return S2;
+}
+
 void UpdaterMSCKF::append_records(const State &state, const ov_core::Feature &feature, const FeatureLinearization *lin,
                                   const std::vector<std::pair<size_t, const CloneState *>> &usable,
                                   TdObservation td_obs, const VelocityProvider &velocities, const Eigen::Vector3d &p_f,
@@ -386,14 +412,8 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
     // Projected copies: lin_ keeps the pre-projection residuals that the log reports.
     nullspace_project(lin_.H_f, a.H, a.r);
 
-    // S = H P Hᵀ + σ²I over the involved columns only.
-    const int nc = static_cast<int>(a.cols.size());
-    Eigen::MatrixXd P_sub(nc, nc);
-    for (int i = 0; i < nc; ++i)
-      for (int j = 0; j < nc; ++j)
-        P_sub(i, j) = state.P(a.cols[i], a.cols[j]);
-    Eigen::MatrixXd S = a.H * P_sub * a.H.transpose();
-    S.diagonal().array() += sigma2;
+    // S = H P Hᵀ + σ²I over the involved columns only, from the unprojected rows' block structure.
+    const Eigen::MatrixXd S = projected_innovation(lin_, state_helper::sub_covariance(state, a.cols), sigma2);
     const double chi2 = a.r.dot(S.ldlt().solve(a.r));
     const int dof = static_cast<int>(a.r.size());
     const double thr = chi2_threshold(dof);
@@ -423,21 +443,30 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
   if (n_acc == 0)
     return st;
 
-  // Scatter the compact blocks into one dense system over the full state.
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(st.rows_stacked, dim);
+  // Scatter the compact blocks into one system over the union of their columns (in state order): the update never
+  // forms the landmarks' and IMU's zero columns.
+  cols_.clear();
+  for (size_t k = 0; k < n_acc; ++k)
+    cols_.insert(cols_.end(), accepted_[k].cols.begin(), accepted_[k].cols.end());
+  std::sort(cols_.begin(), cols_.end());
+  cols_.erase(std::unique(cols_.begin(), cols_.end()), cols_.end());
+  where_.assign(static_cast<size_t>(dim), -1);
+  for (size_t j = 0; j < cols_.size(); ++j)
+    where_[cols_[j]] = static_cast<int>(j);
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(st.rows_stacked, static_cast<Eigen::Index>(cols_.size()));
   Eigen::VectorXd r(st.rows_stacked);
   int row = 0;
   for (size_t k = 0; k < n_acc; ++k) {
     const Accepted &a = accepted_[k];
     const int rows = static_cast<int>(a.r.size());
     for (size_t j = 0; j < a.cols.size(); ++j)
-      H.block(row, a.cols[j], rows, 1) = a.H.col(static_cast<Eigen::Index>(j));
+      H.block(row, where_[a.cols[j]], rows, 1) = a.H.col(static_cast<Eigen::Index>(j));
     r.segment(row, rows) = a.r;
     row += rows;
   }
   compress(H, r);
   st.rows_update = static_cast<int>(r.size());
-  st.mahalanobis = state_helper::ekf_update(state, H, r, sigma2);
+  st.mahalanobis = state_helper::ekf_update(state, cols_, H, r, sigma2);
   st.td_after = state.td;
   return st;
 }

@@ -105,6 +105,12 @@ public:
   /// When H has more rows than columns, replaces (H, r) by (R, Q₁ᵀr) of H's QR: the same information in at most
   /// dim rows, noise still σ²I.
   static void compress(Eigen::MatrixXd &H, Eigen::VectorXd &r);
+  /// The innovation covariance of the nullspace-projected rows, S = Q₂ᵀ H_x P Hₓᵀ Q₂ + σ²I ((2m − 3) square), from
+  /// H_x's structure (linearize's layout: clone k's six columns 6k..6k+5 are non-zero only in rows 2k, 2k + 1; the
+  /// columns after 6m are dense): H_x P Hₓᵀ costs O(m²) for the clone blocks instead of O(m·(6m)²) with the
+  /// projected, dense rows. P_sub is P over lin.cols.
+  static Eigen::MatrixXd projected_innovation(const FeatureLinearization &lin, const Eigen::MatrixXd &P_sub,
+                                              double sigma2);
 
   /// chi2_multiplier × the chi-square quantile at chi2_confidence for `dof` degrees of freedom (cached table).
   double chi2_threshold(int dof) const;
@@ -159,6 +165,7 @@ private:
     Eigen::VectorXd r;
   };
   std::vector<Accepted> accepted_;
+  std::vector<int> cols_, where_; ///< the stacked system's state columns, and each state column's place in it
 };
 
 } // namespace ov_msckf_ton

@@ -5,21 +5,10 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
+#include <algorithm>
 #include <cmath>
 
 namespace ov_msckf_ton {
-
-namespace {
-
-/// Scatters a compact Jacobian (columns = state indices `cols`) into a dense row block over `dim` columns.
-Eigen::MatrixXd scatter(const Eigen::MatrixXd &compact, const std::vector<int> &cols, int dim) {
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(compact.rows(), dim);
-  for (size_t j = 0; j < cols.size(); ++j)
-    H.col(cols[j]) = compact.col(static_cast<Eigen::Index>(j));
-  return H;
-}
-
-} // namespace
 
 UpdaterSLAM::UpdaterSLAM(const ov_core::CameraCalib &calib, const UpdaterSlamOptions &opt, const UpdaterMSCKF &msckf)
     : opt_(opt), msckf_(msckf) {
@@ -53,13 +42,14 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
       ++stats.init_rejected;
       continue;
     }
+    // Both row blocks involve only the feature's columns (lin_.cols): the window's clones, t_d, the calibration.
     const int n = state.dim();
-    const Eigen::MatrixXd H1 = scatter(Hx.topRows(3), lin_.cols, n);
-    const Eigen::MatrixXd H2 = scatter(Hx.bottomRows(rows - 3), lin_.cols, n);
+    const Eigen::MatrixXd H1 = Hx.topRows(3);
+    const Eigen::MatrixXd H2 = Hx.bottomRows(rows - 3);
     const Eigen::Vector3d r1 = r.head<3>();
     const Eigen::VectorXd r2 = r.tail(rows - 3);
 
-    Eigen::MatrixXd S2 = H2 * state.P * H2.transpose();
+    Eigen::MatrixXd S2 = H2 * state_helper::sub_covariance(state, lin_.cols) * H2.transpose();
     S2.diagonal().array() += sigma2;
     const double chi2 = r2.dot(S2.ldlt().solve(r2));
     if (!std::isfinite(chi2) || chi2 > opt_.chi2_multiplier / msckf_.options().chi2_multiplier *
@@ -70,8 +60,12 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
 
     // The invertible part initialises the landmark with its cross-covariance to the state.
     const Eigen::Matrix3d R1inv = R1.inverse();
-    const Eigen::MatrixXd M = state.P * H1.transpose(); // n x 3
-    Eigen::Matrix3d S1 = H1 * M;
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, 3); // P H1ᵀ, n x 3
+    for (size_t j = 0; j < lin_.cols.size(); ++j)
+      M.noalias() += state.P.col(lin_.cols[j]) * H1.col(static_cast<Eigen::Index>(j)).transpose();
+    Eigen::Matrix3d S1 = Eigen::Matrix3d::Zero();
+    for (size_t j = 0; j < lin_.cols.size(); ++j)
+      S1.noalias() += H1.col(static_cast<Eigen::Index>(j)) * M.row(lin_.cols[j]);
     S1.diagonal().array() += sigma2;
     LandmarkState l;
     l.id = f->id;
@@ -87,11 +81,8 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
     state.P.block(l.index, 0, 3, n) = P_xf.transpose();
     state.landmarks[l.id] = l;
     // The rest of the window's information, now that the landmark is in the state.
-    if (r2.size() > 0) {
-      Eigen::MatrixXd H2n = Eigen::MatrixXd::Zero(H2.rows(), state.dim());
-      H2n.leftCols(n) = H2;
-      state_helper::ekf_update(state, H2n, r2, sigma2);
-    }
+    if (r2.size() > 0)
+      state_helper::ekf_update(state, lin_.cols, H2, r2, sigma2);
     ++stats.initialised;
   }
 }
@@ -170,10 +161,13 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
   const UpdaterMSCKF::CameraView view = msckf_.camera_view(state);
   const double sigma2 = opt_.sigma_px * opt_.sigma_px;
   const double thr = opt_.chi2_multiplier / msckf_.options().chi2_multiplier * msckf_.chi2_threshold(2);
-  const int n = state.dim();
+  // Each row pair involves the clone, its landmark, t_d and the calibration; the stacked system is kept over the
+  // union of those columns (in state order), never over the whole state.
   std::vector<Eigen::Matrix<double, 2, Eigen::Dynamic>> rows_H;
+  std::vector<std::vector<int>> rows_cols;
   std::vector<Eigen::Vector2d> rows_r;
   LandmarkLinearization lin;
+  std::vector<int> cols;
   for (auto &[id, l] : state.landmarks) {
     const ov_core::Feature *f = db.get(id);
     if (!f || f->obs.empty() || f->newest().t_cam_ns != t_cam_ns)
@@ -182,16 +176,22 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
       drop.push_back(id);
       continue;
     }
-    // S over the involved columns only: the clone, the landmark, t_d.
-    const int cols[] = {c.index, l.index, state.td_index};
-    Eigen::Matrix<double, 2, Eigen::Dynamic> H = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, n);
-    H.block<2, 6>(0, cols[0]) = lin.H_clone;
-    H.block<2, 3>(0, cols[1]) = lin.H_f;
+    cols.clear();
+    for (int j = 0; j < 6; ++j)
+      cols.push_back(c.index + j);
+    for (int j = 0; j < 3; ++j)
+      cols.push_back(l.index + j);
     if (lin.td_column)
-      H.col(cols[2]) += lin.H_td;
-    for (size_t j = 0; j < lin.calib_cols.size(); ++j)
-      H.col(lin.calib_cols[j]) += lin.H_calib.col(static_cast<Eigen::Index>(j));
-    Eigen::Matrix2d S = H * state.P * H.transpose();
+      cols.push_back(state.td_index);
+    cols.insert(cols.end(), lin.calib_cols.begin(), lin.calib_cols.end());
+    Eigen::Matrix<double, 2, Eigen::Dynamic> H(2, static_cast<Eigen::Index>(cols.size()));
+    H.leftCols<6>() = lin.H_clone;
+    H.middleCols<3>(6) = lin.H_f;
+    int k = 9;
+    if (lin.td_column)
+      H.col(k++) = lin.H_td;
+    H.rightCols(lin.H_calib.cols()) = lin.H_calib;
+    Eigen::Matrix2d S = H * state_helper::sub_covariance(state, cols) * H.transpose();
     S.diagonal().array() += sigma2;
     const double chi2 = lin.r.dot(S.ldlt().solve(lin.r));
     if (!std::isfinite(chi2) || chi2 > thr) {
@@ -199,19 +199,29 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
       continue;
     }
     rows_H.push_back(H);
+    rows_cols.push_back(cols);
     rows_r.push_back(lin.r);
     ++l.updates;
   }
   if (rows_r.empty())
     return;
-  Eigen::MatrixXd H(2 * rows_r.size(), n);
+  cols.clear();
+  for (const auto &rc : rows_cols)
+    cols.insert(cols.end(), rc.begin(), rc.end());
+  std::sort(cols.begin(), cols.end());
+  cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
+  std::vector<int> where(static_cast<size_t>(state.dim()), -1);
+  for (size_t j = 0; j < cols.size(); ++j)
+    where[cols[j]] = static_cast<int>(j);
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(rows_r.size()), cols.size());
   Eigen::VectorXd r(2 * rows_r.size());
   for (size_t k = 0; k < rows_r.size(); ++k) {
-    H.middleRows<2>(2 * k) = rows_H[k];
+    for (size_t j = 0; j < rows_cols[k].size(); ++j)
+      H.block<2, 1>(2 * k, where[rows_cols[k][j]]) += rows_H[k].col(static_cast<Eigen::Index>(j));
     r.segment<2>(2 * k) = rows_r[k];
   }
   UpdaterMSCKF::compress(H, r);
-  state_helper::ekf_update(state, H, r, sigma2);
+  state_helper::ekf_update(state, cols, H, r, sigma2);
   stats.updated += static_cast<int>(rows_r.size());
 }
 
