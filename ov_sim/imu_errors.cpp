@@ -114,6 +114,89 @@ void add_imu_errors(const Trajectory &traj, const ImuErrorModel &m, double white
   }
 }
 
+double allan_variance(const ImuErrorModel &m, bool gyro, int axis, double white, double walk, double tau_s,
+                      double rate_hz) {
+  // AVAR(tau) = 4 * integral of S(f) sin^4(pi f tau) / (pi f tau)^2 df over [0, f_max] (S the two-sided level, as
+  // sensor.yaml's white noise sigma: AVAR = sigma^2 / tau), plus walk^2 tau / 3 for the bias random walk. S is
+  // piecewise constant; the integral runs on a log grid from 1e-5 Hz to the top band (or 100 Hz), 2000 points per
+  // decade, with sin^4 replaced by its mean 3/8 where a step spans more than a quarter of its period 1/tau. The means
+  // are of samples at rate_hz (the boxcar's response k sin(pi f / rate) in place of pi f tau: it matters near Nyquist).
+  const double f_max = rate_hz / 2;
+  const auto density2 = [&](double f) {
+    double d = 0.0;
+    if (m.enabled && !m.flight_spectrum.empty()) {
+      const NoiseBand &first = m.flight_spectrum.front();
+      if (f < first.low_hz)
+        d = gyro ? first.gyro(axis) : first.accel(axis);
+      for (const NoiseBand &b : m.flight_spectrum)
+        if (f >= b.low_hz && f < b.high_hz)
+          d = gyro ? b.gyro(axis) : b.accel(axis);
+    }
+    // The bands are one-sided densities (as imu_match measures them and coloured_noise() draws them: variance =
+    // integral of d^2 over [0, fs/2]); sensor.yaml's white noise w has the two-sided level w^2. The log carries
+    // w plus the coloured part max(0, d^2 - w^2) (add_imu_errors), i.e. the two-sided level w^2 + that / 2.
+    return white * white + 0.5 * std::max(0.0, d * d - white * white);
+  };
+  const double f0 = 1e-5, decades = std::log10(f_max / f0);
+  const int n = static_cast<int>(decades * 2000);
+  double avar = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double fa = f0 * std::pow(10.0, decades * i / n), fb = f0 * std::pow(10.0, decades * (i + 1) / n);
+    const double f = 0.5 * (fa + fb), s = std::sin(M_PI * f * tau_s);
+    const double s4 = (fb - fa) * tau_s > 0.25 ? 3.0 / 8.0 : s * s * s * s;
+    const double x = tau_s * rate_hz * std::sin(M_PI * f / rate_hz); // pi f tau for f << rate: a sampled log's mean
+    avar += 4.0 * density2(f) * s4 / (x * x) * (fb - fa);
+  }
+  return avar + walk * walk * tau_s / 3.0;
+}
+
+ov_core::ImuCalib fitted_imu_noise(const ImuErrorModel &m, const ov_core::ImuCalib &datasheet, double tau_min_s,
+                                   double tau_max_s) {
+  if (!(tau_min_s > 0 && tau_max_s > tau_min_s))
+    throw ov_core::UsageError("fitted_imu_noise: need 0 < tau_min < tau_max");
+  // AVAR(tau) ~ N^2 / tau + K^2 tau / 3, fitted by least squares on log AVAR at 25 averaging times spaced evenly in
+  // log tau (every decade weighs alike; over- and under-declaring by the same factor cost alike): a grid search over
+  // log N^2 and log K^2 (K^2 down to 1e-6 of the level that would explain everything), refined three times.
+  const auto fit = [&](bool gyro, double white, double walk, double &N, double &K) {
+    const int n_tau = 25;
+    std::vector<double> tau(n_tau), log_a(n_tau);
+    for (int i = 0; i < n_tau; ++i) {
+      tau[i] = tau_min_s * std::pow(tau_max_s / tau_min_s, static_cast<double>(i) / (n_tau - 1));
+      double a = 0.0;
+      for (int axis = 0; axis < 3; ++axis)
+        a += allan_variance(m, gyro, axis, white, walk, tau[i], datasheet.rate_hz) / 3.0;
+      log_a[i] = std::log(a);
+    }
+    const auto cost = [&](double ln_n2, double ln_k2) {
+      double c = 0.0;
+      for (int i = 0; i < n_tau; ++i) {
+        const double e = std::log(std::exp(ln_n2) / tau[i] + std::exp(ln_k2) * tau[i] / 3.0) - log_a[i];
+        c += e * e;
+      }
+      return c;
+    };
+    double best_n = log_a[0] + std::log(tau[0]), best_k = log_a[n_tau - 1] - std::log(tau[n_tau - 1] / 3.0);
+    double span = 16.0; // +-16 in ln (about 7 decades)
+    for (int round = 0; round < 4; ++round, span /= 8.0) {
+      const double cn = best_n, ck = best_k;
+      double best_c = cost(cn, ck);
+      for (int a = -40; a <= 40; ++a)
+        for (int b = -40; b <= 40; ++b) {
+          const double ln_n2 = cn + span * a / 40.0, ln_k2 = ck + span * b / 40.0, c = cost(ln_n2, ln_k2);
+          if (c < best_c)
+            best_c = c, best_n = ln_n2, best_k = ln_k2;
+        }
+    }
+    N = std::sqrt(std::exp(best_n));
+    K = std::sqrt(std::exp(best_k));
+  };
+  ov_core::ImuCalib out = datasheet;
+  fit(true, datasheet.gyro_noise_density, datasheet.gyro_random_walk, out.gyro_noise_density, out.gyro_random_walk);
+  fit(false, datasheet.accel_noise_density, datasheet.accel_random_walk, out.accel_noise_density,
+      out.accel_random_walk);
+  return out;
+}
+
 ImuErrorModel euroc_v1_01_imu_errors() {
   // Measured by `ovton simulate --match-imu` on ../shared/data/euroc_v1_01_moving (the full 145 s V1_01 imu0 log):
   // against EuRoC's own ground truth (state_groundtruth_estimate0, knots 0.1 s) for alignment, biases and the bands

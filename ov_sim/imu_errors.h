@@ -4,6 +4,7 @@
 // misalignment, turn-on biases, and coloured noise whose spectrum follows the measured one - the airframe's
 // vibration from the rotors in flight (weaker with idle rotors on the ground) and a low-frequency wander of the
 // readings (bias instability) far above what the datasheet's white noise and bias random walk give.
+#include "ov_core/cam/camera_calib.h"
 #include "ov_core/types/sensor_data.h"
 #include "ov_sim/trajectory.h"
 #include <Eigen/Core>
@@ -37,6 +38,21 @@ void check(const ImuErrorModel &m);
 /// `white_gyro`/`white_accel` are the densities of the white noise already in the log. Deterministic in `seed`.
 void add_imu_errors(const Trajectory &traj, const ImuErrorModel &m, double white_gyro, double white_accel,
                     uint64_t seed, std::vector<ov_core::ImuData> &imu, std::vector<ov_core::StateSample> &truth);
+
+/// Allan variance [unit^2] at averaging time tau_s of one axis of the noise a synthetic log carries: the datasheet
+/// white noise `white` and bias random walk `walk` (EuRoC sensor.yaml units) together with the model's coloured
+/// noise (its flight spectrum; where that lies below `white`, the white noise), sampled at rate_hz (its Nyquist
+/// frequency bounds the spectrum). `gyro` picks the sensor.
+double allan_variance(const ImuErrorModel &m, bool gyro, int axis, double white, double walk, double tau_s,
+                      double rate_hz = 200.0);
+
+/// The white noise density and bias random walk a filter should be told for a synthetic IMU with the datasheet
+/// noise `datasheet` plus the errors of `m`: fitted to the log's Allan variance (averaged over the axes: the filter's
+/// noise is isotropic) over averaging times [tau_min_s, tau_max_s], by least squares on the log of the Allan variance
+/// on a log grid — how a real IMU's noise parameters are obtained (Allan variance of a log). Without `m`'s coloured
+/// noise the datasheet values come back (to the fit's accuracy). Only the four noise values of the result are set.
+ov_core::ImuCalib fitted_imu_noise(const ImuErrorModel &m, const ov_core::ImuCalib &datasheet, double tau_min_s = 0.05,
+                                   double tau_max_s = 20.0);
 
 /// The model measured on the real V1_01_easy log against EuRoC's own ground truth (docs/simulate.md has the
 /// command and the numbers): what `--realism euroc` uses.

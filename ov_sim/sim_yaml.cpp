@@ -28,6 +28,16 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::Key << "gyroscope_random_walk" << YAML::Value << opt.imu.gyro_random_walk;
   e << YAML::Key << "accelerometer_noise_density" << YAML::Value << opt.imu.accel_noise_density;
   e << YAML::Key << "accelerometer_random_walk" << YAML::Value << opt.imu.accel_random_walk;
+  {
+    // What imu0/sensor.yaml declares (the values above are what the synthesis used for its white noise and walk).
+    const ov_core::ImuCalib d = declared_imu(opt);
+    e << YAML::Key << "declared" << YAML::Value << YAML::BeginMap;
+    e << YAML::Key << "gyroscope_noise_density" << YAML::Value << d.gyro_noise_density;
+    e << YAML::Key << "gyroscope_random_walk" << YAML::Value << d.gyro_random_walk;
+    e << YAML::Key << "accelerometer_noise_density" << YAML::Value << d.accel_noise_density;
+    e << YAML::Key << "accelerometer_random_walk" << YAML::Value << d.accel_random_walk;
+    e << YAML::EndMap;
+  }
   e << YAML::Key << "noise" << YAML::Value << opt.imu_noise;
   e << YAML::Key << "bias_walk" << YAML::Value << opt.imu_bias_walk;
   e << YAML::Key << "gyro_scale_error" << YAML::Value << opt.gyro_scale; // planted: the gyro reads (1 + s)·ω

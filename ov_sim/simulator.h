@@ -31,7 +31,10 @@ struct SimOptions {
   bool imu_bias_walk = true;
   std::string imu_from;     ///< semi-real: copy imu0/data.csv of this folder instead of synthesising
   ImuErrorModel imu_errors; ///< synthetic IMU: errors beyond the datasheet (imu_errors.h); off by default
-  TdModelOptions td;        ///< its seed is derived from `seed`
+  /// imu0/sensor.yaml declares the noise the synthetic IMU really has: with imu_errors on, the white noise and bias
+  /// walk fitted to the log's Allan variance (fitted_imu_noise); false: `imu`'s (the datasheet's) in any case.
+  bool declare_imu_errors = true;
+  TdModelOptions td; ///< its seed is derived from `seed`
   /// Rolling shutter: image row v (distorted pixel row, continuous) is exposed at the frame's IMU-clock instant
   /// + v / height · readout_s; the stamp (and td_truth) belongs to row 0. 0: global shutter.
   double readout_s = 0.0;
@@ -96,6 +99,10 @@ Scene make_scene(const Trajectory &traj, const SimOptions &opt);
 /// Writes the whole folder. Files are written stream-wise (rows flushed), so an interrupted run keeps every
 /// image already listed in cam0/data.csv.
 SimReport write_simulation(const SimOptions &opt, const SimProgress &progress = nullptr);
+
+/// What imu0/sensor.yaml says of the IMU: `imu`, with the noise of the realistic IMU's model fitted
+/// (fitted_imu_noise) when a synthetic log carries imu_errors and declare_imu_errors is on.
+ov_core::ImuCalib declared_imu(const SimOptions &opt);
 
 /// Text of sim.yaml for these options (every parameter and the seed).
 std::string sim_yaml(const SimOptions &opt, const Trajectory &traj);

@@ -153,11 +153,15 @@ int cmd_simulate(const Args &args) {
       ("features-only", "write mav0/cam0/features.csv (timestamp_ns,feature_id,u,v) instead of images")       //
       ("no-images", "write no images and no features (IMU, ground truth, stamps)")                            //
       ("no-imu-noise", "noise-free IMU (no white noise, no bias walk)")                                       //
-      ("knot-dt-s", po::value(&o.knot_dt_s)->default_value(0.1), "B-spline knot spacing of the gt fit [s]")   //
-      ("cam-yaml", po::value(&cam_yaml), "EuRoC cam0/sensor.yaml to use (default: built-in EuRoC cam0)")      //
-      ("imu-yaml", po::value(&imu_yaml), "EuRoC imu0/sensor.yaml to use (default: built-in ADIS16448)")       //
-      ("pixel-noise", po::value(&o.features.pixel_noise)->default_value(1.0), "features-only: noise [px]")    //
-      ("max-tracks", po::value(&o.features.max_tracks)->default_value(200), "features-only: live tracks")     //
+      ("imu-errors", po::value<std::string>(),
+       "override the preset's IMU errors: euroc (the model measured on real V1_01) | none (datasheet noise only)") //
+      ("imu-declare", po::value<std::string>(),
+       "what imu0/sensor.yaml says of the noise: fitted (default: the realistic IMU's Allan fit) | datasheet") //
+      ("knot-dt-s", po::value(&o.knot_dt_s)->default_value(0.1), "B-spline knot spacing of the gt fit [s]")    //
+      ("cam-yaml", po::value(&cam_yaml), "EuRoC cam0/sensor.yaml to use (default: built-in EuRoC cam0)")       //
+      ("imu-yaml", po::value(&imu_yaml), "EuRoC imu0/sensor.yaml to use (default: built-in ADIS16448)")        //
+      ("pixel-noise", po::value(&o.features.pixel_noise)->default_value(1.0), "features-only: noise [px]")     //
+      ("max-tracks", po::value(&o.features.max_tracks)->default_value(200), "features-only: live tracks")      //
       ("match-imu", "measure the real IMU log of --imu-from against --gt (noise, biases, scale, the ground truth's "
                     "time shift and frame rotation) and print it; no folder is written")                   //
       ("benchmark", "measure render speed (one core) and disk size per minute; --out optional")            //
@@ -242,6 +246,20 @@ int cmd_simulate(const Args &args) {
     camera_option("full-well-e", c.full_well_e);
     camera_option("read-noise-e", c.read_noise_e);
     camera_option("flicker", c.flicker_amplitude);
+    if (vm.count("imu-errors")) {
+      const std::string v = vm["imu-errors"].as<std::string>();
+      if (v != "euroc" && v != "none")
+        throw ov_core::UsageError("--imu-errors must be euroc or none");
+      o.imu_errors = v == "euroc" ? ov_sim::euroc_v1_01_imu_errors() : ov_sim::ImuErrorModel{};
+      modified = true;
+    }
+    if (vm.count("imu-declare")) {
+      const std::string v = vm["imu-declare"].as<std::string>();
+      if (v != "fitted" && v != "datasheet")
+        throw ov_core::UsageError("--imu-declare must be fitted or datasheet");
+      o.declare_imu_errors = v == "fitted";
+      modified = true;
+    }
     if (!o.texture_from.empty() && o.scene.texture.style != ov_sim::TextureStyle::Room)
       throw ov_core::UsageError("--texture-from needs the room texture (--realism euroc, or --texture room)");
     if (modified || !o.texture_from.empty())
