@@ -162,7 +162,7 @@ void write_true_pose_log(const ov_sim::SimOptions &o, const Dataset &data, doubl
 using CalibEdit = std::function<void(std::vector<CalibrationLogRow> &)>;
 
 /// The filter on the simulation (mode, t_d fixed or started at td_init_s, ground-truth initialisation), its
-/// residual log diagnosed (with its calibration log, edited by `edit`, when one is given). Prints the ranking and the
+/// residual log diagnosed with its calibration log (edited by `edit`, when one is given). Prints the ranking and the
 /// wall time.
 DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_init_s, const CalibEdit &edit = {}) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -184,11 +184,10 @@ DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_in
     Replay(data).run(vio);
     vio.set_residual_log(nullptr);
   }
-  DiagnoseOptions dopt = diagnose_options(data);
-  if (edit) {
-    dopt.calibration = load_calibration_log(calibration_log_path(log_file));
+  DiagnoseOptions dopt = diagnose_options(data); // with the calibration log, as `ovton diagnose` reads it
+  dopt.calibration = load_calibration_log(calibration_log_path(log_file));
+  if (edit)
     edit(dopt.calibration);
-  }
   const DiagnoseReport rep = diagnose(load_residual_log(log_file), dopt);
   std::cout << format_ranking(rep) << "[ measured ] mode " << mode << ", "
             << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n";

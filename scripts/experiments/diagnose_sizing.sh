@@ -5,7 +5,8 @@
 # Data and runs as diagnose_undeclared.sh: `ovton simulate --builtin [--agility 1] --duration-s 30 --features-only
 # --seed S PLANT`, `ovton run --td-mode sr --init groundtruth` (sigma_px 1), `ovton diagnose --dataset`.
 # Usage: scripts/experiments/diagnose_sizing.sh [OUT] [SEED ...]   (default seeds 1 2 3 4; ~30 s per run here).
-# CASES overrides the cases (space-separated). Writes OUT/sizing.md.
+# CASES overrides the cases (space-separated); DIAGNOSE_ONLY=1 re-diagnoses the runs already in OUT. Writes
+# OUT/sizing.md.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 OUT=${1:-results/diagnose_sizing}
@@ -58,7 +59,7 @@ for C in "${CASES[@]}"; do
     [ -d "$DS/mav0" ] && [ -f "$D/.sim_args" ] && [ "$(cat "$D/.sim_args")" = "${SIM[*]}" ] ||
       { "$BIN" "${SIM[@]}" >/dev/null && echo "${SIM[*]}" >"$D/.sim_args"; }
     printf 'update:\n  sigma_px: 1.0\n' >"$D/run.yaml"
-    "$BIN" run --dataset "$DS" --td-mode sr --config "$D/run.yaml" --init groundtruth --output "$D/run.csv" \
+    [ "${DIAGNOSE_ONLY:-0}" = 1 ] && [ -f "$D/res.csv" ] || "$BIN" run --dataset "$DS" --td-mode sr --config "$D/run.yaml" --init groundtruth --output "$D/run.csv" \
       --residual-log "$D/res.csv" -q >"$D/run.txt" 2>"$D/run.err" || true
     "$BIN" diagnose --log "$D/res.csv" --dataset "$DS" --out "$D/diagnose" >"$D/diagnose.txt"
     python3 - "$D/diagnose/diagnose.json" "$(expect "$C")" "$DS" "$C" "$S" >>"$OUT/sizing.md" <<'PY'
