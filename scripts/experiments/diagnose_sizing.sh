@@ -35,7 +35,7 @@ expect() {
   rolling_shutter) echo "rolling_shutter|readout time t_r=20" ;;
   extrinsic_rotation) echo "extrinsic_rotation|rotation error |φ|=0.7071" ;;
   gyro_scale_z) echo "gyro_scale_axes|gyro scale error s_z=3" ;;
-  accel_scale) echo "accel_scale_axes|accel scale error s_x=3;accel scale error s_y=3;accel scale error s_z=3" ;;
+  accel_scale) echo "accel_scale_axes|accel scale error, axes combined=3" ;;
   wander_td) echo "td_piecewise|offset error spread (RMS over bins)=TRUTH" ;;
   clean | clean_plain) echo "-|" ;;
   esac
