@@ -130,6 +130,14 @@ void get(const TextTableReader &rd, const std::string &text, const Column &c, Ro
       c.field);
 }
 
+/// The header: the last non-'#' line the reader skipped before the first data row ("" when none).
+std::string header_line(const TextTableReader &rd) {
+  for (auto it = rd.comments().rbegin(); it != rd.comments().rend(); ++it)
+    if (!it->empty() && (*it)[0] != '#')
+      return *it;
+  return "";
+}
+
 } // namespace
 
 std::string residual_log_header() {
@@ -161,13 +169,7 @@ ResidualLog load_residual_log(const std::string &file) {
   log.file = file;
   std::vector<std::string> f;
   bool have_row = rd.next(f);
-  // The header is the last non-'#' line the reader skipped before the first data row.
-  std::string header;
-  for (auto it = rd.comments().rbegin(); it != rd.comments().rend(); ++it)
-    if (!it->empty() && (*it)[0] != '#') {
-      header = *it;
-      break;
-    }
+  const std::string header = header_line(rd);
   if (header.empty())
     throw DataError(file, 1, "no header line: expected the residual log's column names (ovton run --residual-log)");
   const long header_line = have_row ? std::max(1L, rd.line() - 1) : 1L;
@@ -285,12 +287,7 @@ std::vector<CalibrationLogRow> load_calibration_log(const std::string &file) {
   TextTableReader rd(file, ',');
   std::vector<std::string> f;
   bool have_row = rd.next(f);
-  std::string header;
-  for (auto it = rd.comments().rbegin(); it != rd.comments().rend(); ++it)
-    if (!it->empty() && (*it)[0] != '#') {
-      header = *it;
-      break;
-    }
+  std::string header = header_line(rd);
   while (!header.empty() && (header.back() == '\r' || header.back() == ' '))
     header.pop_back();
   if (header != calibration_log_header())
