@@ -1,8 +1,8 @@
 // `ovton diagnose` as the list of its stages; each stage is a file in ov_eval/diagnose/ (docs/diagnose.md).
 #include "ov_eval/diagnose.h"
 #include "ov_core/types/errors.h"
+#include "ov_eval/diagnose/accel_design.h"
 #include "ov_eval/diagnose/candidates.h"
-
 #include "ov_eval/diagnose/rate_design.h"
 #include "ov_eval/diagnose/residual_design.h"
 #include "ov_eval/diagnose/selection.h"
@@ -34,16 +34,22 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   std::string rate_why = "no raw gyro (pass --dataset)";
   rep.time_from_rates = !opt.imu.empty() && opt.have_camera && diag::build_rate_design(data, opt, rep, dr, rate_why);
 
+  // 3b. The filter's accelerometer bias against the specific force: an accelerometer scale no image shows.
+  diag::Design db;
+  const bool have_bias = diag::build_accel_design(data, opt, rep, db);
+
   // 4. Stepwise selection in each family, then the ranking.
   std::vector<size_t> selected;
-  const auto results = diag::test_candidates(d, rep.time_from_rates ? &dr : nullptr, rate_why, opt, rep, selected);
+  const auto results = diag::test_candidates(d, rep.time_from_rates ? &dr : nullptr, rate_why,
+                                             have_bias ? &db : nullptr, opt, rep, selected);
   rep.candidates = diag::rank_candidates(results, selected);
 
   // 5. What the residual keeps beyond its noise that no selected candidate explains, and where it shows.
   {
     std::vector<int> cols;
     for (size_t c : selected)
-      if (results[c].explained && !(rep.time_from_rates && diag::candidate_table()[c].rate_capable()))
+      if (results[c].explained && !(rep.time_from_rates && diag::candidate_table()[c].rate_capable()) &&
+          diag::candidate_table()[c].needs != diag::Needs::AccelBias)
         for (int col : diag::candidate_table()[c].columns(opt.have_camera))
           if (std::find(cols.begin(), cols.end(), col) == cols.end())
             cols.push_back(col);

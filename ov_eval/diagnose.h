@@ -38,6 +38,10 @@ struct DiagnoseOptions {
   /// camera's angular rate seen in the images against the gyro's (docs/diagnose.md), not on the residual, where a
   /// filter's poses absorb a time offset.
   std::vector<ov_core::ImuData> imu;
+  /// The filter's calibration per update (the calibration log beside the residual log, ov_core/io/
+  /// residual_log_schema.h). When given, the rates compare the images with the IMU through it: the camera-body
+  /// rotation, the IMU intrinsics, the readout time and the focal the filter held at each image (docs/diagnose.md).
+  std::vector<ov_core::CalibrationLogRow> calibration;
   double min_sigma = 5.0;      ///< significance a candidate needs (Gaussian-equivalent σ)
   double min_explained = 0.02; ///< share of the residual loss it must remove
   double huber_k = 3.0;        ///< Huber threshold in robust σ of the residual components

@@ -4,6 +4,7 @@
 #include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
 #include "ov_eval/diagnose.h"
+#include "ov_eval/diagnose/filter_calibration.h"
 #include "ov_msckf_ton/update/residual_log.h"
 #include "test_util.h"
 
@@ -228,4 +229,40 @@ TEST(Diagnose, BadLogsFailWithFileAndLine) {
   // Too few rows to say anything: an error, not a verdict.
   ovtest::write_text(dir / "tiny.csv", header + "\n" + good + "\n");
   EXPECT_THROW(diagnose(load_residual_log(dir / "tiny.csv")), DataError);
+}
+
+// The calibration log beside a residual log (the filter's calibration per update): its path, a round trip through
+// the writer's format and the reader, and the reader's errors; diagnose's lookup of the row for an image.
+TEST(Diagnose, CalibrationLogRoundTripAndLookup) {
+  ovtest::TempDir dir;
+  EXPECT_EQ(calibration_log_path("a/res.csv"), "a/res_calib.csv");
+  EXPECT_EQ(calibration_log_path("a.b/res"), "a.b/res_calib.csv");
+  CalibrationLogRow a, b;
+  a.update_id = 3, a.t_cam_ns = 1'000'000'000, a.estimated = CalibrationLogRow::kImuIntrinsics;
+  a.D_w[8] = 0.97087, a.b_a[1] = -0.0123456789, a.intrinsics[0] = 458.654;
+  b = a;
+  b.update_id = 4, b.t_cam_ns = 1'050'000'000, b.readout_s = 0.02, b.R_BC[1] = 0.01;
+  const std::string file = dir / "res_calib.csv";
+  ovtest::write_text(file, calibration_log_header() + "\n" + format_calibration_row(a) + "\n" +
+                               format_calibration_row(b) + "\n");
+  const auto rows = load_calibration_log(file);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[1].update_id, 4u);
+  EXPECT_EQ(rows[0].estimated, CalibrationLogRow::kImuIntrinsics);
+  EXPECT_DOUBLE_EQ(rows[0].D_w[8], 0.97087);
+  EXPECT_DOUBLE_EQ(rows[0].b_a[1], -0.0123456789);
+  EXPECT_DOUBLE_EQ(rows[1].readout_s, 0.02);
+  EXPECT_DOUBLE_EQ(rows[1].R_BC[1], 0.01);
+  // The first update at or after an image's time; the last after the end.
+  EXPECT_EQ(diag::calibration_at(rows, 900'000'000)->update_id, 3u);
+  EXPECT_EQ(diag::calibration_at(rows, 1'000'000'001)->update_id, 4u);
+  EXPECT_EQ(diag::calibration_at(rows, 2'000'000'000)->update_id, 4u);
+  // Time going back, a short row, a residual log's header.
+  ovtest::write_text(dir / "back.csv", calibration_log_header() + "\n" + format_calibration_row(b) + "\n" +
+                                           format_calibration_row(a) + "\n");
+  ovtest::expect_data_error([&] { load_calibration_log(dir / "back.csv"); }, "back.csv", 3, "goes back");
+  ovtest::write_text(dir / "short.csv", calibration_log_header() + "\n1,2,3\n");
+  ovtest::expect_data_error([&] { load_calibration_log(dir / "short.csv"); }, "short.csv", 2, "short row");
+  ovtest::write_text(dir / "res.csv", ov_msckf_ton::ResidualLogWriter::header() + "\n");
+  EXPECT_THROW(load_calibration_log(dir / "res.csv"), DataError);
 }

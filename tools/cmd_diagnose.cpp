@@ -12,7 +12,8 @@
 namespace po = boost::program_options;
 
 int ovton::cmd_diagnose(const ovton::Args &args) {
-  std::string log_file, dataset_dir, out_dir;
+  std::string log_file, dataset_dir, out_dir, calib_file;
+  bool nominal = false;
   ov_eval::DiagnoseOptions opt;
   po::options_description desc(
       "usage: ovton diagnose --log FILE [--dataset DIR] [--out DIR]\n\n"
@@ -29,6 +30,11 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
     ("dataset", po::value(&dataset_dir),
      "dataset folder the log was made from: camera (intrinsics, distortion, camera-body rotation, height) and "
      "raw IMU (default: height and intrinsics from the log; time candidates on the residual)")
+    ("calibration-log", po::value(&calib_file),
+     "the filter's calibration per update (default: <log>_calib.csv beside the log when it exists, which `ovton run "
+     "--residual-log` writes); the rates compare the images with the IMU through it")
+    ("nominal-calibration", po::bool_switch(&nominal),
+     "ignore the calibration log: compare through the dataset's calibration only")
     ("out", po::value(&out_dir), "output folder (default: <log without extension>_diagnose beside the log)")
     ("min-sigma", po::value(&opt.min_sigma)->default_value(opt.min_sigma, "5"),
      "significance a candidate needs [Gaussian sigma]")
@@ -61,6 +67,12 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
     out_dir = (p.parent_path() / (p.stem().string() + "_diagnose")).string();
   }
   const ov_eval::ResidualLog log = ov_eval::load_residual_log(log_file);
+  if (calib_file.empty() && !nominal && std::filesystem::exists(ov_core::calibration_log_path(log_file)))
+    calib_file = ov_core::calibration_log_path(log_file);
+  if (!calib_file.empty() && !nominal) {
+    opt.calibration = ov_core::load_calibration_log(calib_file);
+    std::cout << "filter's calibration: " << calib_file << " (" << opt.calibration.size() << " updates)\n";
+  }
   const ov_eval::DiagnoseReport rep = ov_eval::diagnose(log, opt);
   std::cout << "log " << log_file << ": " << rep.rows_used << " observations in " << rep.tracks_used << " tracks over "
             << rep.duration_s << " s, residual RMS " << rep.residual_rms_px << " px\n\n"

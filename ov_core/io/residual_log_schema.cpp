@@ -130,6 +130,14 @@ void get(const TextTableReader &rd, const std::string &text, const Column &c, Ro
       c.field);
 }
 
+/// The header: the last non-'#' line the reader skipped before the first data row ("" when none).
+std::string header_line(const TextTableReader &rd) {
+  for (auto it = rd.comments().rbegin(); it != rd.comments().rend(); ++it)
+    if (!it->empty() && (*it)[0] != '#')
+      return *it;
+  return "";
+}
+
 } // namespace
 
 std::string residual_log_header() {
@@ -161,13 +169,7 @@ ResidualLog load_residual_log(const std::string &file) {
   log.file = file;
   std::vector<std::string> f;
   bool have_row = rd.next(f);
-  // The header is the last non-'#' line the reader skipped before the first data row.
-  std::string header;
-  for (auto it = rd.comments().rbegin(); it != rd.comments().rend(); ++it)
-    if (!it->empty() && (*it)[0] != '#') {
-      header = *it;
-      break;
-    }
+  const std::string header = header_line(rd);
   if (header.empty())
     throw DataError(file, 1, "no header line: expected the residual log's column names (ovton run --residual-log)");
   const long header_line = have_row ? std::max(1L, rd.line() - 1) : 1L;
@@ -212,6 +214,108 @@ ResidualLog load_residual_log(const std::string &file) {
     have_row = rd.next(f);
   }
   return log;
+}
+
+} // namespace ov_core
+
+namespace ov_core {
+
+namespace {
+
+using CRow = CalibrationLogRow;
+
+/// The calibration log's real columns: name prefix, the row's array and its length (name_i, or name_rc for 3 × 3).
+struct CalibArray {
+  const char *name;
+  double *(*at)(CRow &);
+  int n;
+};
+const std::vector<CalibArray> &calib_arrays() {
+  static const std::vector<CalibArray> a = {
+      {"td_s", [](CRow &r) { return &r.td_s; }, 1},
+      {"R_BC", [](CRow &r) { return r.R_BC; }, 9},
+      {"p_BC", [](CRow &r) { return r.p_BC; }, 3},
+      {"intr", [](CRow &r) { return r.intrinsics; }, 8},
+      {"readout_s", [](CRow &r) { return &r.readout_s; }, 1},
+      {"D_w", [](CRow &r) { return r.D_w; }, 9},
+      {"D_a", [](CRow &r) { return r.D_a; }, 9},
+      {"b_g", [](CRow &r) { return r.b_g; }, 3},
+      {"b_a", [](CRow &r) { return r.b_a; }, 3},
+  };
+  return a;
+}
+
+std::vector<std::string> calib_real_names() {
+  std::vector<std::string> names;
+  for (const CalibArray &a : calib_arrays())
+    for (int i = 0; i < a.n; ++i)
+      names.push_back(a.n == 1   ? std::string(a.name)
+                      : a.n == 9 ? std::string(a.name) + "_" + std::to_string(i / 3) + std::to_string(i % 3)
+                                 : std::string(a.name) + "_" + std::to_string(i));
+  return names;
+}
+
+} // namespace
+
+std::string calibration_log_path(const std::string &residual_log) {
+  const size_t slash = residual_log.find_last_of('/');
+  const size_t dot = residual_log.find_last_of('.');
+  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
+  return (has_ext ? residual_log.substr(0, dot) : residual_log) + "_calib.csv";
+}
+
+std::string calibration_log_header() {
+  std::string s = "update_id,t_cam_ns,estimated";
+  for (const std::string &n : calib_real_names())
+    s += "," + n;
+  return s;
+}
+
+std::string format_calibration_row(const CalibrationLogRow &r) {
+  std::string s = std::to_string(static_cast<unsigned long long>(r.update_id)) + "," +
+                  std::to_string(static_cast<long long>(r.t_cam_ns)) + "," + std::to_string(r.estimated);
+  CRow copy = r;
+  for (const CalibArray &a : calib_arrays())
+    for (int i = 0; i < a.n; ++i) {
+      s += ',';
+      put_double(s, a.at(copy)[i]);
+    }
+  return s;
+}
+
+std::vector<CalibrationLogRow> load_calibration_log(const std::string &file) {
+  TextTableReader rd(file, ',');
+  std::vector<std::string> f;
+  bool have_row = rd.next(f);
+  std::string header = header_line(rd);
+  while (!header.empty() && (header.back() == '\r' || header.back() == ' '))
+    header.pop_back();
+  if (header != calibration_log_header())
+    throw DataError(file, 1, "header is not the calibration log's (ovton run --residual-log writes it beside the log)");
+  const size_t n_cols = 3 + calib_real_names().size();
+  std::vector<CalibrationLogRow> rows;
+  while (have_row) {
+    if (f.size() != n_cols)
+      rd.fail("row has " + std::to_string(f.size()) + " fields, the header names " + std::to_string(n_cols));
+    CRow r;
+    r.line = rd.line();
+    r.update_id = static_cast<uint64_t>(rd.to_int64(f[0], "update_id"));
+    r.t_cam_ns = rd.to_int64(f[1], "t_cam_ns");
+    r.estimated = static_cast<int>(rd.to_int64(f[2], "estimated"));
+    size_t k = 3;
+    for (const CalibArray &a : calib_arrays())
+      for (int i = 0; i < a.n; ++i, ++k) {
+        const double v = parse_number(rd, f[k], a.name);
+        if (!std::isfinite(v))
+          rd.fail(std::string("NaN ") + a.name);
+        a.at(r)[i] = v;
+      }
+    if (!rows.empty() && r.t_cam_ns < rows.back().t_cam_ns)
+      rd.fail("camera time goes back (rows must be in update order)");
+    rows.push_back(r);
+    have_row = rd.next(f);
+  }
+  return rows;
 }
 
 } // namespace ov_core

@@ -63,4 +63,37 @@ std::string format_residual_row(const ResidualLogRow &r);
 /// status) says a number must be.
 ResidualLog load_residual_log(const std::string &file);
 
+/// The filter's calibration and IMU biases after one update: the companion of a residual log (`ovton run
+/// --residual-log res.csv` writes it to calibration_log_path("res.csv") = "res_calib.csv", one row per update that
+/// logged residuals). `diagnose` compares the images and the raw IMU through these values (the calibration the filter
+/// held at each image), so that an effect the filter has estimated is no longer named. Fixed values when a block is
+/// not estimated (`estimated` says which are). Conventions as in the state (ov_msckf_ton/state/state.h):
+/// R_BC camera -> body, row-major; intrinsics fu fv cu cv d0..d3; a row v is seen at t + t_d + (v/H − ½)·readout_s;
+/// ω = D_w·(ω_m − b_g), a = D_a·(a_m − b_a) (D_w, D_a row-major).
+struct CalibrationLogRow {
+  enum Estimated : int { kExtrinsics = 1, kIntrinsics = 2, kReadout = 4, kImuIntrinsics = 8 };
+  long line = 0; ///< 1-based line in the file it was read from
+  uint64_t update_id = 0;
+  int64_t t_cam_ns = 0; ///< the newest camera time among the update's residual rows
+  int estimated = 0;    ///< bitmask of Estimated
+  double td_s = 0.0;    ///< t̂_d after the update
+  double R_BC[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  double p_BC[3] = {0, 0, 0};
+  double intrinsics[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  double readout_s = 0.0;
+  double D_w[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  double D_a[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  double b_g[3] = {0, 0, 0};
+  double b_a[3] = {0, 0, 0};
+};
+
+/// "dir/res.csv" -> "dir/res_calib.csv" (any extension: "res" -> "res_calib.csv").
+std::string calibration_log_path(const std::string &residual_log);
+/// The header line (without newline) and one row as a CSV line (reals with 10 significant digits).
+std::string calibration_log_header();
+std::string format_calibration_row(const CalibrationLogRow &r);
+/// Reads a calibration log (every column required, all finite, rows in update order). Throws DataError with
+/// file:line like load_residual_log.
+std::vector<CalibrationLogRow> load_calibration_log(const std::string &file);
+
 } // namespace ov_core

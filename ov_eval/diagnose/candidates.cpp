@@ -73,6 +73,25 @@ std::vector<EffectEstimate> gyro_axes(const Coefs &c, const DiagnoseReport &, co
   return out;
 }
 
+/// Per-axis accelerometer scale: the filter's bias follows s_j·f_j (accel_design.h).
+std::vector<EffectEstimate> accel_axes(const Coefs &c, const DiagnoseReport &, const Design &) {
+  std::vector<EffectEstimate> out;
+  const char *names[3] = {"accel scale error s_x", "accel scale error s_y", "accel scale error s_z"};
+  Eigen::Matrix3d C;
+  for (int a = 0; a < 3; ++a) {
+    out.push_back({names[a], "%", 100 * c.b(a), 100 * c.s(a)});
+    for (int b = 0; b < 3; ++b)
+      C(a, b) = c.cov(a, b);
+  }
+  // One common scale, the axes weighted by their information (an axis with little specific-force variation is weak).
+  const Eigen::Vector3d w = C.ldlt().solve(Eigen::Vector3d::Ones());
+  const double W = w.sum();
+  if (W > 0)
+    out.push_back({"accel scale error, axes combined", "%", 100 * w.dot(Eigen::Vector3d(c.b(0), c.b(1), c.b(2))) / W,
+                   100 / std::sqrt(W)});
+  return out;
+}
+
 /// The size of a vector estimate (first three coefficients) and its delta-method SE, scaled to `unit_per`.
 EffectEstimate vector_norm(const Coefs &c, const std::string &name, const std::string &unit, double unit_per) {
   const Eigen::Vector3d v(c.b(0), c.b(1), c.b(2));
@@ -223,6 +242,11 @@ const std::vector<CandidateDef> &candidate_table() {
        "camera-IMU rotation error (rates only)",
        "camera-IMU rotation error, from rates: ω_vis − ω̄_gyro = ω̄_gyro × φ − b (R_BC true = Exp(φ)·R_BC)",
        "", "", "fitted extrinsic_rotation effect, / SE"},
+      // The accelerometer's scale: no image shows it; the filter's accelerometer bias follows it (accel_design.h).
+      {"accel_scale_axes", span(kAccAx0, 3), {}, Needs::AccelBias, accel_axes,
+       "per-axis accelerometer scale error, from the filter's accelerometer bias: b̂_a,j = s_j·f_j + c_j (body axes; "
+       "needs the calibration log and --dataset)",
+       "", "", "specific force along the axis, bin means removed [m/s^2]", ""},
       {"extrinsic_translation", span(kExtTrans0, 3), {}, Needs::Nothing, extrinsic_translation,
        "camera-IMU translation error: r = −f·J_π(x)·δp_C/z (what the rotation along a track leaves of it)",
        "", "",

@@ -37,7 +37,10 @@ enum Col : int {
   /// α·1[time bin b] (rates) or V·1[bin b] (residual) for bins b = 1 .. kTdBins − 2; with kV and kVt, a piecewise
   /// offset.
   kTdBin0 = kExtTrans0 + 3,
-  kNumCols = kTdBin0 + kTdBins - 2
+  /// The filter's accelerometer bias only (accel_design.h): 3 columns, the specific force along body axis j on the
+  /// rows of axis j.
+  kAccAx0 = kTdBin0 + kTdBins - 2,
+  kNumCols = kAccAx0 + 3
 };
 
 /// The piecewise offset's bin of a row at t seconds into a log of `duration_s`.
@@ -59,8 +62,9 @@ struct Coefs {
 using EstimatesFn = std::vector<EffectEstimate> (*)(const Coefs &c, const DiagnoseReport &rep, const Design &d);
 
 /// What a candidate needs of the residual log's rows to be tested on the residual (the rate design has both); Rates:
-/// it has no model on the residual and is tested on rates only (--dataset).
-enum class Needs { Nothing, Velocity, BodyRates, Rates };
+/// it has no model on the residual and is tested on rates only (--dataset); AccelBias: tested on the filter's
+/// accelerometer bias only (the calibration log and --dataset, accel_design.h).
+enum class Needs { Nothing, Velocity, BodyRates, Rates, AccelBias };
 
 struct CandidateDef {
   std::string key;              ///< td_const, td_drift, rolling_shutter, focal, principal_point, radial_k1, gyro_scale

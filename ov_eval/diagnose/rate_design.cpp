@@ -1,6 +1,7 @@
 #include "ov_eval/diagnose/rate_design.h"
 #include "ov_core/math/so3.h"
 #include "ov_eval/diagnose/candidates.h"
+#include "ov_eval/diagnose/filter_calibration.h"
 #include "ov_eval/diagnose/image_geometry.h"
 
 #include <Eigen/Dense>
@@ -255,10 +256,12 @@ Eigen::Vector3d gyro_at(const std::vector<ov_core::ImuData> &imu, double t_ns) {
 /// The time candidates keep the raw gyro: smoothed, it left a −0.5 ms offset on clean runs.
 class GyroThroughImages {
 public:
-  GyroThroughImages(const std::vector<ov_core::ImuData> &imu, const Eigen::Matrix3d &R_BC) : imu_(imu), R_BC_(R_BC) {}
+  explicit GyroThroughImages(const std::vector<ov_core::ImuData> &imu) : imu_(imu) {}
 
-  /// In the camera frame, for the image with features `obs` fitted as `ff` (the fitter's current depth corrections).
-  Eigen::Vector3d omega(const std::vector<FlowObs> &obs, const FrameFit &ff, const FlowFitter &fitter) {
+  /// In the camera frame, for the image with features `obs` fitted as `ff` (the fitter's current depth corrections),
+  /// the camera-body rotation R_BC the filter held at the image.
+  Eigen::Vector3d omega(const std::vector<FlowObs> &obs, const FrameFit &ff, const FlowFitter &fitter,
+                        const Eigen::Matrix3d &R_BC) {
     const Eigen::Index no = static_cast<Eigen::Index>(obs.size());
     const MatrixXd H = fitter.frame_design(obs, false);
     VectorXd y(2 * no);
@@ -266,7 +269,8 @@ public:
       const FlowObs &o = obs[q];
       Eigen::Vector2d xdot = Eigen::Vector2d::Zero();
       for (int k = 0; k < o.n_win; ++k) {
-        const Eigen::Vector3d b = R_CjCq(o.t_imu, o.win_t_imu[k]).transpose() * o.x.homogeneous();
+        const Eigen::Matrix3d R_CjCq = R_BC.transpose() * R_BjBq(o.t_imu, o.win_t_imu[k]) * R_BC;
+        const Eigen::Vector3d b = R_CjCq.transpose() * o.x.homogeneous();
         xdot += o.win_w[k] * b.head<2>() / b.z();
       }
       y.segment<2>(2 * q) = xdot;
@@ -276,8 +280,8 @@ public:
   }
 
 private:
-  /// The camera's rotation from IMU time t0 to t1, integrated from the gyro (memoised: windows overlap).
-  const Eigen::Matrix3d &R_CjCq(double t0, double t1) {
+  /// The body's rotation from IMU time t0 to t1, integrated from the gyro (memoised: windows overlap).
+  const Eigen::Matrix3d &R_BjBq(double t0, double t1) {
     auto it = cache_.find({t0, t1});
     if (it != cache_.end())
       return it->second;
@@ -287,11 +291,10 @@ private:
     Eigen::Matrix3d R = Eigen::Matrix3d::Identity(); // R_{B0 B1}
     for (int k = 0; k < steps; ++k)
       R = R * ov_core::so3_exp(gyro_at(imu_, t0 + 1e9 * (k + 0.5) * dt) * dt);
-    return cache_.emplace(std::make_pair(t0, t1), R_BC_.transpose() * R * R_BC_).first->second;
+    return cache_.emplace(std::make_pair(t0, t1), R).first->second;
   }
 
   const std::vector<ov_core::ImuData> &imu_;
-  const Eigen::Matrix3d R_BC_;
   std::map<std::pair<double, double>, Eigen::Matrix3d> cache_;
 };
 
@@ -397,33 +400,41 @@ void fill_rate_rows(const std::vector<FrameRate> &fr, const DiagnoseReport &rep,
 bool build_rate_design(const UsedData &data, const DiagnoseOptions &opt, const DiagnoseReport &rep, Design &dr,
                        std::string &why) {
   const FlowData flow = collect_flow(data.tracks, rep);
-  const Eigen::Matrix3d R_BC = opt.camera.T_BC.block<3, 3>(0, 0);
+  const Eigen::Matrix3d R_BC_nominal = opt.camera.T_BC.block<3, 3>(0, 0);
   const ov_core::CameraModel cam(opt.camera);
   FlowFitter fitter(flow.n_tracks);
   FitMap fits, fits_psi;
   fitter.solve(flow.frames, fits, fits_psi);
   add_focal_response(flow.frames, cam, fitter, fits, fits_psi);
 
-  const auto body_se = [&](const Eigen::Matrix3d &C) {
-    return (R_BC * C * R_BC.transpose()).diagonal().cwiseMax(1e-20).cwiseSqrt().eval();
-  };
+  // The filter's calibration at each image, when the log has one (filter_calibration.h): the IMU through its
+  // intrinsics, its camera-body rotation, its readout time and focal.
+  const std::vector<ov_core::ImuData> imu_cal =
+      opt.calibration.empty() ? std::vector<ov_core::ImuData>{} : imu_through_calibration(opt.imu, opt.calibration);
+  const std::vector<ov_core::ImuData> &imu = opt.calibration.empty() ? opt.imu : imu_cal;
   const double h_ns = 50e6; // ±50 ms for the angular acceleration: the gyro noise of a difference shrinks with it
   // ω̄_gyro's fit uses the fitter's depth corrections as add_focal_response left them (those of the perturbed data).
-  GyroThroughImages gyro_bar(opt.imu, R_BC);
+  GyroThroughImages gyro_bar(imu);
   std::vector<FrameRate> fr;
   for (const auto &[t_cam, ff] : fits) {
+    const CalibrationLogRow *cal = calibration_at(opt.calibration, t_cam);
+    const Eigen::Matrix3d R_BC = cal ? mat3(cal->R_BC) : R_BC_nominal;
+    const auto body_se = [&](const Eigen::Matrix3d &C) {
+      return (R_BC * C * R_BC.transpose()).diagonal().cwiseMax(1e-20).cwiseSqrt().eval();
+    };
     const double t_imu = double(t_cam) + 1e9 * flow.frame_td.at(t_cam);
     FrameRate f;
     f.t = 1e-9 * double(t_cam - data.t_first);
-    f.e = R_BC * ff.sol.head<3>() - gyro_at(opt.imu, t_imu);
-    f.gyro_s = R_BC * gyro_bar.omega(flow.frames.at(t_cam), ff, fitter);
-    f.e_s = R_BC * ff.sol.head<3>() - f.gyro_s;
-    f.alpha = (gyro_at(opt.imu, t_imu + h_ns) - gyro_at(opt.imu, t_imu - h_ns)) / (2e-9 * h_ns);
-    f.se = body_se(ff.C.topLeftCorner<3, 3>());
+    f.e = R_BC * ff.sol.head<3>() - gyro_at(imu, t_imu);
+    f.gyro_s = R_BC * gyro_bar.omega(flow.frames.at(t_cam), ff, fitter, R_BC);
     f.focal_e = R_BC * ff.focal.head<3>();
+    // What the filter's focal estimate already takes of the focal column.
+    f.e_s = R_BC * ff.sol.head<3>() - f.gyro_s - (cal ? focal_estimate(*cal, rep.fu, rep.fv) : 0.0) * f.focal_e;
+    f.alpha = (gyro_at(imu, t_imu + h_ns) - gyro_at(imu, t_imu - h_ns)) / (2e-9 * h_ns);
+    f.se = body_se(ff.C.topLeftCorner<3, 3>());
     const auto fp = fits_psi.find(t_cam);
-    if (fp != fits_psi.end()) {
-      f.psi = R_BC * fp->second.sol.segment<3>(3);
+    if (fp != fits_psi.end()) { // ψ beyond the filter's readout time: ψ_vis − α·t̂_r
+      f.psi = R_BC * fp->second.sol.segment<3>(3) - (cal ? cal->readout_s : 0.0) * f.alpha;
       f.psi_se = body_se(fp->second.C.block<3, 3>(3, 3));
     } else { // no ψ row: zero weight
       f.psi.setZero();

@@ -55,7 +55,13 @@ Fit fit_huber(const MatrixXd &X, const VectorXd &r, const Design &d, double k, c
         S.row(d.cluster[i]) += (w(i) * f.e(i)) * X.row(i);
     const MatrixXd Ainv = A.ldlt().solve(MatrixXd::Identity(p, p));
     const double g = d.n_clusters > 1 ? double(d.n_clusters) / (d.n_clusters - 1) : 1.0;
-    f.cov = g * Ainv * (S.transpose() * S) * Ainv;
+    MatrixXd meat = S.transpose() * S;
+    // Clusters in time order whose scores still correlate a few clusters apart: Newey-West, Bartlett weights.
+    for (int l = 1; l <= d.hac_lags && l < d.n_clusters; ++l) {
+      const MatrixXd C = S.bottomRows(d.n_clusters - l).transpose() * S.topRows(d.n_clusters - l);
+      meat += (1.0 - l / (d.hac_lags + 1.0)) * (C + C.transpose());
+    }
+    f.cov = g * Ainv * meat * Ainv;
   }
   return f;
 }

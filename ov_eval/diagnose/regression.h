@@ -20,6 +20,9 @@ struct Design {
   std::vector<int> cluster; ///< cluster index per row, in [0, n_clusters)
   std::vector<double> t_s;  ///< time of each row [s from the first used row]
   int n_clusters = 0;
+  /// > 0: the clusters are consecutive in time and their scores correlate up to this many clusters apart (a smooth
+  /// series such as the filter's bias): Newey-West with Bartlett weights over the cluster scores.
+  int hac_lags = 0;
   double scale = 1; ///< robust σ of r (fixed, so that the losses of different candidates compare)
   double t_mid = 0; ///< centre of the drift term
   bool have_velocity = false, have_rate = false;

@@ -10,7 +10,7 @@ namespace ov_eval::diag {
 namespace {
 
 /// Runs the stepwise selection on one family (indices into the table) and writes its verdicts into res.
-std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &family, bool on_rates,
+std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &family, bool on_rates, bool on_bias,
                                 const DiagnoseOptions &opt, const DiagnoseReport &rep,
                                 std::vector<CandidateResult> &res) {
   const auto &table = candidate_table();
@@ -21,6 +21,10 @@ std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &fami
     if (def.needs == Needs::Velocity && !d.have_velocity)
       sc.skip = "skipped: fewer than " + std::to_string(int(100 * opt.min_velocity_share)) +
                 "% of rows carry an image velocity";
+    if (def.needs == Needs::AccelBias && !on_bias)
+      sc.skip =
+          "skipped: tested on the filter's accelerometer bias only (needs the calibration log beside the residual "
+          "log and --dataset)";
     if (!on_rates && def.needs == Needs::Rates)
       sc.skip = "skipped: tested on rates only (needs --dataset: the raw gyro and the camera)";
     if (!on_rates && def.needs == Needs::BodyRates && !d.have_rate)
@@ -46,6 +50,8 @@ std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &fami
       cr.curve.xlabel = def.xlabel;
       cr.curve.ylabel = "residual, other selected effects removed [px] (bin mean +- SE)";
     }
+    if (on_bias)
+      cr.curve.ylabel = "filter's accel bias, bin means removed [m/s^2] (bin mean +- SE)";
     if (on_rates) {
       cr.curve.xlabel = def.rate_xlabel;
       cr.curve.ylabel = "w_vis - w_gyro (bias removed) and psi_vis, / SE (bin mean +- SE)";
@@ -60,23 +66,28 @@ std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &fami
 } // namespace
 
 std::vector<CandidateResult> test_candidates(const Design &d, const Design *rates, const std::string &rate_why,
-                                             const DiagnoseOptions &opt, const DiagnoseReport &rep,
+                                             const Design *bias, const DiagnoseOptions &opt, const DiagnoseReport &rep,
                                              std::vector<size_t> &selected) {
   const auto &table = candidate_table();
   std::vector<CandidateResult> res(table.size());
-  std::vector<size_t> residual_family, rate_family;
+  std::vector<size_t> residual_family, rate_family, bias_family;
   for (size_t c = 0; c < table.size(); ++c) {
     res[c].key = table[c].key;
     const bool on_rates = table[c].rate_capable() && rates;
-    (on_rates ? rate_family : residual_family).push_back(c);
+    const bool on_bias = table[c].needs == Needs::AccelBias && bias;
+    (on_bias ? bias_family : on_rates ? rate_family : residual_family).push_back(c);
     res[c].description = on_rates ? table[c].rate_description : table[c].description;
     if (table[c].rate_capable() && !rates)
       res[c].note = "on the residual (" + rate_why + "): " + table[c].fallback_note;
   }
-  selected = test_family(d, residual_family, false, opt, rep, res);
+  selected = test_family(d, residual_family, false, false, opt, rep, res);
   if (rates) {
-    const auto sel_rate = test_family(*rates, rate_family, true, opt, rep, res);
+    const auto sel_rate = test_family(*rates, rate_family, true, false, opt, rep, res);
     selected.insert(selected.end(), sel_rate.begin(), sel_rate.end());
+  }
+  if (bias) {
+    const auto sel_bias = test_family(*bias, bias_family, false, true, opt, rep, res);
+    selected.insert(selected.end(), sel_bias.begin(), sel_bias.end());
   }
   return res;
 }

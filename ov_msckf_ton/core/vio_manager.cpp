@@ -495,7 +495,7 @@ void VioManager::msckf_update(const std::vector<const ov_core::Feature *> &feats
   }
   counters_.td_features += st.td_features_used;
   if (log_)
-    log_->write(records);
+    log_->write(records, s);
   // A feature used in an update must not be used again: its information is in the state now.
   std::vector<size_t> ids;
   ids.reserve(feats.size());

@@ -1,15 +1,59 @@
 #include "ov_msckf_ton/update/residual_log.h"
 #include "ov_core/types/errors.h"
 
+#include <algorithm>
+
 namespace ov_msckf_ton {
 
-ResidualLogWriter::ResidualLogWriter(const std::string &path) : path_(path), out_(path, std::ios::trunc) {
+ov_core::CalibrationLogRow calibration_row(const State &state, const std::vector<ResidualRecord> &records) {
+  ov_core::CalibrationLogRow c;
+  for (const ResidualRecord &r : records) {
+    c.update_id = r.update_id;
+    c.t_cam_ns = std::max(c.t_cam_ns, r.t_cam_ns);
+  }
+  const CalibState &k = state.calib;
+  c.estimated = (k.extrinsics_index >= 0 ? c.kExtrinsics : 0) | (k.intrinsics_index >= 0 ? c.kIntrinsics : 0) |
+                (k.readout_index >= 0 ? c.kReadout : 0) | (k.imu_intrinsics_index >= 0 ? c.kImuIntrinsics : 0);
+  c.td_s = state.td;
+  for (int i = 0; i < 9; ++i) {
+    c.R_BC[i] = k.R_BC(i / 3, i % 3);
+    c.D_w[i] = k.D_w(i / 3, i % 3);
+    c.D_a[i] = k.D_a(i / 3, i % 3);
+  }
+  for (int i = 0; i < 3; ++i) {
+    c.p_BC[i] = k.p_BC(i);
+    c.b_g[i] = state.imu.bg(i);
+    c.b_a[i] = state.imu.ba(i);
+  }
+  for (int i = 0; i < 8; ++i)
+    c.intrinsics[i] = k.intrinsics(i);
+  c.readout_s = k.readout_s;
+  return c;
+}
+
+ResidualLogWriter::ResidualLogWriter(const std::string &path)
+    : path_(path), calib_path_(ov_core::calibration_log_path(path)), out_(path, std::ios::trunc),
+      calib_out_(calib_path_, std::ios::trunc) {
   if (!out_)
     throw ov_core::DataError(path, "cannot open the residual log for writing");
+  if (!calib_out_)
+    throw ov_core::DataError(calib_path_, "cannot open the calibration log for writing");
   out_ << header() << '\n';
+  calib_out_ << ov_core::calibration_log_header() << '\n';
   out_.flush();
-  if (!out_)
-    throw ov_core::DataError(path, "cannot write the residual log header");
+  calib_out_.flush();
+  if (!out_ || !calib_out_)
+    throw ov_core::DataError(path, "cannot write the residual or calibration log header");
+}
+
+void ResidualLogWriter::write(const std::vector<ResidualRecord> &records, const State &state) {
+  write(records);
+  if (records.empty())
+    return;
+  calib_out_ << ov_core::format_calibration_row(calibration_row(state, records)) << '\n';
+  calib_out_.flush();
+  if (!calib_out_)
+    throw ov_core::DataError(calib_path_, "write failed (disk full?)");
 }
 
 void ResidualLogWriter::write(const std::vector<ResidualRecord> &records) {

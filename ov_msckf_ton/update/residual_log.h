@@ -4,6 +4,7 @@
 // (time-offset error, rolling shutter, focal/distortion error, IMU scale) against these columns. The row and its
 // columns are the schema both the writer and the reader see (ov_core/io/residual_log_schema.h).
 #include "ov_core/io/residual_log_schema.h"
+#include "ov_msckf_ton/state/state.h"
 
 #include <fstream>
 #include <string>
@@ -15,12 +16,20 @@ using ResidualStatus = ov_core::ResidualStatus;
 /// One observation of one feature in one update (ov_core::ResidualLogRow; `line` stays 0 when written).
 using ResidualRecord = ov_core::ResidualLogRow;
 
-/// Writes ResidualRecords as CSV: one header line, then one line per record. Each batch is flushed so that an
-/// interrupted run leaves every finished update on disk.
+/// The filter's calibration and IMU biases as a calibration-log row (ov_core::CalibrationLogRow), for the update
+/// whose residual rows are `records` (update id and newest camera time from them).
+ov_core::CalibrationLogRow calibration_row(const State &state, const std::vector<ResidualRecord> &records);
+
+/// Writes ResidualRecords as CSV: one header line, then one line per record; and beside it the calibration log
+/// (ov_core::calibration_log_path), one row per update with records. Each batch is flushed so that an interrupted
+/// run leaves every finished update on disk.
 class ResidualLogWriter {
 public:
-  /// Opens (truncates) the file and writes the header; throws ov_core::DataError when it cannot be written.
+  /// Opens (truncates) both files and writes their headers; throws ov_core::DataError when they cannot be written.
   explicit ResidualLogWriter(const std::string &path);
+  /// The records of one update and the state after it (its calibration goes to the calibration log).
+  void write(const std::vector<ResidualRecord> &records, const State &state);
+  /// Records only (no calibration row).
   void write(const std::vector<ResidualRecord> &records);
   const std::string &path() const { return path_; }
   size_t rows_written() const { return rows_; }
@@ -31,8 +40,8 @@ public:
   static std::string format(const ResidualRecord &r) { return ov_core::format_residual_row(r); }
 
 private:
-  std::string path_;
-  std::ofstream out_;
+  std::string path_, calib_path_;
+  std::ofstream out_, calib_out_;
   size_t rows_ = 0;
 };
 

@@ -1,0 +1,17 @@
+#pragma once
+// The design on the filter's accelerometer bias (docs/diagnose.md, "Accelerometer scale"): an accelerometer scale
+// error is in no image, and the filter's poses follow the images; what the filter does with it is to move its
+// accelerometer bias. It reads a = a_m − b̂_a while the truth is a = a_m/(1 + s) (per axis), so its bias follows
+// b̂_a,j ≈ s_j·f_j + c_j, f the specific force the accelerometer measures along body axis j.
+#include "ov_eval/diagnose/regression.h"
+#include "ov_eval/diagnose/tracks.h"
+
+namespace ov_eval::diag {
+
+/// Three rows per update of the calibration log (one per body axis): the filter's b̂_a,j against the measured specific
+/// force f_j (the raw accelerometer through the filter's D_a, low-passed like the bias follows it), both with their
+/// means per bias bin removed (the bias's own random walk), clustered per second. Needs opt.calibration (50+ updates
+/// in the used span) and opt.imu; false otherwise.
+bool build_accel_design(const UsedData &data, const DiagnoseOptions &opt, const DiagnoseReport &rep, Design &db);
+
+} // namespace ov_eval::diag

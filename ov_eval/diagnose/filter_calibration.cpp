@@ -1,0 +1,42 @@
+#include "ov_eval/diagnose/filter_calibration.h"
+
+#include <algorithm>
+
+namespace ov_eval::diag {
+
+const CalibrationLogRow *calibration_at(const std::vector<CalibrationLogRow> &rows, int64_t t_cam_ns) {
+  if (rows.empty())
+    return nullptr;
+  const auto it = std::lower_bound(rows.begin(), rows.end(), t_cam_ns,
+                                   [](const CalibrationLogRow &r, int64_t t) { return r.t_cam_ns < t; });
+  return it == rows.end() ? &rows.back() : &*it;
+}
+
+Eigen::Matrix3d mat3(const double *a) {
+  Eigen::Matrix3d m;
+  for (int i = 0; i < 9; ++i)
+    m(i / 3, i % 3) = a[i];
+  return m;
+}
+
+std::vector<ov_core::ImuData> imu_through_calibration(const std::vector<ov_core::ImuData> &imu,
+                                                      const std::vector<CalibrationLogRow> &rows) {
+  std::vector<ov_core::ImuData> out = imu;
+  if (rows.empty())
+    return out;
+  for (auto &m : out) {
+    const CalibrationLogRow *c =
+        calibration_at(rows, m.t_imu_ns - static_cast<int64_t>(1e9 * rows.front().td_s)); // t_cam = t_imu − t_d
+    m.wm = mat3(c->D_w) * m.wm;
+    m.am = mat3(c->D_a) * m.am;
+  }
+  return out;
+}
+
+double focal_estimate(const CalibrationLogRow &row, double fu, double fv) {
+  if (!(row.estimated & CalibrationLogRow::kIntrinsics) || !(fu > 0 && fv > 0))
+    return 0.0;
+  return 0.5 * (row.intrinsics[0] / fu + row.intrinsics[1] / fv) - 1.0;
+}
+
+} // namespace ov_eval::diag

@@ -1,0 +1,33 @@
+#pragma once
+// The filter's own calibration at each image, from the calibration log `ovton run --residual-log` writes beside the
+// residual log (ov_core/io/residual_log_schema.h): the rate design compares the images with the raw IMU through it,
+// so that an effect the filter has estimated (camera-IMU rotation, IMU scale, readout, focal) is not named again
+// (docs/diagnose.md, "The filter's calibration").
+#include "ov_core/io/residual_log_schema.h"
+#include "ov_core/types/sensor_data.h"
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace ov_eval::diag {
+
+using ov_core::CalibrationLogRow;
+
+/// The calibration the filter held for the image at t_cam_ns: the row of the first update at or after it (the first
+/// that can have used the image), the last row after the log's end; nullptr when there are no rows.
+const CalibrationLogRow *calibration_at(const std::vector<CalibrationLogRow> &rows, int64_t t_cam_ns);
+
+/// A row-major 3 × 3 array as a matrix.
+Eigen::Matrix3d mat3(const double *a);
+
+/// The raw IMU through the filter's IMU intrinsics at each reading: ω_m -> D_w·ω_m, a_m -> D_a·a_m (the biases are left
+/// in: the rate rows remove them per bin). The reading at IMU time t takes the calibration of camera time t − t̂_d.
+std::vector<ov_core::ImuData> imu_through_calibration(const std::vector<ov_core::ImuData> &imu,
+                                                      const std::vector<CalibrationLogRow> &rows);
+
+/// The filter's relative focal error ε̂ = ½·(f̂u/fu + f̂v/fv) − 1 against the nominal fu, fv, when it estimated the
+/// intrinsics (0 otherwise).
+double focal_estimate(const CalibrationLogRow &row, double fu, double fv);
+
+} // namespace ov_eval::diag

@@ -1,0 +1,103 @@
+#!/usr/bin/env bash
+# Issue #16's sizing statistics: each undeclared effect of diagnose_undeclared.sh planted on seeds 1-4, the `sr` run
+# with the effect not modelled, diagnose: is the planted effect named first, and sized within 20 %? And the clean
+# flights (plain and agile, seeds 1-4): is nothing flagged (no candidate, no UNEXPLAINED)?
+# Data and runs as diagnose_undeclared.sh: `ovton simulate --builtin [--agility 1] --duration-s 30 --features-only
+# --seed S PLANT`, `ovton run --td-mode sr --init groundtruth` (sigma_px 1), `ovton diagnose --dataset`.
+# Usage: scripts/experiments/diagnose_sizing.sh [OUT] [SEED ...]   (default seeds 1 2 3 4; ~30 s per run here).
+# CASES overrides the cases (space-separated); DIAGNOSE_ONLY=1 re-diagnoses the runs already in OUT. Writes
+# OUT/sizing.md.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+OUT=${1:-results/diagnose_sizing}
+shift || true
+SEEDS=("$@")
+[ ${#SEEDS[@]} -eq 0 ] && SEEDS=(1 2 3 4)
+BIN=${OVTON_BIN:-build/ovton}
+read -r -a CASES <<<"${CASES:-rolling_shutter extrinsic_rotation gyro_scale_z accel_scale wander_td clean clean_plain}"
+[ -x "$BIN" ] || scripts/build.sh
+mkdir -p "$OUT"
+
+# case -> simulate options | expected key | estimate name(s) : truth (per estimate)
+plant() {
+  case $1 in
+  rolling_shutter) echo "--agility 1 --readout-ms 20" ;;
+  extrinsic_rotation) echo "--agility 1 --extrinsic-rot-deg 0.3,-0.4,0.5" ;;
+  gyro_scale_z) echo "--agility 1 --gyro-scale-axes-pct 0,0,3" ;;
+  accel_scale) echo "--agility 1 --accel-scale-axes-pct 3,3,3" ;;
+  wander_td) echo "--agility 1 --td-model wander --td-wander-ms 8 --td-wander-period-s 10" ;;
+  clean) echo "--agility 1" ;;
+  clean_plain) echo "" ;;
+  esac
+}
+expect() {
+  case $1 in
+  rolling_shutter) echo "rolling_shutter|readout time t_r=20" ;;
+  extrinsic_rotation) echo "extrinsic_rotation|rotation error |φ|=0.7071" ;;
+  gyro_scale_z) echo "gyro_scale_axes|gyro scale error s_z=3" ;;
+  accel_scale) echo "accel_scale_axes|accel scale error, axes combined=3" ;;
+  wander_td) echo "td_piecewise|offset error spread (RMS over bins)=TRUTH" ;;
+  clean | clean_plain) echo "-|" ;;
+  esac
+}
+
+{
+  echo "# Diagnose: named first and sized within 20 %, seeds ${SEEDS[*]}"
+  echo
+  echo "Made by \`scripts/experiments/diagnose_sizing.sh $OUT ${SEEDS[*]}\` at commit $(git rev-parse --short HEAD)."
+  echo
+  echo "| case | seed | first flagged | estimates (truth) | named first | within 20 % |"
+  echo "|---|---:|---|---|---|---|"
+} >"$OUT/sizing.md"
+for C in "${CASES[@]}"; do
+  for S in "${SEEDS[@]}"; do
+    D="$OUT/$C/s$S"
+    DS="$D/data"
+    mkdir -p "$D"
+    read -r -a P <<<"$(plant "$C")"
+    SIM=(simulate --out "$DS" --builtin --duration-s 30 --features-only --seed "$S" --force -q "${P[@]}")
+    [ -d "$DS/mav0" ] && [ -f "$D/.sim_args" ] && [ "$(cat "$D/.sim_args")" = "${SIM[*]}" ] ||
+      { "$BIN" "${SIM[@]}" >/dev/null && echo "${SIM[*]}" >"$D/.sim_args"; }
+    printf 'update:\n  sigma_px: 1.0\n' >"$D/run.yaml"
+    [ "${DIAGNOSE_ONLY:-0}" = 1 ] && [ -f "$D/res.csv" ] || "$BIN" run --dataset "$DS" --td-mode sr --config "$D/run.yaml" --init groundtruth --output "$D/run.csv" \
+      --residual-log "$D/res.csv" -q >"$D/run.txt" 2>"$D/run.err" || true
+    "$BIN" diagnose --log "$D/res.csv" --dataset "$DS" --out "$D/diagnose" >"$D/diagnose.txt"
+    python3 - "$D/diagnose/diagnose.json" "$(expect "$C")" "$DS" "$C" "$S" >>"$OUT/sizing.md" <<'PY'
+import json, sys, csv
+d = json.load(open(sys.argv[1]))
+key, _, ests = sys.argv[2].partition("|")
+first = next((c for c in d["candidates"] if c["explained"]), None)
+unexpl = [u for u in d.get("unexplained", []) if u["flagged"]]
+flag = "nothing" if first is None else first["key"]
+if unexpl:
+    flag += " + UNEXPLAINED"
+if key == "-":
+    ok = first is None and not unexpl
+    print(f"| {sys.argv[4]} | {sys.argv[5]} | {flag} | | | {'clean: nothing flagged' if ok else 'FALSE FLAG'} |")
+    sys.exit()
+def truth_spread():  # RMS about their mean of the true offset's means over eighths of the used span
+    rows = [r for r in csv.reader(open(sys.argv[3] + "/mav0/td_truth/data.csv")) if r and not r[0].startswith("#")]
+    t = [int(r[0]) * 1e-9 for r in rows]; v = [float(r[1]) * 1e3 for r in rows]
+    t0, t1 = t[0], t[-1]
+    b = [[] for _ in range(8)]
+    for ti, vi in zip(t, v):
+        b[min(7, int(8 * (ti - t0) / (t1 - t0)))].append(vi)
+    m = [sum(x) / len(x) for x in b if x]; mu = sum(m) / len(m)
+    return (sum((x - mu) ** 2 for x in m) / len(m)) ** 0.5
+cand = next(c for c in d["candidates"] if c["key"] == key)
+parts, within = [], True
+for e in ests.split(";"):
+    name, _, truth = e.partition("=")
+    truth = truth_spread() if truth == "TRUTH" else float(truth)
+    est = next((x for x in cand.get("estimates", []) if x["name"] == name), None)
+    if est is None:
+        parts.append(f"{name}: -"); within = False; continue
+    parts.append(f"{name.split()[-1]} {est['value']:.3g} ± {est['stderr']:.2g} ({truth:.3g})")
+    within &= abs(est["value"] - truth) <= 0.2 * abs(truth)
+named = first is not None and first["key"] == key
+print(f"| {sys.argv[4]} | {sys.argv[5]} | {flag} | {'; '.join(parts)} | {'yes' if named else 'no'} | "
+      f"{'yes' if within else 'no'} |")
+PY
+  done
+done
+cat "$OUT/sizing.md"
