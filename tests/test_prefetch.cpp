@@ -9,6 +9,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <memory>
+
 using namespace ov_core;
 
 namespace {
@@ -62,6 +64,22 @@ TEST(ImagePrefetcher, StopsCleanlyWhenDroppedEarly) {
     for (size_t i = 0; i < stop_after; ++i)
       EXPECT_EQ(pixel(pf.get(i)), static_cast<int>(i));
   } // destructor joins a thread that may be waiting or decoding
+}
+
+// Images decoded before the replay (the coarse t_d search's) are handed out as given, not decoded again, on the
+// thread and when asked again; the others are decoded.
+TEST(ImagePrefetcher, HandsOutGivenImages) {
+  ovtest::TempDir dir;
+  const auto images = write_images(dir, 12, 9);
+  auto given = std::make_shared<DecodedImages>();
+  for (size_t i : {2u, 3u, 4u, 9u}) // 9 has no file: only the given image can be handed out
+    (*given)[i] = cv::Mat(8, 12, CV_8UC1, cv::Scalar(static_cast<double>(100 + i)));
+  ImagePrefetcher pf(images, 2, given);
+  for (size_t i = 0; i < images.size(); ++i)
+    EXPECT_EQ(pixel(pf.get(i)), given->count(i) ? static_cast<int>(100 + i) : static_cast<int>(i)) << i;
+  EXPECT_EQ(pixel(pf.get(3)), 103); // behind: from the given ones again
+  EXPECT_EQ(pixel(pf.get(1)), 1);
+  EXPECT_EQ(given->at(3).data, pf.get(3).data) << "the pixels are shared, not copied";
 }
 
 // A short rendered flight through the whole filter, decoding on the filter's thread and through the prefetcher.

@@ -10,6 +10,7 @@
 #include "tools/progress.h"
 #include "tools/run_pipeline.h"
 
+#include <algorithm>
 #include <boost/program_options.hpp>
 #include <cmath>
 #include <filesystem>
@@ -29,6 +30,7 @@ int cmd_run(const Args &args) {
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
   bool quiet = false, no_prefetch = false;
   RunRequest req;
+  size_t keep_mb = RunRequest::kKeepSearchImagesBytes >> 20;
   desc.add_options()("help,h", "this help")                                                               //
       ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")              //
       ("dataset,d", po::value(&dataset)->required(), "dataset folder (EuRoC or SCube) or ROS bag (.bag)") //
@@ -52,6 +54,9 @@ int cmd_run(const Args &args) {
           "max-images", po::value(&req.max_images), "stop after this many images") //
       ("no-prefetch", po::bool_switch(&no_prefetch),
        "decode images on the filter's thread (default: the next ones on a second thread, same results)") //
+      ("search-images-mb", po::value(&keep_mb),
+       "the filter reuses up to this many MB of the images the coarse t_d search decoded (0: decodes them again; "
+       "same results)") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bar, no option listing");
   ov_core::BagOptions bag_opt;
   add_bag_options(desc, bag_opt);
@@ -59,6 +64,7 @@ int cmd_run(const Args &args) {
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
   req.prefetch = !no_prefetch && std::thread::hardware_concurrency() >= 2;
+  req.keep_search_images_bytes = std::min<size_t>(keep_mb, size_t{1} << 30) << 20;
   if (format != "csv" && format != "tum")
     throw ov_core::UsageError("--format must be csv or tum");
   req.tum = format == "tum";
@@ -119,7 +125,8 @@ int cmd_run(const Args &args) {
             << (tm.frames ? tm.networks / tm.frames : 0.0) << " ms/frame\n";
   std::cout << "initialisation: " << r.init_message << "\n";
   if (r.td_search)
-    std::cout << "coarse t_d search: " << r.td_search->summary() << "\n";
+    std::cout << "coarse t_d search: " << r.td_search->summary() << "; the filter reused " << r.images_predecoded
+              << " of its decoded images\n";
   const auto &acc = r.acceptance;
   if (acc.examined() > 0)
     std::cout << "update acceptance " << 100.0 * acc.acceptance() << " % of " << acc.examined() << " features ("

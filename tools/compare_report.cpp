@@ -97,7 +97,9 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
   ov_msckf_ton::VioOptions searched = req.base, unsearched = req.base;
   searched.td.mode = TdMode::Sr;
   unsearched.td.search = false;
-  if (const auto s = run_td_search(data, searched)) {
+  // The images the search decoded are shared read-only by every mode's filter instead of being decoded again.
+  auto decoded = std::make_shared<ov_core::DecodedImages>();
+  if (const auto s = run_td_search(data, searched, decoded.get())) {
     info.notes.push_back("coarse t_d search (shared by the modes that estimate t_d): " + s->summary());
     if (req.log)
       *req.log << "compare: " << info.notes.back() << "\n" << std::flush;
@@ -110,6 +112,8 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
     ov_msckf_ton::apply_mode_spec(spec, rr.opt);
     rr.output = (fs::path(req.out_dir) / ("traj_" + name + ".csv")).string();
     rr.max_images = req.max_images;
+    if (!decoded->empty())
+      rr.decoded = decoded;
     rr.progress = false; // parallel bars would overwrite each other; the log has one line per finished mode
     // A diverged filter (EstimatorFailure) or a run without a single pose (DataError) throws: run_parallel makes
     // that the mode's status, "failed: <why>".

@@ -17,7 +17,8 @@ void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov
     opt.td.init_s = data.td_prior_s;
 }
 
-std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt) {
+std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt,
+                                                          ov_core::DecodedImages *keep, size_t keep_bytes) {
   using ov_msckf_ton::TdMode;
   const bool due = opt.td.search && opt.td.mode != TdMode::Off && opt.td.mode != TdMode::Oracle;
   opt.td.search = false;
@@ -26,7 +27,18 @@ std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset
   ov_msckf_ton::TdSearchOptions so;
   so.range_s = opt.td.search_range_s;
   so.track = opt.track;
-  const auto r = ov_msckf_ton::search_td(data.images, data.imu, data.cam, opt.td.init_s, so);
+  size_t kept_bytes = 0;
+  const auto load = [&](const ov_core::ImageEntry &e) {
+    cv::Mat img = ov_core::load_gray_image(e, data.cam.width, data.cam.height);
+    const size_t bytes = img.total() * img.elemSize();
+    const ov_core::ImageEntry *begin = data.images.data();
+    if (keep && &e >= begin && &e < begin + data.images.size() && kept_bytes + bytes <= keep_bytes) {
+      (*keep)[static_cast<size_t>(&e - begin)] = img;
+      kept_bytes += bytes;
+    }
+    return img;
+  };
+  const auto r = ov_msckf_ton::search_td(data.images, data.imu, data.cam, opt.td.init_s, so, load);
   if (r.found) {
     opt.td.init_s = r.td_s;
     // The filter's prior must cover the search's own error.
@@ -38,7 +50,16 @@ std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset
 RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   ov_msckf_ton::VioOptions opt = req.opt;
   RunResult res;
-  res.td_search = run_td_search(data, opt);
+  std::shared_ptr<const ov_core::DecodedImages> decoded = req.decoded;
+  if (decoded)
+    res.td_search = run_td_search(data, opt);
+  else {
+    auto kept = std::make_shared<ov_core::DecodedImages>();
+    res.td_search = run_td_search(data, opt, kept.get(), req.keep_search_images_bytes);
+    if (!kept->empty())
+      decoded = std::move(kept);
+  }
+  res.images_predecoded = decoded ? decoded->size() : 0;
   if (res.td_search && req.progress) // before the run, so that it is seen even when the run fails
     std::fprintf(stderr, "coarse t_d search: %s\n", res.td_search->summary().c_str());
   ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
@@ -77,11 +98,16 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
 
   std::unique_ptr<ov_core::ImagePrefetcher> prefetcher;
   if (req.prefetch && !data.images.empty() && !data.images.front().features)
-    prefetcher = std::make_unique<ov_core::ImagePrefetcher>(data.images);
+    prefetcher = std::make_unique<ov_core::ImagePrefetcher>(data.images, 2, decoded);
   // An image of the wrong size is reported with its file here, not as a tracker error without one.
-  vio.set_image_source([&prefetcher, &data](const ov_core::ImageEntry &e) {
-    if (!prefetcher)
+  vio.set_image_source([&prefetcher, &data, &decoded](const ov_core::ImageEntry &e) {
+    if (!prefetcher) {
+      const ov_core::ImageEntry *begin = data.images.data();
+      if (decoded && &e >= begin && &e < begin + data.images.size())
+        if (const auto it = decoded->find(static_cast<size_t>(&e - begin)); it != decoded->end())
+          return it->second; // checked when the search decoded it
       return ov_core::load_gray_image(e, data.cam.width, data.cam.height);
+    }
     cv::Mat img = prefetcher->get(e);
     ov_core::check_gray_image(img, e, data.cam.width, data.cam.height);
     return img;

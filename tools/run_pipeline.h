@@ -1,12 +1,14 @@
 #pragma once
 // One replay of a dataset through the estimator, shared by `run`, `compare` and `benchmark`.
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/image_prefetcher.h"
 #include "ov_core/io/replay.h"
 #include "ov_eval/nees.h"
 #include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_msckf_ton/init/td_search.h"
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,6 +29,12 @@ struct RunRequest {
   bool prefetch = false;
   /// Called after each image with (images done, images in the dataset); the benchmark samples memory here.
   std::function<void(size_t, size_t)> on_progress;
+  /// The coarse t_d search keeps up to this many bytes of the images it decodes (8 s at 20 Hz of 752x480 is 58 MB) and
+  /// the filter takes them instead of decoding them again; 0: decoded twice.
+  size_t keep_search_images_bytes = kKeepSearchImagesBytes;
+  /// Images decoded before this run (`compare`: by the search its modes share); the run's own search keeps none then.
+  std::shared_ptr<const ov_core::DecodedImages> decoded;
+  static constexpr size_t kKeepSearchImagesBytes = size_t{128} << 20;
 };
 
 struct RunResult {
@@ -38,6 +46,7 @@ struct RunResult {
   std::string init_message;
   ov_msckf_ton::UpdateTally acceptance;                  ///< features used / gated / failed triangulation over the run
   std::optional<ov_msckf_ton::TdSearchResult> td_search; ///< when the coarse search ran
+  size_t images_predecoded = 0; ///< images the filter took decoded (by the search) instead of decoding them
   double wall_s = 0.0;
   double data_span_s = 0.0; ///< camera time covered by the images replayed
   bool interrupted = false;
@@ -50,8 +59,12 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req);
 
 /// The coarse t_d search (ov_msckf_ton/init/td_search.h) when opt.td_search is set and the mode estimates t_d: on
 /// success opt.td_init_s becomes what it found. Either way opt.td_search is cleared, so that the runs of a comparison
-/// share one search. Returns nothing when no search was due.
-std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt);
+/// share one search. Returns nothing when no search was due. With `keep`, the images the search decodes are put there
+/// (by index into data.images) while their bytes stay within keep_bytes, for the filter to take instead of decoding
+/// them again: the same pixels, so the same trajectory.
+std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt,
+                                                          ov_core::DecodedImages *keep = nullptr,
+                                                          size_t keep_bytes = RunRequest::kKeepSearchImagesBytes);
 
 /// Applies the dataset's own facts to options the user did not set: Kalibr timeshift as t_d prior.
 void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov_msckf_ton::VioOptions &opt);

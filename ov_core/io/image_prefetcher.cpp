@@ -4,26 +4,34 @@
 namespace ov_core {
 namespace {
 
-cv::Mat decode(const ImageEntry &e) {
+cv::Mat decode_entry(const ImageEntry &e) {
   return e.features ? cv::Mat() : load_image(e);
+}
+
+} // namespace
+
+ImagePrefetcher::ImagePrefetcher(const std::vector<ImageEntry> &images, size_t ahead,
+                                 std::shared_ptr<const DecodedImages> given)
+    : images_(images), ahead_(ahead < 1 ? 1 : ahead), given_(std::move(given)), thread_([this] { work(); }) {}
+
+cv::Mat ImagePrefetcher::decode(size_t index) const {
+  if (given_)
+    if (const auto it = given_->find(index); it != given_->end())
+      return it->second;
+  return decode_entry(images_[index]);
 }
 
 /// Decodes on the worker thread; what the decoder throws (a corrupt bag message) is kept for the consumer, who rethrows
 /// it when it asks for that image: an exception must not escape the thread.
-ImagePrefetcher::Decoded decode_caught(const ImageEntry &e) {
-  ImagePrefetcher::Decoded d;
+ImagePrefetcher::Decoded ImagePrefetcher::decode_caught(size_t index) const {
+  Decoded d;
   try {
-    d.image = decode(e);
+    d.image = decode(index);
   } catch (...) {
     d.error = std::current_exception();
   }
   return d;
 }
-
-} // namespace
-
-ImagePrefetcher::ImagePrefetcher(const std::vector<ImageEntry> &images, size_t ahead)
-    : images_(images), ahead_(ahead < 1 ? 1 : ahead), thread_([this] { work(); }) {}
 
 ImagePrefetcher::~ImagePrefetcher() {
   {
@@ -44,7 +52,7 @@ void ImagePrefetcher::work() {
     ++produced_;
     in_flight_ = index;
     lock.unlock();
-    Decoded m = decode_caught(images_[index]); // the work that overlaps the consumer's
+    Decoded m = decode_caught(index); // the work that overlaps the consumer's
     lock.lock();
     in_flight_ = std::numeric_limits<size_t>::max();
     if (index >= wanted_)
@@ -55,7 +63,7 @@ void ImagePrefetcher::work() {
 
 cv::Mat ImagePrefetcher::get(const ImageEntry &e) {
   const ImageEntry *begin = images_.data(), *end = begin + images_.size();
-  return &e >= begin && &e < end ? get(static_cast<size_t>(&e - begin)) : decode(e);
+  return &e >= begin && &e < end ? get(static_cast<size_t>(&e - begin)) : decode_entry(e);
 }
 
 cv::Mat ImagePrefetcher::get(size_t index) {
@@ -81,7 +89,7 @@ cv::Mat ImagePrefetcher::get(size_t index) {
     }
   }
   lock.unlock(); // asked again for an index already taken or dropped: decode here
-  return decode(images_[index]);
+  return decode(index);
 }
 
 } // namespace ov_core

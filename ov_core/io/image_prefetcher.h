@@ -8,6 +8,7 @@
 #include <exception>
 #include <limits>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <thread>
@@ -15,11 +16,17 @@
 
 namespace ov_core {
 
+/// Images decoded before the replay (the coarse t_d search's window), by index into the dataset's list. Shared
+/// read-only: a cv::Mat handed out shares the pixels, which no consumer writes.
+using DecodedImages = std::map<size_t, cv::Mat>;
+
 class ImagePrefetcher {
 public:
   /// Starts decoding images[0], images[1], ... (grayscale) with at most `ahead` decoded images waiting. Feature-level
-  /// entries (features set) are not decoded. `images` must outlive the prefetcher.
-  explicit ImagePrefetcher(const std::vector<ImageEntry> &images, size_t ahead = 2);
+  /// entries (features set) are not decoded, nor those in `given`, which are handed out as they are. `images` must
+  /// outlive the prefetcher.
+  explicit ImagePrefetcher(const std::vector<ImageEntry> &images, size_t ahead = 2,
+                           std::shared_ptr<const DecodedImages> given = nullptr);
   ~ImagePrefetcher();
   ImagePrefetcher(const ImagePrefetcher &) = delete;
   ImagePrefetcher &operator=(const ImagePrefetcher &) = delete;
@@ -40,9 +47,13 @@ public:
 
 private:
   void work();
+  /// images[index] from `given_`, else decoded.
+  cv::Mat decode(size_t index) const;
+  Decoded decode_caught(size_t index) const;
 
   const std::vector<ImageEntry> &images_;
   const size_t ahead_;
+  const std::shared_ptr<const DecodedImages> given_;
   std::mutex mutex_;
   std::condition_variable cv_;
   std::map<size_t, Decoded> ready_;                       ///< decoded, not yet taken (indices ≥ wanted_)
