@@ -36,12 +36,13 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
 
   // 3b. The filter's accelerometer bias against the specific force: an accelerometer scale no image shows.
   diag::Design db;
-  const bool have_bias = diag::build_accel_design(data, opt, rep, db);
+  std::string bias_why;
+  const bool have_bias = diag::build_accel_design(data, opt, rep, db, bias_why);
 
   // 4. Stepwise selection in each family, then the ranking.
   std::vector<size_t> selected;
   const auto results = diag::test_candidates(d, rep.time_from_rates ? &dr : nullptr, rate_why,
-                                             have_bias ? &db : nullptr, opt, rep, selected);
+                                             have_bias ? &db : nullptr, bias_why, opt, rep, selected);
   rep.candidates = diag::rank_candidates(results, selected);
 
   // 5. What the residual keeps beyond its noise that no selected candidate explains, and where it shows.

@@ -44,13 +44,14 @@ struct Plant {
   Eigen::Vector3d ext_rot = Eigen::Vector3d::Zero();   ///< R_BC true = Exp(ext_rot)·R_BC [rad]
   Eigen::Vector3d ext_trans = Eigen::Vector3d::Zero(); ///< p_BC true = p_BC + ext_trans [m]
   double wander_s = 0.0, wander_period_s = 10.0;       ///< offset td0 + A·sin(2π·t/P)
+  int seed = 7;
 };
 
 ov_sim::SimOptions sim_options(const std::string &dir, const Plant &p) {
   ov_sim::SimOptions o;
   o.out_dir = dir;
   o.duration_s = p.duration_s;
-  o.seed = 7;
+  o.seed = p.seed;
   o.features_only = true;
   o.td.kind = p.td_rate != 0.0    ? ov_sim::TdModelKind::Drift
               : p.wander_s != 0.0 ? ov_sim::TdModelKind::Wander
@@ -164,7 +165,8 @@ using CalibEdit = std::function<void(std::vector<CalibrationLogRow> &)>;
 /// The filter on the simulation (mode, t_d fixed or started at td_init_s, ground-truth initialisation), its
 /// residual log diagnosed with its calibration log (edited by `edit`, when one is given). Prints the ranking and the
 /// wall time.
-DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_init_s, const CalibEdit &edit = {}) {
+DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_init_s, const CalibEdit &edit = {},
+                           const ov_msckf_ton::CalibrationOptions &calibration = {}) {
   const auto t0 = std::chrono::steady_clock::now();
   ovtest::TempDir dir;
   const ov_sim::SimOptions o = sim_options(dir / "sim", p);
@@ -175,6 +177,7 @@ DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_in
   opt.td.init_s = td_init_s;
   opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
   opt.update.sigma_px = o.features.pixel_noise;
+  opt.calibration = calibration;
   ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);
   const std::string log_file = dir / "res.csv";
@@ -348,12 +351,17 @@ TEST(DiagnoseFilterLog, ExtrinsicRotationInTheCalibrationLogIsNotNamed) {
   }));
 }
 
-TEST(DiagnoseFilterLog, GyroScaleInTheCalibrationLogIsNotNamed) {
+// The gyro case's real "after": the filter estimates the IMU's intrinsics (D_w, D_a) and holds the planted scale in
+// its calibration log. (Editing the unmodelled run's calibration log instead, as above, left that run's accelerometer
+// bias in place, which the gyro error had moved: the accelerometer candidate read 1-2.8 % at 4.6-11.7σ on seeds 1-4
+// and 7, and the CI machine's libm tipped seed 7 over the bar. With D_a estimated that candidate is not tested,
+// accel_design.h.) Seed 7: largest gyro_scale_axes 2.6σ, 1.4 %; seeds 1-4 flag nothing but td_piecewise on seed 3
+// (6.0σ, 2.1 %: the clean-flight false flags of docs/diagnose.md).
+TEST(DiagnoseFilterLog, GyroScaleEstimatedByTheFilterIsNotNamed) {
   Plant p;
   p.gyro_M(2, 2) = 0.03;
   p.agility = 1.0;
-  expect_nothing_flagged(filter_case(p, "off", p.td0_s, [](std::vector<CalibrationLogRow> &rows) {
-    for (auto &r : rows)
-      r.D_w[8] = 1.0 / 1.03; // ω = D_w·ω_m undoes the reading (1 + 0.03)·ω_z
-  }));
+  ov_msckf_ton::CalibrationOptions calibration;
+  calibration.imu_intrinsics = true;
+  expect_nothing_flagged(filter_case(p, "off", p.td0_s, {}, calibration));
 }

@@ -16,9 +16,19 @@ constexpr double kTauS = 3.0;
 constexpr double kBinS = 5.0;
 } // namespace
 
-bool build_accel_design(const UsedData &data, const DiagnoseOptions &opt, const DiagnoseReport &rep, Design &db) {
-  if (opt.calibration.empty() || opt.imu.empty())
+bool build_accel_design(const UsedData &data, const DiagnoseOptions &opt, const DiagnoseReport &rep, Design &db,
+                        std::string &why) {
+  if (opt.calibration.empty() || opt.imu.empty()) {
+    why = "needs the calibration log beside the residual log and --dataset";
     return false;
+  }
+  for (const CalibrationLogRow &c : opt.calibration)
+    for (int i = 0; i < 9; ++i)
+      if (std::abs(c.D_a[i] - opt.calibration.front().D_a[i]) > 1e-9) {
+        why = "the filter estimated the accelerometer's scale itself (D_a varies in the calibration log): read its "
+              "D_a and sigma instead";
+        return false;
+      }
   const std::vector<ov_core::ImuData> imu = imu_through_calibration(opt.imu, opt.calibration);
   struct Sample {
     double t;
@@ -38,8 +48,10 @@ bool build_accel_design(const UsedData &data, const DiagnoseOptions &opt, const 
     }
     s.push_back({1e-9 * double(c.t_cam_ns - data.t_first), Eigen::Vector3d(c.b_a[0], c.b_a[1], c.b_a[2]), f});
   }
-  if (s.size() < 50)
+  if (s.size() < 50) {
+    why = "fewer than 50 calibration-log rows in the used span";
     return false;
+  }
   const int nb = std::max(1, static_cast<int>(std::lround(rep.duration_s / kBinS)));
   const auto bin = [&](double t) {
     return std::min(nb - 1, static_cast<int>(nb * t / std::max(1e-9, rep.duration_s)));

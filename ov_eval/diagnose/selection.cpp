@@ -11,7 +11,7 @@ namespace {
 
 /// Runs the stepwise selection on one family (indices into the table) and writes its verdicts into res.
 std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &family, bool on_rates, bool on_bias,
-                                const DiagnoseOptions &opt, const DiagnoseReport &rep,
+                                const std::string &bias_why, const DiagnoseOptions &opt, const DiagnoseReport &rep,
                                 std::vector<CandidateResult> &res) {
   const auto &table = candidate_table();
   std::vector<StepCandidate> cands;
@@ -22,9 +22,7 @@ std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &fami
       sc.skip = "skipped: fewer than " + std::to_string(int(100 * opt.min_velocity_share)) +
                 "% of rows carry an image velocity";
     if (def.needs == Needs::AccelBias && !on_bias)
-      sc.skip =
-          "skipped: tested on the filter's accelerometer bias only (needs the calibration log beside the residual "
-          "log and --dataset)";
+      sc.skip = "skipped: tested on the filter's accelerometer bias only (" + bias_why + ")";
     if (!on_rates && def.needs == Needs::Rates)
       sc.skip = "skipped: tested on rates only (needs --dataset: the raw gyro and the camera)";
     if (!on_rates && def.needs == Needs::BodyRates && !d.have_rate)
@@ -66,7 +64,8 @@ std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &fami
 } // namespace
 
 std::vector<CandidateResult> test_candidates(const Design &d, const Design *rates, const std::string &rate_why,
-                                             const Design *bias, const DiagnoseOptions &opt, const DiagnoseReport &rep,
+                                             const Design *bias, const std::string &bias_why,
+                                             const DiagnoseOptions &opt, const DiagnoseReport &rep,
                                              std::vector<size_t> &selected) {
   const auto &table = candidate_table();
   std::vector<CandidateResult> res(table.size());
@@ -80,13 +79,13 @@ std::vector<CandidateResult> test_candidates(const Design &d, const Design *rate
     if (table[c].rate_capable() && !rates)
       res[c].note = "on the residual (" + rate_why + "): " + table[c].fallback_note;
   }
-  selected = test_family(d, residual_family, false, false, opt, rep, res);
+  selected = test_family(d, residual_family, false, false, bias_why, opt, rep, res);
   if (rates) {
-    const auto sel_rate = test_family(*rates, rate_family, true, false, opt, rep, res);
+    const auto sel_rate = test_family(*rates, rate_family, true, false, bias_why, opt, rep, res);
     selected.insert(selected.end(), sel_rate.begin(), sel_rate.end());
   }
   if (bias) {
-    const auto sel_bias = test_family(*bias, bias_family, false, true, opt, rep, res);
+    const auto sel_bias = test_family(*bias, bias_family, false, true, bias_why, opt, rep, res);
     selected.insert(selected.end(), sel_bias.begin(), sel_bias.end());
   }
   return res;

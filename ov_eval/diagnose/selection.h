@@ -15,7 +15,8 @@ namespace ov_eval::diag {
 /// filter's bias (accel_design.h; skipped otherwise). Returns one result per candidate of candidate_table(), in its
 /// order; `selected` gets the selected ones (residual family first, then rates, then bias, each in selection order).
 std::vector<CandidateResult> test_candidates(const Design &d, const Design *rates, const std::string &rate_why,
-                                             const Design *bias, const DiagnoseOptions &opt, const DiagnoseReport &rep,
+                                             const Design *bias, const std::string &bias_why,
+                                             const DiagnoseOptions &opt, const DiagnoseReport &rep,
                                              std::vector<size_t> &selected);
 
 /// The selected candidates by the share they explain of their own data, then the rest (tested before untested, then
