@@ -22,6 +22,8 @@
 #   --exchange           also swap front ends: ovton's estimator on OpenVINS's tracks and OpenVINS's (matched)
 #                        estimator on ovton's tracks (`ovton track`; builds scripts/peer/ov_track_exchange.cpp)
 #   --md FILE            the Markdown table (default OUT/peer.md)
+#   --resume             keep OUT/results.csv and skip the runs it already holds (an interrupted run goes on where it
+#                        stopped; the table covers old and new rows)
 #   --bin FILE           the ovton binary (default build/ovton)
 # Every process runs under `nice -n 10`, one at a time. OpenVINS runs with one OpenCV thread (threads=1); ovton with
 # `--no-prefetch` and OPENCV_FOR_THREADS_NUM=1, so that the CPU times compare one core against one core.
@@ -38,6 +40,7 @@ CFG_SIM=$REPO/config/sim/estimator_config.yaml
 CFG_REAL=$REPO/config/euroc_mav/estimator_config.yaml
 REPEATS=1
 EXCHANGE=0
+RESUME=0
 MD=
 BIN=$REPO/build/ovton
 FOLDERS=()
@@ -52,6 +55,7 @@ while [ $# -gt 0 ]; do
   --ovton-config-real) CFG_REAL=$(realpath "$2"); shift 2 ;;
   --repeats) REPEATS=$2; shift 2 ;;
   --exchange) EXCHANGE=1; shift ;;
+  --resume) RESUME=1; shift ;;
   --md) MD=$2; shift 2 ;;
   --bin) BIN=$(realpath "$2"); shift 2 ;;
   -h | --help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
@@ -98,7 +102,13 @@ ov_args() {
 }
 
 RES=$OUT/results.csv
-echo "folder,system,variant,repeat,ape_m,are_deg,td_err_late_ms,final_td_ms,est_ms_frame,cpu_s,feat_per_frame" > "$RES"
+mkdir -p "$OUT"
+if [ "$RESUME" = 0 ] || [ ! -s "$RES" ]; then
+  echo "folder,system,variant,repeat,ape_m,are_deg,td_err_late_ms,final_td_ms,est_ms_frame,cpu_s,feat_per_frame" > "$RES"
+fi
+have_row() { # folder system variant repeat: already scored (--resume)
+  [ "$RESUME" = 1 ] && grep -qF "$1,$2,$3,$4," "$RES"
+}
 
 # score EST (ovton CSV columns) against FOLDER; appends one row to results.csv
 score() { # folder system variant repeat est ms_frame cpu_s feat_per_frame
@@ -132,6 +142,7 @@ imu_view() {
 
 run_ov() { # folder variant repeat
   local f=$1 var=$2 rep=$3 name pre src=$1
+  if have_row "$f" OpenVINS "$var" "$rep"; then return 0; fi
   name=$(basename "$f")
   pre=$OUT/$name/ov_${var/@/_}_r$rep
   mkdir -p "$OUT/$name"
@@ -148,6 +159,7 @@ run_ov() { # folder variant repeat
 
 run_ovton() { # folder mode repeat
   local f=$1 mode=$2 rep=$3 name pre cfg init=()
+  if have_row "$f" ovton "$mode" "$rep"; then return 0; fi
   name=$(basename "$f")
   pre=$OUT/$name/ovton_${mode//+/_}_r$rep
   mkdir -p "$OUT/$name"
