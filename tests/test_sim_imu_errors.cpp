@@ -31,6 +31,17 @@ ImuSynthOptions noise_free_imu() {
   return io;
 }
 
+/// The EuRoC datasheet's white noise (ADIS16448); bias walk off unless asked for.
+ImuSynthOptions datasheet_imu(uint64_t seed) {
+  ImuSynthOptions io;
+  io.calib.rate_hz = 200.0;
+  io.calib.gyro_noise_density = 1.6968e-4;
+  io.calib.accel_noise_density = 2.0e-3;
+  io.add_bias_walk = false;
+  io.seed = seed;
+  return io;
+}
+
 } // namespace
 
 TEST(SimImuMatch, FindsAPlantedGroundTruthShiftAndRotationAndTheGyroScale) {
@@ -62,12 +73,7 @@ TEST(SimImuMatch, FindsAPlantedGroundTruthShiftAndRotationAndTheGyroScale) {
 
 TEST(SimImuErrors, ASyntheticLogShowsTheSpectrumTheModelAsksFor) {
   const LissajousTrajectory traj(150.0);
-  ImuSynthOptions io;
-  io.calib.rate_hz = 200.0;
-  io.calib.gyro_noise_density = 1.6968e-4;
-  io.calib.accel_noise_density = 2.0e-3;
-  io.add_bias_walk = false;
-  io.seed = 11;
+  const ImuSynthOptions io = datasheet_imu(11);
   ImuSynthResult imu = synthesize_imu(traj, io);
   const ImuErrorModel m = euroc_v1_01_imu_errors();
   add_imu_errors(traj, m, io.calib.gyro_noise_density, io.calib.accel_noise_density, 12, imu.imu, imu.truth);
@@ -130,13 +136,10 @@ TEST(SimImuErrors, DeclaredNoiseIsTheAllanFitOfWhatTheLogCarries) {
   // 1. allan_variance() against the overlapping Allan variance of a synthetic log's noise (datasheet white noise,
   //    bias walk and the euroc model's coloured noise; scale and turn-on biases left out: they are not noise).
   const LissajousTrajectory traj(300.0);
-  ImuSynthOptions io;
-  io.calib.rate_hz = 200.0;
-  io.calib.gyro_noise_density = 1.6968e-4;
-  io.calib.accel_noise_density = 2.0e-3;
+  ImuSynthOptions io = datasheet_imu(21);
+  io.add_bias_walk = true;
   io.calib.gyro_random_walk = 1.9393e-5;
   io.calib.accel_random_walk = 3.0e-3;
-  io.seed = 21;
   ImuSynthResult noisy = synthesize_imu(traj, io);
   ImuErrorModel m = euroc_v1_01_imu_errors();
   m.gyro_scale_misalignment.setIdentity();
