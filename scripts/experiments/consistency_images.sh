@@ -8,6 +8,7 @@
 # blocks, 1 for t_d; the issue asks [2, 4.5] and near 1) and the APE; runs the health check stopped are counted.
 # Writes OUT/summary.md, OUT/runs.csv. Usage:
 #   scripts/experiments/consistency_images.sh OUT [SEEDS] [DURATION_S]        (~15 min on 2 cores for 4 seeds, 20 s)
+#   SEEDS: N (seeds 1..N) or A-B (seeds A..B: scenes held out from a tuning on 1..N)
 # Environment (ablations): CONFIG (default config/sim/estimator_config.yaml), SET ("section.key=value ..." config
 # overrides), MODES (default "sr ton drift"), SLAMS (default "0 25"), SEQS (default "V1_02_medium V1_03_difficult"),
 # START_S (default 20), SIM_ARGS (extra `ovton simulate` options, e.g. "--features-only" or "--imu-errors none";
@@ -19,6 +20,7 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 OUT=${1:?usage: consistency_images.sh OUT [SEEDS] [DURATION_S]}
 SEEDS=${2:-4}
+if [[ $SEEDS == *-* ]]; then SEED_LIST=$(seq "${SEEDS%-*}" "${SEEDS#*-}"); else SEED_LIST=$(seq 1 "$SEEDS"); fi
 DUR=${3:-20}
 CONFIG=${CONFIG:-config/sim/estimator_config.yaml}
 SET=${SET:-}
@@ -65,7 +67,7 @@ sim_one() { # SEQ SEED -> folder
 }
 export -f sim_one
 export OUT DATA DATA_TAG IMU_TAG BIN GTDIR START_S DUR SIM_ARGS IMU_ARGS
-for Q in $SEQS; do for S in $(seq 1 "$SEEDS"); do echo "$Q $S"; done; done |
+for Q in $SEQS; do for S in $SEED_LIST; do echo "$Q $S"; done; done |
   xargs -P "$JOBS" -L 1 bash -c 'sim_one "$0" "$1"'
 
 # 2. Configs: CONFIG with slam.max_features N and the SET overrides.
@@ -98,7 +100,7 @@ run_one() { # SEQ SEED MODE SLAM
 }
 export -f run_one
 echo "seq,seed,mode,slam,exit,nees_ori,nees_pos,nees_td,ape_m" >"$OUT/runs.csv"
-for Q in $SEQS; do for S in $(seq 1 "$SEEDS"); do for M in $MODES; do for L in $SLAMS; do
+for Q in $SEQS; do for S in $SEED_LIST; do for M in $MODES; do for L in $SLAMS; do
   echo "$Q $S $M $L"
 done; done; done; done | xargs -P "$JOBS" -L 1 bash -c 'run_one "$0" "$1" "$2" "$3"' | sort >>"$OUT/runs.csv"
 
@@ -109,7 +111,7 @@ done; done; done; done | xargs -P "$JOBS" -L 1 bash -c 'run_one "$0" "$1" "$2" "
   echo "Made by \`CONFIG=$CONFIG SET=\"$SET\" SIM_ARGS=\"$SIM_ARGS\" IMU_ARGS=\"$IMU_ARGS\" MODES=\"$MODES\" SLAMS=\"$SLAMS\""
   echo "scripts/experiments/consistency_images.sh $OUT $SEEDS $DUR\`"
   echo "($(date -u +%F), commit $(git rev-parse --short HEAD)). Folders: \`ovton simulate --gt SEQ.txt --start-s $START_S"
-  echo "--duration-s $DUR --seed 1..$SEEDS $SIM_ARGS\` (IMU: $IMU_ARGS) of $SEQS; runs \`ovton run --init groundtruth --td-mode MODE\`."
+  echo "--duration-s $DUR --seed $(echo $SEED_LIST | awk '{print $1".."$NF}') $SIM_ARGS\` (IMU: $IMU_ARGS) of $SEQS; runs \`ovton run --init groundtruth --td-mode MODE\`."
   echo "NEES: per run the average over its frames, then mean ± sd (min–max) over the runs; 3 ideal (ori, pos), 1 (t_d)."
   echo
   echo "| mode | SLAM features | runs (stopped) | NEES orientation | NEES position | NEES t_d | APE [mm] |"
