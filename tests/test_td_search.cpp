@@ -62,6 +62,7 @@ TEST_F(TdSearchSim, NoRotationChangeKeepsThePriorAndSaysWhy) {
   EXPECT_DOUBLE_EQ(r.prior_s, 0.05);
   EXPECT_NE(r.why.find("too little rotation"), std::string::npos) << r.summary();
   EXPECT_NE(r.summary().find("not used"), std::string::npos);
+  EXPECT_TRUE(r.weak_excitation);
 }
 
 // Real images in flight (90 frames of V1_01) with their stamps moved by ±100 ms, as `ovton perturb --td-model constant`

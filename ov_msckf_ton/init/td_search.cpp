@@ -257,6 +257,7 @@ TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const s
   res.window_begin_s = t_img[win.b];
   res.window_end_s = t_img[win.e - 1];
   if (win.rms_alpha < opt.min_rms_alpha) {
+    res.weak_excitation = true;
     char why[160];
     std::snprintf(why, sizeof why, "too little rotation change (RMS angular acceleration %.2f rad/s^2 < %.2f)",
                   win.rms_alpha, opt.min_rms_alpha);

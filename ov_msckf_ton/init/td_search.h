@@ -41,6 +41,9 @@ struct TdSearchResult {
   int pairs = 0;                               ///< image pairs in the fit
   double window_begin_s = 0, window_end_s = 0; ///< seconds after the first image
   double rms_alpha = 0.0;                      ///< rad/s^2 over the window
+  /// The window's rotation rate barely changes (rms_alpha below TdSearchOptions::min_rms_alpha): t_d is weakly
+  /// observable there, for the filter as for the search (`ovton run` says so beside the final t_d).
+  bool weak_excitation = false;
   double seconds = 0.0;                        ///< wall time of the search
   /// Robust cost per candidate of the grid (prior − range ... prior + range in steps), for plots and diagnosis.
   std::vector<double> cost_profile;
