@@ -44,7 +44,7 @@ struct TdSearchResult {
   /// The window's rotation rate barely changes (rms_alpha below TdSearchOptions::min_rms_alpha): t_d is weakly
   /// observable there, for the filter as for the search (`ovton run` says so beside the final t_d).
   bool weak_excitation = false;
-  double seconds = 0.0;                        ///< wall time of the search
+  double seconds = 0.0; ///< wall time of the search
   /// Robust cost per candidate of the grid (prior − range ... prior + range in steps), for plots and diagnosis.
   std::vector<double> cost_profile;
   double residual_sigma = 0.0; ///< rad/s per axis at the best candidate
