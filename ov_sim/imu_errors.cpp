@@ -9,6 +9,32 @@
 
 namespace ov_sim {
 
+void drop_imu_error_parts(ImuErrorModel &m, const std::string &parts) {
+  std::string rest = parts;
+  while (!rest.empty()) {
+    const size_t comma = rest.find(',');
+    const std::string p = rest.substr(0, comma);
+    rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
+    const auto drop_bands = [&](double lo, double hi) { // bands lying within [lo, hi) Hz
+      m.flight_spectrum.erase(std::remove_if(m.flight_spectrum.begin(), m.flight_spectrum.end(),
+                                             [&](const NoiseBand &b) { return b.low_hz >= lo && b.high_hz <= hi; }),
+                              m.flight_spectrum.end());
+    };
+    if (p == "scale")
+      m.gyro_scale_misalignment.setIdentity();
+    else if (p == "turn-on")
+      m.gyro_bias0.setZero(), m.accel_bias0.setZero();
+    else if (p == "slow")
+      drop_bands(0.0, 2.0);
+    else if (p == "mid")
+      drop_bands(2.0, 10.0);
+    else if (p == "vibration")
+      drop_bands(10.0, 1e9);
+    else
+      throw ov_core::UsageError("unknown IMU error part '" + p + "' (scale, turn-on, slow, mid, vibration)");
+  }
+}
+
 void check(const ImuErrorModel &m) {
   const auto need = [](bool ok, const char *what) {
     if (!ok)

@@ -8,6 +8,7 @@
 #include "ov_core/types/sensor_data.h"
 #include "ov_sim/trajectory.h"
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 namespace ov_sim {
@@ -33,6 +34,11 @@ struct ImuErrorModel {
 
 /// Throws UsageError naming what is out of range.
 void check(const ImuErrorModel &m);
+
+/// Removes parts of the model, for ablations (`ovton simulate --imu-errors-drop`): a comma-separated list of
+/// scale (scale and misalignment -> identity), turn-on (the turn-on biases), slow (bands below 2 Hz: bias wander),
+/// mid (2-10 Hz), vibration (bands from 10 Hz). Throws UsageError for an unknown part.
+void drop_imu_error_parts(ImuErrorModel &m, const std::string &parts);
 
 /// Adds the model's errors to a synthetic log (its stamps, in order) and the turn-on biases to the truth's biases.
 /// `white_gyro`/`white_accel` are the densities of the white noise already in the log. Deterministic in `seed`.

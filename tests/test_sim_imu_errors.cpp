@@ -206,3 +206,19 @@ TEST(SimImuErrors, DeclaredNoiseIsTheAllanFitOfWhatTheLogCarries) {
     EXPECT_NEAR(std::exp(log_sum / count), 1.0, 0.15) << (gyro ? "gyro" : "accel");
   }
 }
+
+TEST(SimImuErrors, DroppedPartsLeaveTheRestOfTheModel) {
+  ImuErrorModel m = euroc_v1_01_imu_errors();
+  const size_t bands = m.flight_spectrum.size();
+  drop_imu_error_parts(m, "slow,scale");
+  EXPECT_TRUE(m.gyro_scale_misalignment.isIdentity());
+  EXPECT_GT(m.gyro_bias0.norm(), 0.0); // turn-on biases kept
+  ASSERT_FALSE(m.flight_spectrum.empty());
+  EXPECT_LT(m.flight_spectrum.size(), bands);
+  for (const NoiseBand &b : m.flight_spectrum)
+    EXPECT_GE(b.low_hz, 2.0);
+  drop_imu_error_parts(m, "turn-on,mid,vibration");
+  EXPECT_TRUE(m.gyro_bias0.isZero() && m.accel_bias0.isZero());
+  EXPECT_TRUE(m.flight_spectrum.empty());
+  EXPECT_THROW(drop_imu_error_parts(m, "scale,wobble"), ov_core::UsageError);
+}

@@ -155,6 +155,9 @@ int cmd_simulate(const Args &args) {
       ("no-imu-noise", "noise-free IMU (no white noise, no bias walk)")                                       //
       ("imu-errors", po::value<std::string>(),
        "override the preset's IMU errors: euroc (the model measured on real V1_01) | none (datasheet noise only)") //
+      ("imu-errors-drop", po::value<std::string>(),
+       "leave parts of the IMU error model out (ablations), comma separated: scale, turn-on, slow (< 2 Hz), mid, "
+       "vibration (>= 10 Hz)") //
       ("imu-declare", po::value<std::string>(),
        "what imu0/sensor.yaml says of the noise: fitted (default: the realistic IMU's Allan fit) | datasheet") //
       ("knot-dt-s", po::value(&o.knot_dt_s)->default_value(0.1), "B-spline knot spacing of the gt fit [s]")    //
@@ -251,6 +254,10 @@ int cmd_simulate(const Args &args) {
       if (v != "euroc" && v != "none")
         throw ov_core::UsageError("--imu-errors must be euroc or none");
       o.imu_errors = v == "euroc" ? ov_sim::euroc_v1_01_imu_errors() : ov_sim::ImuErrorModel{};
+      modified = true;
+    }
+    if (vm.count("imu-errors-drop")) {
+      ov_sim::drop_imu_error_parts(o.imu_errors, vm["imu-errors-drop"].as<std::string>());
       modified = true;
     }
     if (vm.count("imu-declare")) {
