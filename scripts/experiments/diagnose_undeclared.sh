@@ -7,7 +7,7 @@
 # Data: feature-level simulations (`ovton simulate --features-only`, 1 px noise, EuRoC ADIS16448 IMU noise) along the
 # built-in flight with agility 1 (angular accelerations like EuRoC's medium sequences: a readout and the gyro's
 # errors show in rates through the rotation), 30 s, seed SEED, constant offset 10 ms unless the case plants another.
-# Usage: scripts/experiments/diagnose_undeclared.sh [OUT] [CASE ...]   cases: clean rolling_shutter extrinsic_rotation
+# Usage: scripts/experiments/diagnose_undeclared.sh [OUT] [CASE ...]   cases: clean rolling_shutter focal extrinsic_rotation
 #        gyro_scale_z accel_scale wander_td (default: all; ~1 min each here). OVTON_BIN overrides the binary, SEED
 #        the seed (default 1). Writes OUT/undeclared.md.
 set -euo pipefail
@@ -15,7 +15,7 @@ cd "$(dirname "$0")/../.."
 OUT=${1:-results/diagnose_undeclared}
 shift || true
 CASES=("$@")
-[ ${#CASES[@]} -eq 0 ] && CASES=(clean rolling_shutter extrinsic_rotation gyro_scale_z accel_scale wander_td)
+[ ${#CASES[@]} -eq 0 ] && CASES=(clean rolling_shutter focal extrinsic_rotation gyro_scale_z accel_scale wander_td)
 BIN=${OVTON_BIN:-build/ovton}
 SEED=${SEED:-1}
 source scripts/experiments/run_summary.sh
@@ -27,6 +27,7 @@ plant() {
   case $1 in
   clean) echo "" ;;
   rolling_shutter) echo "--readout-ms 20" ;;
+  focal) echo "--focal-error-pct 1" ;;
   extrinsic_rotation) echo "--extrinsic-rot-deg 0.3,-0.4,0.5" ;;
   gyro_scale_z) echo "--gyro-scale-axes-pct 0,0,3" ;;
   accel_scale) echo "--accel-scale-axes-pct 3,3,3" ;;
@@ -37,6 +38,7 @@ model() {
   case $1 in
   clean) printf 'calibration:\n  extrinsics: true\n  readout: true\n  imu_intrinsics: true\n' ;;
   rolling_shutter) printf 'calibration:\n  readout: true\n  sigma_readout_s: 0.02\n' ;;
+  focal) printf 'calibration:\n  intrinsics: true\n' ;;
   extrinsic_rotation) printf 'calibration:\n  extrinsics: true\n' ;;
   gyro_scale_z | accel_scale) printf 'calibration:\n  imu_intrinsics: true\n' ;;
   # A wander of ±8 ms over 10 s moves the offset by up to 5 ms/s: t_d random walk of 3 ms/sqrt(s).
