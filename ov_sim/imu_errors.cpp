@@ -30,8 +30,12 @@ void drop_imu_error_parts(ImuErrorModel &m, const std::string &parts) {
       drop_bands(2.0, 10.0);
     else if (p == "vibration")
       drop_bands(10.0, 1e9);
-    else
-      throw ov_core::UsageError("unknown IMU error part '" + p + "' (scale, turn-on, slow, mid, vibration)");
+    else if (p == "vibration-gyro" || p == "vibration-accel") {
+      for (NoiseBand &b : m.flight_spectrum)
+        if (b.low_hz >= 10.0)
+          (p == "vibration-gyro" ? b.gyro : b.accel).setZero();
+    } else
+      throw ov_core::UsageError("unknown IMU error part '" + p + "' (scale, turn-on, slow, mid, vibration, vibration-gyro, vibration-accel)");
   }
 }
 

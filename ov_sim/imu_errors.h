@@ -37,7 +37,8 @@ void check(const ImuErrorModel &m);
 
 /// Removes parts of the model, for ablations (`ovton simulate --imu-errors-drop`): a comma-separated list of
 /// scale (scale and misalignment -> identity), turn-on (the turn-on biases), slow (bands below 2 Hz: bias wander),
-/// mid (2-10 Hz), vibration (bands from 10 Hz). Throws UsageError for an unknown part.
+/// mid (2-10 Hz), vibration (bands from 10 Hz), vibration-gyro / vibration-accel (those bands of one sensor only).
+/// Throws UsageError for an unknown part.
 void drop_imu_error_parts(ImuErrorModel &m, const std::string &parts);
 
 /// Adds the model's errors to a synthetic log (its stamps, in order) and the turn-on biases to the truth's biases.

@@ -217,6 +217,12 @@ TEST(SimImuErrors, DroppedPartsLeaveTheRestOfTheModel) {
   EXPECT_LT(m.flight_spectrum.size(), bands);
   for (const NoiseBand &b : m.flight_spectrum)
     EXPECT_GE(b.low_hz, 2.0);
+  ImuErrorModel g = euroc_v1_01_imu_errors();
+  drop_imu_error_parts(g, "vibration-gyro");
+  for (const NoiseBand &b : g.flight_spectrum) {
+    EXPECT_EQ(b.gyro.isZero(), b.low_hz >= 10.0);
+    EXPECT_FALSE(b.accel.isZero());
+  }
   drop_imu_error_parts(m, "turn-on,mid,vibration");
   EXPECT_TRUE(m.gyro_bias0.isZero() && m.accel_bias0.isZero());
   EXPECT_TRUE(m.flight_spectrum.empty());

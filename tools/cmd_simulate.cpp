@@ -157,7 +157,7 @@ int cmd_simulate(const Args &args) {
        "override the preset's IMU errors: euroc (the model measured on real V1_01) | none (datasheet noise only)") //
       ("imu-errors-drop", po::value<std::string>(),
        "leave parts of the IMU error model out (ablations), comma separated: scale, turn-on, slow (< 2 Hz), mid, "
-       "vibration (>= 10 Hz)") //
+       "vibration (>= 10 Hz), vibration-gyro, vibration-accel") //
       ("imu-declare", po::value<std::string>(),
        "what imu0/sensor.yaml says of the noise: fitted (default: the realistic IMU's Allan fit) | datasheet") //
       ("knot-dt-s", po::value(&o.knot_dt_s)->default_value(0.1), "B-spline knot spacing of the gt fit [s]")    //
