@@ -35,7 +35,8 @@ void drop_imu_error_parts(ImuErrorModel &m, const std::string &parts) {
         if (b.low_hz >= 10.0)
           (p == "vibration-gyro" ? b.gyro : b.accel).setZero();
     } else
-      throw ov_core::UsageError("unknown IMU error part '" + p + "' (scale, turn-on, slow, mid, vibration, vibration-gyro, vibration-accel)");
+      throw ov_core::UsageError("unknown IMU error part '" + p +
+                                "' (scale, turn-on, slow, mid, vibration, vibration-gyro, vibration-accel)");
   }
 }
 
