@@ -20,7 +20,8 @@ ReplayStats Replay::run(ReplayConsumer &c, const std::function<bool(size_t, size
     const int64_t t_imu_ns = *t_imu;
     // Feed every reading up to and including the image's IMU-clock time; one more if the image falls between two
     // readings, so the consumer can interpolate to the image time instead of extrapolating.
-    while (k < imu_.size() && imu_[k].t_imu_ns <= t_imu_ns)
+    const int64_t ahead = c.imu_lookahead_ns();
+    while (k < imu_.size() && imu_[k].t_imu_ns <= t_imu_ns + ahead)
       c.on_imu(imu_[k++]);
     if (k < imu_.size() && (k == 0 || imu_[k - 1].t_imu_ns < t_imu_ns))
       c.on_imu(imu_[k++]);

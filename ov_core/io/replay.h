@@ -17,6 +17,9 @@ public:
   virtual void on_imu(const ImuData &imu) = 0;
   virtual void on_image(const ImageEntry &img) = 0;
   virtual double td_for_image_s(int64_t t_cam_ns) const = 0;
+  /// How far past an image's IMU-clock time the consumer wants the readings before the image (a centred estimate of
+  /// the body rate at the image needs some; a live system pays it as latency).
+  virtual int64_t imu_lookahead_ns() const { return 0; }
 };
 
 struct ReplayStats {

@@ -351,6 +351,13 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
   ov_core::ImuData at_image;
   Eigen::Vector3d w_B =
       propagator_.reading_at(s.t_imu_ns, at_image) ? Eigen::Vector3d(at_image.wm - s.imu.bg) : propagator_.last_w_B();
+  // The clone's error from a t_d error follows the TRUE body rate; a vibrating gyro's reading at one instant is not
+  // it, and on a flight whose rate barely changes the filter takes the vibration for information about t_d
+  // (docs/robustness.md, "Weak excitation"). A centred mean over the window removes the vibration without lag.
+  const int64_t half = ov_core::s_to_ns(0.5 * opt_.td.jacobian_rate_window_s);
+  Eigen::Vector3d w_mean;
+  if (half > 0 && propagator_.mean_gyro(s.t_imu_ns - half, s.t_imu_ns + half, w_mean))
+    w_B = w_mean - s.imu.bg;
   if (s.calib.imu_intrinsics_index >= 0 && propagator_.reading_at(s.t_imu_ns, at_image))
     w_B = s.calib.D_w * w_B; // the gyro's scale and misalignment, as the propagation applies them
   state_helper::clone(s, t_cam_ns, uses_state_relevant(opt_.td.mode), w_B, s.imu.v);

@@ -73,6 +73,7 @@ public:
   /// Loads the image named in the entry (grayscale, from the image source), then processes it.
   void on_image(const ov_core::ImageEntry &e) override;
   double td_for_image_s(int64_t t_cam_ns) const override;
+  int64_t imu_lookahead_ns() const override { return ov_core::s_to_ns(0.5 * opt_.td.jacobian_rate_window_s); }
 
   /// Processes an already decoded image (benchmarks, tests, prefetching callers).
   void process_image(int64_t t_cam_ns, const cv::Mat &gray);

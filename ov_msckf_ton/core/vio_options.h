@@ -41,6 +41,10 @@ struct TimeOffsetOptions {
   /// so that σ(t_d) stays honest when the model's prediction is off. Applies to random walk, drift and tpn (a
   /// constant stays constant). Measured in docs/results.md: TPN's t_d NEES 4.9 -> 1.0 on the worked case.
   bool adaptive_noise = true;
+  /// The body rate in the clone's t_d Jacobian: 0 = the gyro reading at the image time; > 0 = the mean reading over
+  /// this window centred on it (the replay then hands over half of it past the image: latency in a live system). A
+  /// vibrating IMU otherwise makes t_d look observable on a gentle flight (docs/robustness.md, "Weak excitation").
+  double jacobian_rate_window_s = 0.0;
   /// Defaults measured in docs/results.md (the paper's choices, backward / none, are config/paper/): eq. 2's
   /// backward difference shares the observation's own noise with its residual and biases t̂_d (errors in variables;
   /// TPN then learns and amplifies the bias), and without a first velocity the image-plane modes diverge on a fast

@@ -130,6 +130,18 @@ bool Propagator::reading_at(int64_t t_ns, ov_core::ImuData &out) const {
   return true;
 }
 
+bool Propagator::mean_gyro(int64_t t_from_ns, int64_t t_to_ns, Eigen::Vector3d &w) const {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (const ov_core::ImuData &m : buf_)
+    if (m.t_imu_ns >= t_from_ns && m.t_imu_ns <= t_to_ns)
+      sum += m.wm, ++n;
+  if (n == 0)
+    return false;
+  w = sum / n;
+  return true;
+}
+
 template <typename StepFn> bool Propagator::integrate(int64_t t_from, int64_t t_to, StepFn &&step) const {
   if (t_to <= t_from)
     return t_to == t_from;

@@ -62,6 +62,8 @@ public:
   const ImuNoise &noise() const { return noise_; }
   /// Interpolated reading at t (IMU clock); false when t is outside the buffer.
   bool reading_at(int64_t t_ns, ov_core::ImuData &out) const;
+  /// Mean gyro reading over [t_from_ns, t_to_ns] (the readings the buffer holds there); false when it holds none.
+  bool mean_gyro(int64_t t_from_ns, int64_t t_to_ns, Eigen::Vector3d &w) const;
   const std::deque<ov_core::ImuData> &buffer() const { return buf_; }
 
 private:
