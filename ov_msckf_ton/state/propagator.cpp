@@ -133,9 +133,11 @@ bool Propagator::reading_at(int64_t t_ns, ov_core::ImuData &out) const {
 bool Propagator::mean_gyro(int64_t t_from_ns, int64_t t_to_ns, Eigen::Vector3d &w) const {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   int n = 0;
-  for (const ov_core::ImuData &m : buf_)
-    if (m.t_imu_ns >= t_from_ns && m.t_imu_ns <= t_to_ns)
-      sum += m.wm, ++n;
+  // Per image on the filter's path: start at the window (binary search) instead of walking the 5 s history.
+  auto it = std::lower_bound(buf_.begin(), buf_.end(), t_from_ns,
+                             [](const ov_core::ImuData &m, int64_t t) { return m.t_imu_ns < t; });
+  for (; it != buf_.end() && it->t_imu_ns <= t_to_ns; ++it)
+    sum += it->wm, ++n;
   if (n == 0)
     return false;
   w = sum / n;
