@@ -31,8 +31,9 @@ struct SimOptions {
   bool imu_bias_walk = true;
   std::string imu_from;     ///< semi-real: copy imu0/data.csv of this folder instead of synthesising
   ImuErrorModel imu_errors; ///< synthetic IMU: errors beyond the datasheet (imu_errors.h); off by default
-  /// imu0/sensor.yaml declares the noise the synthetic IMU really has: with imu_errors on, the white noise and bias
-  /// walk fitted to the log's Allan variance (fitted_imu_noise); false: `imu`'s (the datasheet's) in any case.
+  /// imu0/sensor.yaml declares the noise the IMU really has: with imu_errors on, the white noise and bias walk fitted
+  /// to the synthetic log's Allan variance (fitted_imu_noise); with imu_from (a real EuRoC ADIS16448 log) the same
+  /// fit of the model measured on that IMU (euroc_v1_01_imu_errors); false: `imu`'s (the datasheet's) in any case.
   bool declare_imu_errors = true;
   TdModelOptions td; ///< its seed is derived from `seed`
   /// Rolling shutter: image row v (distorted pixel row, continuous) is exposed at the frame's IMU-clock instant
@@ -101,7 +102,7 @@ Scene make_scene(const Trajectory &traj, const SimOptions &opt);
 SimReport write_simulation(const SimOptions &opt, const SimProgress &progress = nullptr);
 
 /// What imu0/sensor.yaml says of the IMU: `imu`, with the noise of the realistic IMU's model fitted
-/// (fitted_imu_noise) when a synthetic log carries imu_errors and declare_imu_errors is on.
+/// (fitted_imu_noise) when declare_imu_errors is on and the log carries imu_errors or is a real one (imu_from).
 ov_core::ImuCalib declared_imu(const SimOptions &opt);
 
 /// Text of sim.yaml for these options (every parameter and the seed).

@@ -159,12 +159,13 @@ int cmd_simulate(const Args &args) {
        "leave parts of the IMU error model out (ablations), comma separated: scale, turn-on, slow (< 2 Hz), mid, "
        "vibration (>= 10 Hz), vibration-gyro, vibration-accel") //
       ("imu-declare", po::value<std::string>(),
-       "what imu0/sensor.yaml says of the noise: fitted (default: the realistic IMU's Allan fit) | datasheet") //
-      ("knot-dt-s", po::value(&o.knot_dt_s)->default_value(0.1), "B-spline knot spacing of the gt fit [s]")    //
-      ("cam-yaml", po::value(&cam_yaml), "EuRoC cam0/sensor.yaml to use (default: built-in EuRoC cam0)")       //
-      ("imu-yaml", po::value(&imu_yaml), "EuRoC imu0/sensor.yaml to use (default: built-in ADIS16448)")        //
-      ("pixel-noise", po::value(&o.features.pixel_noise)->default_value(1.0), "features-only: noise [px]")     //
-      ("max-tracks", po::value(&o.features.max_tracks)->default_value(200), "features-only: live tracks")      //
+       "what imu0/sensor.yaml says of the noise: fitted (default: the realistic IMU's Allan fit, also for "
+       "--imu-from) | datasheet")                                                                           //
+      ("knot-dt-s", po::value(&o.knot_dt_s)->default_value(0.1), "B-spline knot spacing of the gt fit [s]") //
+      ("cam-yaml", po::value(&cam_yaml), "EuRoC cam0/sensor.yaml to use (default: built-in EuRoC cam0)")    //
+      ("imu-yaml", po::value(&imu_yaml), "EuRoC imu0/sensor.yaml to use (default: built-in ADIS16448)")     //
+      ("pixel-noise", po::value(&o.features.pixel_noise)->default_value(1.0), "features-only: noise [px]")  //
+      ("max-tracks", po::value(&o.features.max_tracks)->default_value(200), "features-only: live tracks")   //
       ("match-imu", "measure the real IMU log of --imu-from against --gt (noise, biases, scale, the ground truth's "
                     "time shift and frame rotation) and print it; no folder is written")                   //
       ("benchmark", "measure render speed (one core) and disk size per minute; --out optional")            //
