@@ -42,6 +42,10 @@ TEST(VioOptions, ShippedConfigLoadsAndUnknownKeysFail) {
   expect_error("dup.yaml", "update:\n  sigma_px: 1\n  sigma_px: 2\n", 3, "duplicate key 'update.sigma_px'");
   expect_error("range.yaml", "imu:\n  gravity_mag: 0\n", 0, "imu.gravity_mag must be > 0");
   expect_error("enum.yaml", "time_offset:\n  first_velocity: later\n", 2, "expected none, next");
+  expect_error("noise.yaml", "imu:\n  gyroscope_noise_density: -1e-4\n", 0, "imu noise densities");
+  // The EuRoC config declares the ADIS16448's measured noise, which replaces the folders' datasheet values.
+  EXPECT_GT(o.imu.gyroscope_noise_density, 4 * 1.6968e-4);
+  EXPECT_GT(o.imu.accelerometer_noise_density, 4 * 2.0e-3);
   // MODE+PROCESS specs: the process overrides the mode's own.
   VioOptions spec;
   apply_mode_spec(parse_mode_spec("sr+random_walk"), spec);

@@ -22,10 +22,11 @@ double ms_since(Clock::time_point t0) {
 ImuNoise noise_from(const ov_core::ImuCalib &imu, const VioOptions &opt) {
   ImuNoise n;
   const double k = opt.imu.noise_multiplier;
-  n.sigma_w = k * imu.gyro_noise_density;
-  n.sigma_a = k * imu.accel_noise_density;
-  n.sigma_wb = k * imu.gyro_random_walk;
-  n.sigma_ab = k * imu.accel_random_walk;
+  const auto pick = [k](double configured, double folder) { return k * (configured > 0 ? configured : folder); };
+  n.sigma_w = pick(opt.imu.gyroscope_noise_density, imu.gyro_noise_density);
+  n.sigma_a = pick(opt.imu.accelerometer_noise_density, imu.accel_noise_density);
+  n.sigma_wb = pick(opt.imu.gyroscope_random_walk, imu.gyro_random_walk);
+  n.sigma_ab = pick(opt.imu.accelerometer_random_walk, imu.accel_random_walk);
   return n;
 }
 

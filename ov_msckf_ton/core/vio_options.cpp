@@ -173,6 +173,10 @@ std::vector<Field> fields(VioOptions &o) {
                                              namer(kEqualization)),
       field(I, "noise_multiplier", o.imu.noise_multiplier),
       field(I, "gravity_mag", o.imu.gravity_mag),
+      field(I, "gyroscope_noise_density", o.imu.gyroscope_noise_density),
+      field(I, "gyroscope_random_walk", o.imu.gyroscope_random_walk),
+      field(I, "accelerometer_noise_density", o.imu.accelerometer_noise_density),
+      field(I, "accelerometer_random_walk", o.imu.accelerometer_random_walk),
       enum_field<InitMode>(S, "mode", in.mode, parse_init_mode, [](InitMode m) { return to_string(m); }),
       field(S, "window_s", in.window_s),
       field(S, "max_accel_std", in.max_accel_std),
@@ -260,6 +264,10 @@ void validate_vio_options(const VioOptions &o) {
   require(std::isfinite(c.readout_s) && std::abs(c.readout_s) < 0.1, "calibration.readout_s must be in (-0.1, 0.1) s");
   require(o.zupt.max_disparity_px >= 0 && o.zupt.sigma_v > 0, "zupt.max_disparity_px >= 0 and zupt.sigma_v > 0");
   require(o.imu.noise_multiplier > 0, "imu.noise_multiplier must be > 0");
+  for (const double v : {o.imu.gyroscope_noise_density, o.imu.gyroscope_random_walk, o.imu.accelerometer_noise_density,
+                         o.imu.accelerometer_random_walk})
+    require(std::isfinite(v) && v >= 0 && v < 10,
+            "imu noise densities and random walks must be in [0, 10) (0: the dataset's sensor.yaml)");
   // Physical ranges: gravity 0 would let the accel bias absorb 9.8 m/s^2.
   require(o.imu.gravity_mag > 0, "imu.gravity_mag must be > 0");
   require(o.imu.gravity_mag <= 100, "imu.gravity_mag must be <= 100 m/s^2");

@@ -130,9 +130,13 @@ struct ZuptOptions {
 };
 
 /// IMU noise comes from the dataset's sensor.yaml, multiplied by noise_multiplier (inflation is common practice).
+/// A value > 0 below replaces the folder's (Kalibr names): a datasheet understates a real IMU's noise, and
+/// the measured values belong to the sensor, not to each recording (config/euroc_mav: the ADIS16448 as measured).
 struct ImuOptions {
   double noise_multiplier = 1.0;
   double gravity_mag = 9.81;
+  double gyroscope_noise_density = 0.0, gyroscope_random_walk = 0.0;
+  double accelerometer_noise_density = 0.0, accelerometer_random_walk = 0.0;
 };
 
 struct InitOptions {

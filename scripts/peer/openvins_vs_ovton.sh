@@ -12,7 +12,8 @@
 #                          default = max_slam=50 calib_ext=1 calib_int=1 (OpenVINS's own EuRoC choice)
 #                          matched = max_clones=20 sigma_px=0.5 (ovton's simulation config)
 #                        VARIANT@imuK (e.g. matched@imu4) runs VARIANT on a view of the folder whose imu0/sensor.yaml
-#                        noise densities and random walks are K times the folder's (as ovton's imu.noise_multiplier)
+#                        noise densities and random walks are K times the folder's (as ovton's imu.noise_multiplier);
+#                        VARIANT@imufit: the ADIS16448's measured values that config/euroc_mav declares instead
 #   --ovton-modes LIST   ovton modes (MODE[+PROCESS]), comma separated (default sr,drift)
 #   --ovton-config-sim F / --ovton-config-real F
 #                        ovton configs for simulated folders (those with mav0/td_truth) and real ones
@@ -128,15 +129,22 @@ PY
 
 cpu_of() { awk '{print $1+$2}' "$1"; } # /usr/bin/time -f "%U %S" output
 
-# A view of folder $1 (symlinks) whose IMU noise parameters are $2 times the folder's; prints its path.
+# A view of folder $1 (symlinks) whose IMU noise parameters are $2 times the folder's, or (k = fit) the values
+# config/euroc_mav declares; prints its path.
 imu_view() {
   local f=$1 k=$2 v
   v=$OUT/$(basename "$f")/view_imu$k
   mkdir -p "$v/mav0/imu0"
   for d in "$f"/mav0/*; do [ "$(basename "$d")" = imu0 ] || ln -sfn "$d" "$v/mav0/$(basename "$d")"; done
   ln -sf "$f/mav0/imu0/data.csv" "$v/mav0/imu0/data.csv"
-  awk -v k="$k" '/^(gyroscope|accelerometer)_(noise_density|random_walk):/ {printf "%s %.6g\n", $1, $2 * k; next} {print}' \
-    "$f/mav0/imu0/sensor.yaml" > "$v/mav0/imu0/sensor.yaml"
+  if [ "$k" = fit ]; then
+    awk 'NR == FNR { if ($1 ~ /^(gyroscope|accelerometer)_(noise_density|random_walk):$/) fit[$1] = $2; next }
+         ($1 in fit) { printf "%s %s\n", $1, fit[$1]; next } { print }' \
+      "$REPO/config/euroc_mav/estimator_config.yaml" "$f/mav0/imu0/sensor.yaml" > "$v/mav0/imu0/sensor.yaml"
+  else
+    awk -v k="$k" '/^(gyroscope|accelerometer)_(noise_density|random_walk):/ {printf "%s %.6g\n", $1, $2 * k; next} {print}' \
+      "$f/mav0/imu0/sensor.yaml" > "$v/mav0/imu0/sensor.yaml"
+  fi
   echo "$v"
 }
 
