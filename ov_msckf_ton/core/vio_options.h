@@ -43,8 +43,9 @@ struct TimeOffsetOptions {
   bool adaptive_noise = true;
   /// The body rate in the clone's t_d Jacobian: 0 = the gyro reading at the image time; > 0 = the mean reading over
   /// this window centred on it (the replay then hands over half of it past the image: latency in a live system). A
-  /// vibrating IMU otherwise makes t_d look observable on a gentle flight (docs/robustness.md, "Weak excitation").
-  double jacobian_rate_window_s = 0.0;
+  /// vibrating IMU otherwise makes t_d look observable on a gentle flight (docs/robustness.md, "Weak excitation"),
+  /// and `diagnose` then read the pulled t_d as a 0.4-0.6 deg camera-IMU rotation on clean flights (docs/diagnose.md).
+  double jacobian_rate_window_s = 0.1;
   /// Defaults measured in docs/results.md (the paper's choices, backward / none, are config/paper/): eq. 2's
   /// backward difference shares the observation's own noise with its residual and biases t̂_d (errors in variables;
   /// TPN then learns and amplifies the bias), and without a first velocity the image-plane modes diverge on a fast
