@@ -32,7 +32,7 @@ SIM_ARGS=${SIM_ARGS:-}
 IMU_ARGS=${IMU_ARGS:-}
 JOBS=${JOBS:-2}
 DATA=${DATA:-$OUT/data}
-BIN=$(pwd)/build/ovton
+BIN=${OVTON_BIN:-$(pwd)/build/ovton} # OVTON_BIN: a copy of the binary, to go on building while it runs
 [ -x "$BIN" ] || scripts/build.sh
 GTDIR=../shared/data/euroc_groundtruth
 mkdir -p "$DATA" "$OUT/runs" "$OUT/cfg"
