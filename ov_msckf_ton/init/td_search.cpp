@@ -176,7 +176,9 @@ std::vector<PairRate> image_pair_rates(const std::vector<ov_core::ImageEntry> &i
                                        const std::vector<double> &t_img, const ov_core::CameraCalib &cam,
                                        const TdSearchOptions &opt, const TdSearchImageLoader &load) {
   const ov_core::CameraModel camera(cam);
-  ov_core::TrackKLT tracker(camera, opt.track);
+  ov_core::TrackKLTOptions track = opt.track;
+  track.num_features = std::min(track.num_features, opt.max_features);
+  ov_core::TrackKLT tracker(camera, track);
   const Eigen::Matrix3d R_BC = cam.T_BC.block<3, 3>(0, 0);
   const double huber_rad = 2.0 / std::max(camera.fu(), camera.fv());
   std::unordered_map<size_t, Eigen::Vector3d> prev, curr;

@@ -29,6 +29,10 @@ struct TdSearchOptions {
   double highpass_s = 0.5;
   int min_pairs = 40; ///< consecutive image pairs with a rotation fit
   ov_core::TrackKLTOptions track;
+  /// At most this many features tracked (track.num_features if fewer): a rotation fit of bearings needs few, and the
+  /// search's tracking is a second pass over its images. Measured at 100 against 200: the same t_d within 0.3 ms and
+  /// σ within 0.05 ms on the real cut and renders of V1_03 and MH_03, the same APE and TPE, −16 % CPU on the real cut.
+  int max_features = 100;
 };
 
 struct TdSearchResult {
