@@ -311,6 +311,20 @@ TEST(DiagnoseFilterLog, GyroScaleOneAxisRankedFirstAndSized) {
   }
 }
 
+// A gyro whose axes are not orthogonal: M's symmetric off-diagonal (xy, xz, yz) = (5, -4, 3) mrad, |m| 7.07 mrad. On
+// rates its mismatch −M·ω̄ cannot be a camera-body rotation (antisymmetric), so it has its own candidate.
+TEST(DiagnoseFilterLog, GyroMisalignmentRankedFirstAndSized) {
+  Plant p;
+  p.gyro_M(0, 1) = p.gyro_M(1, 0) = 0.005;
+  p.gyro_M(0, 2) = p.gyro_M(2, 0) = -0.004;
+  p.gyro_M(1, 2) = p.gyro_M(2, 1) = 0.003;
+  p.agility = 1.0;
+  const auto r = filter_case(p, "off", p.td0_s);
+  expect_top(r, "gyro_misalignment", "gyro misalignment |m|", 7.07, 1.41);
+  if (!r.candidates.empty() && top(r).key == "gyro_misalignment")
+    EXPECT_NEAR(estimate(top(r), "gyro misalignment m_xy"), 5.0, 1.5) << format_ranking(r);
+}
+
 // An offset wandering ±8 ms over 10 s around the filter's (true mean) t_d, without a trend: neither a constant nor a
 // drift, the piecewise offset names it. Over 2.5-s bins a sine's bin means are ±(2/π)·A: spread 5.09 ms. (±4 ms is
 // sized but not flagged: 2.61 ± 0.31 ms for 2.55 at 10σ, 0.95 % share under the 2 % bar, sr on 30 s; clean agile

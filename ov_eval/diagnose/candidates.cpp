@@ -112,6 +112,14 @@ std::vector<EffectEstimate> extrinsic_rotation(const Coefs &c, const DiagnoseRep
           {"φ_z (body)", "deg", deg * c.b(2), deg * c.s(2)}};
 }
 
+/// The gyro's symmetric misalignment, M_xy, M_xz, M_yz, in mrad.
+std::vector<EffectEstimate> gyro_misalignment(const Coefs &c, const DiagnoseReport &, const Design &) {
+  return {vector_norm(c, "gyro misalignment |m|", "mrad", 1e3),
+          {"gyro misalignment m_xy", "mrad", 1e3 * c.b(0), 1e3 * c.s(0)},
+          {"gyro misalignment m_xz", "mrad", 1e3 * c.b(1), 1e3 * c.s(1)},
+          {"gyro misalignment m_yz", "mrad", 1e3 * c.b(2), 1e3 * c.s(2)}};
+}
+
 /// Fitted in the camera frame; with the dataset's camera also shown in the body frame (δp_B = R_BC·δp_C).
 std::vector<EffectEstimate> extrinsic_translation(const Coefs &c, const DiagnoseReport &rep, const Design &) {
   std::vector<EffectEstimate> out = {vector_norm(c, "translation error |δp|", "mm", 1e3)};
@@ -242,6 +250,12 @@ const std::vector<CandidateDef> &candidate_table() {
        "camera-IMU rotation error (rates only)",
        "camera-IMU rotation error, from rates: ω_vis − ω̄_gyro = ω̄_gyro × φ − b (R_BC true = Exp(φ)·R_BC)",
        "", "", "fitted extrinsic_rotation effect, / SE"},
+      // The symmetric part of the gyro's off-diagonal errors (axes not orthogonal): unlike the antisymmetric part it
+      // cannot be a camera-body rotation.
+      {"gyro_misalignment", span(kGyroMis0, 3), {}, Needs::Rates, gyro_misalignment,
+       "gyro axis misalignment (rates only)",
+       "gyro axis misalignment, from rates: ω_vis − ω̄_gyro = −M·ω̄_gyro − b, M symmetric with a zero diagonal",
+       "", "", "fitted gyro_misalignment effect, / SE"},
       // The accelerometer's scale: no image shows it; the filter's accelerometer bias follows it (accel_design.h).
       {"accel_scale_axes", span(kAccAx0, 3), {}, Needs::AccelBias, accel_axes,
        "per-axis accelerometer scale error, from the filter's accelerometer bias: b̂_a,j = s_j·f_j + c_j (body axes; "

@@ -32,8 +32,10 @@ enum Col : int {
   kGyroAxY, ///< −e_y·ω̄_y: with kGyroScale, the y axis's own scale
   kGyroAxZ, ///< −e_z·ω̄_z
   kExtRot0, ///< 3 columns ω̄ × e_j: camera-body rotation error φ (R_BC true = Exp(φ)·R_BC)
+  /// 3 columns −(e_i·e_jᵀ + e_j·e_iᵀ)·ω̄ for (i, j) = (x, y), (x, z), (y, z): the gyro's symmetric misalignment.
+  kGyroMis0 = kExtRot0 + 3,
   /// Residual only: 3 columns −f·J_π(x)·e_c/z, a camera-body translation error seen in the camera frame.
-  kExtTrans0 = kExtRot0 + 3,
+  kExtTrans0 = kGyroMis0 + 3,
   /// α·1[time bin b] (rates) or V·1[bin b] (residual) for bins b = 1 .. kTdBins − 2; with kV and kVt, a piecewise
   /// offset.
   kTdBin0 = kExtTrans0 + 3,

@@ -308,18 +308,24 @@ struct FrameRate {
 };
 
 /// The gyro's linear error columns beyond the isotropic scale, on ω_vis − ω̄_gyro (body frame), in the order
-/// kGyroAxY, kGyroAxZ, kExtRot0..2: the gyro reads (I + M)·ω, so the mismatch is −M·ω̄; a camera-body rotation φ
-/// (R_BC true = Exp(φ)·R_BC) makes R_BC·ω_vis = ω − φ × ω, a mismatch ω̄ × φ. M's symmetric off-diagonal (a gyro
-/// misalignment) was a candidate too, and dropped: on the plain built-in flight, clean, it was flagged on one seed of
-/// four (5.5σ, 6 % share, 8-9 mrad) - the rates' model error at low rotation rates, not the gyro.
-constexpr int kLinCols = kExtRot0 + 3 - kGyroAxY;
-static_assert(kGyroAxZ == kGyroAxY + 1 && kExtRot0 == kGyroAxY + 2, "column order");
+/// kGyroAxY, kGyroAxZ, kExtRot0..2, kGyroMis0..2: the gyro reads (I + M)·ω, so the mismatch is −M·ω̄; a camera-body
+/// rotation φ (R_BC true = Exp(φ)·R_BC) makes R_BC·ω_vis = ω − φ × ω, a mismatch ω̄ × φ; M's symmetric off-diagonal
+/// is the gyro's misalignment. (Its candidate was dropped once for a false flag on the plain clean flight, 5.5σ; that
+/// flight's filter then held a t_d pulled by the vibrating gyro, docs/robustness.md "Weak excitation".)
+constexpr int kLinCols = kGyroMis0 + 3 - kGyroAxY;
+static_assert(kGyroAxZ == kGyroAxY + 1 && kExtRot0 == kGyroAxY + 2 && kGyroMis0 == kExtRot0 + 3, "column order");
 Eigen::Matrix<double, 3, kLinCols> gyro_linear_cols(const Eigen::Vector3d &w) {
   Eigen::Matrix<double, 3, kLinCols> L = Eigen::Matrix<double, 3, kLinCols>::Zero();
   L(1, 0) = -w.y();
   L(2, 1) = -w.z();
   for (int j = 0; j < 3; ++j)
     L.col(2 + j) = w.cross(Eigen::Vector3d::Unit(j));
+  const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+  for (int p = 0; p < 3; ++p) {
+    const int i = pairs[p][0], j = pairs[p][1];
+    L(i, 5 + p) = -w(j);
+    L(j, 5 + p) = -w(i);
+  }
   return L;
 }
 
