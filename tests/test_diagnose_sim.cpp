@@ -324,8 +324,9 @@ TEST(DiagnoseFilterLog, GyroMisalignmentRankedFirstAndSized) {
   p.agility = 1.0;
   const auto r = filter_case(p, "off", p.td0_s);
   expect_top(r, "gyro_misalignment", "gyro misalignment |m|", 21.21, 4.24);
-  if (!r.candidates.empty() && top(r).key == "gyro_misalignment") // a component: SE 1.1-1.4 mrad, builds ~2 apart
+  if (!r.candidates.empty() && top(r).key == "gyro_misalignment") { // a component: SE 1.1-1.4 mrad, builds ~2 apart
     EXPECT_NEAR(estimate(top(r), "gyro misalignment m_xy"), 15.0, 5.0) << format_ranking(r);
+  }
 }
 
 // An offset wandering ±8 ms over 10 s around the filter's (true mean) t_d, without a trend: neither a constant nor a
