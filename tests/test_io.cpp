@@ -235,7 +235,7 @@ TEST(Replay, FeedsImuUpToImageImuClockTime) {
     imu[i].t_imu_ns = 5000000LL * i; // 200 Hz over 0.5 s
   std::vector<ImageEntry> img;
   for (int k = 1; k <= 9; ++k)
-    img.push_back({50000000LL * k, ""}); // 20 Hz camera stamps
+    img.push_back({50000000LL * k, "", {}, 0, {}}); // 20 Hz camera stamps
   for (double td : {0.0, 0.012, -0.0125}) {
     RecordingConsumer c;
     c.td = td;

@@ -94,7 +94,7 @@ TEST(CheckedTime, ReplayOfAStampAtTheEndOfTheClockIsAnError) {
   } consumer;
   std::vector<ImuData> imu(2);
   imu[1].t_imu_ns = 1;
-  const std::vector<ImageEntry> images = {{8000000000000000000LL, "img.png"}};
+  const std::vector<ImageEntry> images = {{8000000000000000000LL, "img.png", {}, 0, {}}};
   try {
     Replay(images, imu).run(consumer);
     FAIL() << "overflowing image time accepted";
@@ -230,7 +230,7 @@ TEST(ReaderPlausibility, OutputPathsAndImagesNameTheFile) {
   EXPECT_NO_THROW(require_writable(tmp / "traj.csv"));
   EXPECT_FALSE(std::filesystem::exists(tmp / "traj.csv")); // checking creates nothing
   // An image of another size than the calibration's (it was a tracker usage error without the file's name).
-  const ImageEntry e{1, tmp / "small.png"};
+  const ImageEntry e{1, tmp / "small.png", {}, 0, {}};
   expect_data_error([&] { check_gray_image(cv::Mat(10, 20, CV_8UC1), e, 752, 480); }, "small.png", 0, "wrong size");
   expect_data_error([&] { load_gray_image(e, 752, 480); }, "small.png", 0, "missing image");
 }
