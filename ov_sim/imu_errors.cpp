@@ -6,15 +6,13 @@
 #include <cmath>
 #include <functional>
 #include <opencv2/core.hpp>
+#include <sstream>
 
 namespace ov_sim {
 
 void drop_imu_error_parts(ImuErrorModel &m, const std::string &parts) {
-  std::string rest = parts;
-  while (!rest.empty()) {
-    const size_t comma = rest.find(',');
-    const std::string p = rest.substr(0, comma);
-    rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
+  std::istringstream list(parts);
+  for (std::string p; std::getline(list, p, ',');) {
     const auto drop_bands = [&](double lo, double hi) { // bands lying within [lo, hi) Hz
       m.flight_spectrum.erase(std::remove_if(m.flight_spectrum.begin(), m.flight_spectrum.end(),
                                              [&](const NoiseBand &b) { return b.low_hz >= lo && b.high_hz <= hi; }),

@@ -159,16 +159,18 @@ Scene make_scene(const Trajectory &traj, const SimOptions &opt) {
   return Scene::around_path(path, so);
 }
 
+bool declares_fitted_imu_noise(const SimOptions &opt) {
+  return opt.declare_imu_errors && (!opt.imu_from.empty() || (opt.imu_errors.enabled && opt.imu_noise));
+}
+
 ov_core::ImuCalib declared_imu(const SimOptions &opt) {
-  // The log holds the datasheet noise plus the model's coloured noise (add_imu_errors); a filter told only the
-  // datasheet is overconfident (docs/results.md, "Consistency on images").
-  if (opt.imu_errors.enabled && opt.imu_from.empty() && opt.declare_imu_errors && opt.imu_noise)
-    return fitted_imu_noise(opt.imu_errors, opt.imu);
-  // A real EuRoC log (ADIS16448) is noisier than its datasheet in the same way as the model measured on it: declaring
-  // the datasheet made semi-real runs overconfident (NEES 58 / 108 on the real cut's span, APE 6 cm instead of 1).
-  if (!opt.imu_from.empty() && opt.declare_imu_errors)
-    return fitted_imu_noise(euroc_v1_01_imu_errors(), opt.imu);
-  return opt.imu;
+  if (!declares_fitted_imu_noise(opt))
+    return opt.imu;
+  // A synthetic log holds the datasheet noise plus the model's coloured noise (add_imu_errors); a filter told only
+  // the datasheet is overconfident (docs/results.md, "Consistency on images"). A real EuRoC log (ADIS16448) is
+  // noisier than its datasheet as the model measured on it says: declaring the datasheet made semi-real runs
+  // overconfident (NEES 58 / 108 on the real cut's span, APE 6 cm instead of 1).
+  return fitted_imu_noise(opt.imu_from.empty() ? opt.imu_errors : euroc_v1_01_imu_errors(), opt.imu);
 }
 
 SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
@@ -202,7 +204,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
 
   write_text(fs::path(opt.out_dir) / "sim.yaml", sim_yaml(opt, *traj));
   write_text(mav0 / "cam0" / "sensor.yaml", euroc_camera_yaml(opt.cam, "simulated cam0 (" + opt.cam_source + ")"));
-  const bool fitted = opt.declare_imu_errors && (!opt.imu_from.empty() || (opt.imu_errors.enabled && opt.imu_noise));
+  const bool fitted = declares_fitted_imu_noise(opt);
   write_text(mav0 / "imu0" / "sensor.yaml",
              euroc_imu_yaml(declared_imu(opt),
                             (opt.imu_from.empty() ? "simulated imu0 (" + opt.imu_source

@@ -101,8 +101,12 @@ Scene make_scene(const Trajectory &traj, const SimOptions &opt);
 /// image already listed in cam0/data.csv.
 SimReport write_simulation(const SimOptions &opt, const SimProgress &progress = nullptr);
 
+/// Whether imu0/sensor.yaml declares the realistic IMU model's fitted noise: declare_imu_errors is on and the log
+/// carries imu_errors or is a real one (imu_from).
+bool declares_fitted_imu_noise(const SimOptions &opt);
+
 /// What imu0/sensor.yaml says of the IMU: `imu`, with the noise of the realistic IMU's model fitted
-/// (fitted_imu_noise) when declare_imu_errors is on and the log carries imu_errors or is a real one (imu_from).
+/// (fitted_imu_noise) when declares_fitted_imu_noise.
 ov_core::ImuCalib declared_imu(const SimOptions &opt);
 
 /// Text of sim.yaml for these options (every parameter and the seed).

@@ -1,5 +1,6 @@
 // A gentle flight with a vibrating gyro: the clone's t_d Jacobian must not take the vibration for motion
 // (docs/robustness.md, "Weak excitation").
+#include "io_test_util.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/replay.h"
 #include "ov_msckf_ton/core/vio_manager.h"
@@ -19,12 +20,8 @@
 // answer); with the centred 0.1 s mean it ends near the truth with an honest sigma (7.9 ± 1.1 ms, 2.6 s here).
 TEST(WeakExcitation, VibratingGyroDoesNotMakeTdLookObservable) {
   ovtest::TempDir tmp;
-  ov_sim::SimOptions o;
-  o.out_dir = tmp / "sim";
-  o.duration_s = 20.0;
-  o.seed = 1;
+  ov_sim::SimOptions o = ovtest::feature_sim(tmp / "sim", 20.0, 1);
   ov_sim::apply_realism("euroc", o); // the IMU error model measured on real V1_01, its flight vibration included
-  o.features_only = true;
   o.td.td0_s = 0.010;
   ov_sim::write_simulation(o);
   const ov_core::Dataset data = ov_core::load_dataset(o.out_dir);

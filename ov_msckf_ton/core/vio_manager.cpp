@@ -350,16 +350,18 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
   // The clone's t_d Jacobian needs the body rate AT the image time (interpolated reading), not the mean over the
   // last IMU interval, and not a stale value: the first clone after initialisation has no interval behind it.
   ov_core::ImuData at_image;
-  Eigen::Vector3d w_B =
-      propagator_.reading_at(s.t_imu_ns, at_image) ? Eigen::Vector3d(at_image.wm - s.imu.bg) : propagator_.last_w_B();
+  const bool have_reading = propagator_.reading_at(s.t_imu_ns, at_image);
   // The clone's error from a t_d error follows the TRUE body rate; a vibrating gyro's reading at one instant is not
   // it, and on a flight whose rate barely changes the filter takes the vibration for information about t_d
-  // (docs/robustness.md, "Weak excitation"). A centred mean over the window removes the vibration without lag.
-  const int64_t half = ov_core::s_to_ns(0.5 * opt_.td.jacobian_rate_window_s);
-  Eigen::Vector3d w_mean;
+  // (docs/robustness.md, "Weak excitation"). A centred mean over the window removes the vibration without lag; the
+  // replay hands over its second half before the image (imu_lookahead_ns).
+  const int64_t half = imu_lookahead_ns();
+  Eigen::Vector3d w_B, w_mean;
   if (half > 0 && propagator_.mean_gyro(s.t_imu_ns - half, s.t_imu_ns + half, w_mean))
     w_B = w_mean - s.imu.bg;
-  if (s.calib.imu_intrinsics_index >= 0 && propagator_.reading_at(s.t_imu_ns, at_image))
+  else
+    w_B = have_reading ? Eigen::Vector3d(at_image.wm - s.imu.bg) : propagator_.last_w_B();
+  if (s.calib.imu_intrinsics_index >= 0 && have_reading)
     w_B = s.calib.D_w * w_B; // the gyro's scale and misalignment, as the propagation applies them
   state_helper::clone(s, t_cam_ns, uses_state_relevant(opt_.td.mode), w_B, s.imu.v);
   clone_rates_[t_cam_ns] = w_B;
