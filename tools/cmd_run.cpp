@@ -28,7 +28,7 @@ int cmd_run(const Args &args) {
   po::options_description desc("ovton run: replay a dataset folder through the MSCKF and write its trajectory");
   std::string config, dataset, mode, format = "csv", init, nees_log, td_search, health;
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
-  bool quiet = false, no_prefetch = false;
+  bool quiet = false, no_prefetch = false, no_track_thread = false;
   RunRequest req;
   size_t keep_mb = RunRequest::kKeepSearchImagesBytes >> 20;
   desc.add_options()("help,h", "this help")                                                               //
@@ -53,7 +53,10 @@ int cmd_run(const Args &args) {
       ("nees-log", po::value(&nees_log), "with --init groundtruth: write per-frame NEES (t_ns,ori,pos,td) here")(
           "max-images", po::value(&req.max_images), "stop after this many images") //
       ("no-prefetch", po::bool_switch(&no_prefetch),
-       "decode images on the filter's thread (default: the next ones on a second thread, same results)") //
+       "decode and track images on the filter's thread (default: the next ones are decoded and tracked on threads "
+       "of their own, same results)") //
+      ("no-track-thread", po::bool_switch(&no_track_thread),
+       "track images on the filter's thread, decode them on a second one (same results)") //
       ("search-images-mb", po::value(&keep_mb),
        "the filter reuses up to this many MB of the images the coarse t_d search decoded (0: decodes them again; "
        "same results)") //
@@ -64,6 +67,7 @@ int cmd_run(const Args &args) {
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
   req.prefetch = !no_prefetch && std::thread::hardware_concurrency() >= 2;
+  req.track_thread = !no_track_thread;
   req.keep_search_images_bytes = std::min<size_t>(keep_mb, size_t{1} << 30) << 20;
   if (format != "csv" && format != "tum")
     throw ov_core::UsageError("--format must be csv or tum");
@@ -139,7 +143,8 @@ int cmd_run(const Args &args) {
                 << " m/s)\n";
   }
   if (tm.frames > 0)
-    std::cout << "per frame [ms]: image load " << tm.image_load / tm.frames << ", tracking " << tm.tracking / tm.frames
+    std::cout << "per frame [ms]: image load " << tm.image_load / tm.frames << ", tracking "
+              << (tm.tracking + tm.tracking_thread) / tm.frames << (tm.tracking_thread > 0 ? " (own thread)" : "")
               << ", propagation " << tm.propagation / tm.frames << ", update " << tm.update / tm.frames << "; "
               << (r.wall_s > 0 ? r.data_span_s / r.wall_s : 0) << "x real time\n";
   if (!r.traj.empty())

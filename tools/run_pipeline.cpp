@@ -2,6 +2,7 @@
 #include "ov_core/io/image_io.h"
 #include "ov_core/io/image_prefetcher.h"
 #include "ov_core/io/trajectory_io.h"
+#include "ov_core/track/track_pipeline.h"
 #include "ov_core/types/errors.h"
 #include "tools/progress.h"
 
@@ -112,6 +113,17 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
     ov_core::check_gray_image(img, e, data.cam.width, data.cam.height);
     return img;
   });
+  // Declared after the prefetcher it draws from, so that it stops first.
+  std::unique_ptr<ov_core::TrackPipeline> pipeline;
+  if (prefetcher && req.track_thread) {
+    pipeline = std::make_unique<ov_core::TrackPipeline>(
+        data.images, ov_core::CameraModel(data.cam), opt.track, [&prefetcher, &data](size_t i) {
+          cv::Mat img = prefetcher->get(i);
+          ov_core::check_gray_image(img, data.images[i], data.cam.width, data.cam.height);
+          return img;
+        });
+    vio.set_frame_source([&pipeline](const ov_core::ImageEntry &e) { return pipeline->take(e); });
+  }
   ProgressBar bar(req.label.empty() ? "run " + ov_msckf_ton::to_string(opt.td.mode) : req.label, !req.progress);
   const auto t0 = std::chrono::steady_clock::now();
   size_t last_i = 0;

@@ -27,6 +27,9 @@ struct RunRequest {
   /// Decode the next images on a second thread (ov_core::ImagePrefetcher) while the filter works. Same results;
   /// `image_load` then measures the wait for a decoded image.
   bool prefetch = false;
+  /// With prefetch, track the images on a third thread (ov_core::TrackPipeline), overlapping the filter's update. Same
+  /// results; `image_load` then measures the wait for a tracked image.
+  bool track_thread = true;
   /// Called after each image with (images done, images in the dataset); the benchmark samples memory here.
   std::function<void(size_t, size_t)> on_progress;
   /// The coarse t_d search keeps up to this many bytes of the images it decodes (8 s at 20 Hz of 752x480 is 58 MB) and

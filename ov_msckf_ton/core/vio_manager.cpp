@@ -206,6 +206,14 @@ void VioManager::on_image(const ov_core::ImageEntry &e) {
     return;
   }
   const auto t0 = Clock::now();
+  if (frame_source_) {
+    const ov_core::TrackedFrame f = frame_source_(e); // waits for the tracking thread; rethrows its error
+    times_.image_load += ms_since(t0);
+    times_.tracking_thread += f.track_ms;
+    db_.add_frame(e.t_cam_ns, f.features);
+    process_frame(e.t_cam_ns, t0);
+    return;
+  }
   cv::Mat gray = image_source_ ? image_source_(e) : ov_core::load_image(e);
   if (gray.empty())
     throw ov_core::DataError(e.path, "unreadable image (listed for stamp " + std::to_string(e.t_cam_ns) + ")");

@@ -6,6 +6,7 @@
 #include "ov_core/io/velocity_log.h"
 #include "ov_core/track/feature_database.h"
 #include "ov_core/track/track_klt.h"
+#include "ov_core/track/track_pipeline.h"
 #include "ov_msckf_ton/core/filter_health.h"
 #include "ov_msckf_ton/core/vio_options.h"
 #include "ov_msckf_ton/init/inertial_init.h"
@@ -31,10 +32,13 @@
 namespace ov_msckf_ton {
 
 /// Per-frame cost of each stage [ms], accumulated; the benchmark prints means. `networks` is FVON and TPN
-/// (training, prediction and FVON's triangulation); it is not part of `update`.
+/// (training, prediction and FVON's triangulation); it is not part of `update`. With a frame source (tracking on
+/// its own thread) `image_load` is the filter's wait for a tracked image and `tracking` stays 0; the tracking thread's
+/// own time is `tracking_thread`, which `total` does not contain.
 struct StageTimes {
   long frames = 0;
   double image_load = 0, tracking = 0, propagation = 0, update = 0, networks = 0, total = 0;
+  double tracking_thread = 0;
 };
 
 struct VioCounters {
@@ -68,6 +72,10 @@ public:
   /// or the bag message). An empty image is reported as unreadable, naming the file.
   using ImageSource = std::function<cv::Mat(const ov_core::ImageEntry &)>;
   void set_image_source(ImageSource src) { image_source_ = std::move(src); }
+  /// Where on_image gets an image's tracked features when they are tracked elsewhere (an ov_core::TrackPipeline with
+  /// this manager's tracker options and camera): set, it replaces the image source and the manager's own tracker.
+  using FrameSource = std::function<ov_core::TrackedFrame(const ov_core::ImageEntry &)>;
+  void set_frame_source(FrameSource src) { frame_source_ = std::move(src); }
 
   void on_imu(const ov_core::ImuData &m) override;
   /// Loads the image named in the entry (grayscale, from the image source), then processes it.
@@ -140,6 +148,7 @@ private:
   /// Rows of the velocity log for the update's features, with the velocities `used` gives them.
   void log_velocities(const std::vector<const ov_core::Feature *> &feats, const VelocityProvider &used);
   ImageSource image_source_;
+  FrameSource frame_source_;
 
   bool initialized_ = false;
   std::string init_msg_;

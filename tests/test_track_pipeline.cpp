@@ -1,0 +1,169 @@
+// TrackPipeline: images tracked on a thread of their own are tracked exactly as one tracker on the caller's thread
+// tracks them, whatever the consumer skips; errors reach the consumer with the image that caused them; and a filter
+// fed through it writes the same trajectory as one that tracks itself.
+#include "ov_core/io/dataset.h"
+#include "ov_core/io/image_io.h"
+#include "ov_core/io/image_prefetcher.h"
+#include "ov_core/io/replay.h"
+#include "ov_core/track/track_pipeline.h"
+#include "ov_core/types/errors.h"
+#include "ov_msckf_ton/core/vio_manager.h"
+#include "ov_sim/simulator.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+
+using namespace ov_core;
+
+namespace {
+
+/// A short rendered flight (images, IMU, ground truth), written once for the tests below.
+const Dataset &flight() {
+  static ovtest::TempDir dir;
+  static const Dataset data = [] {
+    ov_sim::SimOptions o;
+    o.out_dir = dir / "sim";
+    o.duration_s = 3.0;
+    o.seed = 3;
+    ov_sim::write_simulation(o);
+    return load_dataset(o.out_dir);
+  }();
+  return data;
+}
+
+TrackPipeline::ImageGetter decoder(const Dataset &d) {
+  return [&d](size_t i) { return load_gray_image(d.images[i], d.cam.width, d.cam.height); };
+}
+
+/// What one tracker on this thread outputs for every image of the list.
+std::vector<std::vector<TrackedFeature>> sequential(const Dataset &d) {
+  TrackKLT tracker(CameraModel(d.cam), TrackKLTOptions{});
+  std::vector<std::vector<TrackedFeature>> out;
+  for (const auto &e : d.images)
+    out.push_back(tracker.track(e.t_cam_ns, load_gray_image(e, d.cam.width, d.cam.height)));
+  return out;
+}
+
+void expect_same(const std::vector<TrackedFeature> &a, const std::vector<TrackedFeature> &b, size_t index) {
+  ASSERT_EQ(a.size(), b.size()) << "image " << index;
+  for (size_t j = 0; j < a.size(); ++j) {
+    EXPECT_EQ(a[j].id, b[j].id) << "image " << index;
+    EXPECT_EQ(a[j].uv, b[j].uv) << "image " << index;
+    EXPECT_EQ(a[j].xy, b[j].xy) << "image " << index;
+  }
+}
+
+} // namespace
+
+TEST(TrackPipeline, TracksAsOneTrackerDoesWhateverIsSkipped) {
+  const Dataset &d = flight();
+  const auto want = sequential(d);
+  ASSERT_GT(want.size(), 40u);
+  ASSERT_GT(want.back().size(), 50u) << "the flight has too few features to test anything";
+  for (size_t ahead : {1u, 3u}) {
+    TrackPipeline p(d.images, CameraModel(d.cam), TrackKLTOptions{}, decoder(d), ahead);
+    for (size_t i = 0; i < d.images.size(); ++i) {
+      if (i >= 10 && i < 17)
+        continue; // skipped by the consumer: the thread still tracks through them
+      const TrackedFrame f = p.take(d.images[i]);
+      EXPECT_FALSE(f.error);
+      expect_same(f.features, want[i], i);
+    }
+  }
+}
+
+TEST(TrackPipeline, ErrorsReachTheConsumerWithTheirImage) {
+  const Dataset &d = flight();
+  const auto want = sequential(d);
+  const size_t bad = 12;
+  const auto getter = [&d, bad](size_t i) {
+    return i == bad ? cv::Mat() : load_gray_image(d.images[i], d.cam.width, d.cam.height);
+  };
+  {
+    TrackPipeline p(d.images, CameraModel(d.cam), TrackKLTOptions{}, getter);
+    for (size_t i = 0; i < bad; ++i)
+      expect_same(p.take(i).features, want[i], i);
+    try {
+      p.take(bad);
+      ADD_FAILURE() << "an unreadable image was tracked";
+    } catch (const DataError &e) {
+      EXPECT_NE(std::string(e.what()).find(d.images[bad].path), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(p.take(bad + 1), DataError) << "tracking must not jump the unreadable image";
+  }
+  {
+    // A consumer that skipped the unreadable image gets its error at the next image it asks for.
+    TrackPipeline p(d.images, CameraModel(d.cam), TrackKLTOptions{}, getter);
+    EXPECT_THROW(p.take(bad + 3), DataError);
+  }
+  {
+    // What the getter throws (a wrong size, a corrupt bag message) is handed over the same way.
+    TrackPipeline p(d.images, CameraModel(d.cam), TrackKLTOptions{}, [&](size_t i) -> cv::Mat {
+      if (i == 2)
+        throw DataError(d.images[i].path, "test error");
+      return load_gray_image(d.images[i], d.cam.width, d.cam.height);
+    });
+    EXPECT_NO_THROW(p.take(0));
+    EXPECT_THROW(p.take(2), DataError);
+  }
+}
+
+TEST(TrackPipeline, RefusesIndicesThatDoNotIncrease) {
+  const Dataset &d = flight();
+  TrackPipeline p(d.images, CameraModel(d.cam), TrackKLTOptions{}, decoder(d));
+  p.take(3);
+  EXPECT_THROW(p.take(3), std::logic_error);
+  EXPECT_THROW(p.take(1), std::logic_error);
+  EXPECT_THROW(p.take(d.images.size()), std::logic_error);
+  const ImageEntry other = d.images[5]; // a copy: not an entry of the pipeline's list
+  EXPECT_THROW(p.take(other), std::logic_error);
+  EXPECT_NO_THROW(p.take(4));
+}
+
+TEST(TrackPipeline, StopsCleanlyWhenDroppedEarly) {
+  const Dataset &d = flight();
+  for (size_t stop_after : {0u, 1u, 10u}) {
+    TrackPipeline p(d.images, CameraModel(d.cam), TrackKLTOptions{}, decoder(d), 2);
+    for (size_t i = 0; i < stop_after; ++i)
+      EXPECT_FALSE(p.take(i).features.empty());
+  } // the destructor joins a thread that may be waiting or tracking
+}
+
+// The whole filter: tracking on its own thread (drawing from the decoding thread, as `ovton run` does) gives the
+// trajectory of a filter that decodes and tracks on its own thread.
+TEST(TrackPipeline, FilterGivesTheSameTrajectory) {
+  const Dataset &d = flight();
+  ov_msckf_ton::VioOptions opt;
+  opt.td.mode = ov_msckf_ton::TdMode::Sr;
+  opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
+  const auto run = [&](bool pipelined) {
+    ov_msckf_ton::VioManager vio(opt, d.cam, d.imu_calib);
+    vio.set_groundtruth(d.groundtruth);
+    std::vector<StateSample> traj;
+    vio.set_state_callback([&](const StateSample &s) { traj.push_back(s); });
+    std::unique_ptr<ImagePrefetcher> pf;
+    std::unique_ptr<TrackPipeline> tp;
+    if (pipelined) {
+      pf = std::make_unique<ImagePrefetcher>(d.images);
+      tp = std::make_unique<TrackPipeline>(d.images, CameraModel(d.cam), opt.track,
+                                           [&](size_t i) { return pf->get(i); });
+      vio.set_frame_source([&](const ImageEntry &e) { return tp->take(e); });
+    }
+    Replay(d).run(vio);
+    EXPECT_EQ(vio.times().tracking_thread > 0, pipelined);
+    return traj;
+  };
+  const auto a = run(false), b = run(true);
+  ASSERT_GT(a.size(), 40u);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].t_ns, b[i].t_ns);
+    EXPECT_EQ((a[i].p - b[i].p).norm(), 0.0) << "pose " << i;
+    EXPECT_EQ(a[i].q_WB.coeffs(), b[i].q_WB.coeffs()) << "pose " << i;
+    EXPECT_EQ(a[i].td_s, b[i].td_s) << "pose " << i;
+  }
+}
