@@ -57,11 +57,16 @@ bool unfilter_row(int type, const uint8_t *in, const uint8_t *prev, uint8_t *out
     return true;
   }
   case 4: {
+    // Branch-free: the predictor's choice is data-dependent and unpredictable, and each pixel waits for the one
+    // before it, so a mispredicted branch costs the whole row's chain. Same choices as the specification's
+    // (ties to a, then b): c only when it is strictly closest.
     int a = 0, c = 0;
     for (int i = 0; i < w; ++i) {
       const int b = prev[i];
       const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
-      const int pred = (pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c);
+      const int m = pa <= pb ? pa : pb;
+      int pred = pa <= pb ? a : b;
+      pred = pc < m ? c : pred;
       a = static_cast<uint8_t>(in[i] + pred);
       out[i] = static_cast<uint8_t>(a);
       c = b;
