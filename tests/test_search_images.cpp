@@ -1,6 +1,7 @@
-// `ovton run` hands the images the coarse t_d search decoded to the filter instead of decoding them again
-// (tools/run_pipeline.cpp): the trajectory is byte-identical to decoding twice, with and without the prefetch thread,
-// with a budget that keeps only some of them, and from a ROS bag.
+// `ovton run` hands the coarse t_d search's work to the filter (tools/run_pipeline.cpp): its tracks when its window
+// starts at the first image, else the images it decoded. The trajectory is byte-identical to decoding and tracking
+// twice, with and without the decoding and tracking threads, with a budget that keeps only some images, and from a
+// ROS bag.
 #include "ov_core/io/rosbag_reader.h"
 #include "test_util.h"
 
@@ -28,17 +29,20 @@ int ovton(const std::string &args, const std::string &out) {
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 
-/// How many images the run's filter took from the search, from its summary line (-1 when it has none).
-int reused(const std::string &out) {
+/// How many decoded images and tracked images the run's filter took from the search, from its summary line
+/// ({-1, -1} when it has none).
+std::pair<int, int> reused(const std::string &out) {
   std::smatch m;
   const std::string text = ovtest::read_text(out);
-  return std::regex_search(text, m, std::regex("the filter reused ([0-9]+) of its decoded images")) ? std::stoi(m[1])
-                                                                                                    : -1;
+  return std::regex_search(text, m,
+                           std::regex("the filter reused ([0-9]+) of its decoded images and the tracks of ([0-9]+)"))
+             ? std::make_pair(std::stoi(m[1]), std::stoi(m[2]))
+             : std::make_pair(-1, -1);
 }
 
 } // namespace
 
-TEST(SearchImages, ReusedImagesGiveTheByteIdenticalTrajectory) {
+TEST(SearchImages, ReusedTracksAndImagesGiveTheByteIdenticalTrajectory) {
   OVTEST_REQUIRE_SHARED_DATA();
   if (!fs::exists(ovton_binary()))
     GTEST_SKIP() << "ovton not built";
@@ -54,15 +58,22 @@ TEST(SearchImages, ReusedImagesGiveTheByteIdenticalTrajectory) {
         << ovtest::read_text(out + ".err");
     return reused(out);
   };
-  EXPECT_EQ(run("twice", "--search-images-mb 0 --no-prefetch"), 0);
-  const int all = run("once", "--no-prefetch");
+  using P = std::pair<int, int>;
+  EXPECT_EQ(run("twice", "--search-images-mb 0 --search-tracks off --no-prefetch"), P(0, 0));
+  // The cut's search window starts at its first image: the filter takes its tracks (and then needs no images of it).
+  const int tracked = run("tracks", "--no-prefetch").second;
+  EXPECT_GT(tracked, 40) << "the search handed over no tracks: nothing was tested";
+  EXPECT_EQ(run("tracks_threads", ""), P(0, tracked));
+  EXPECT_EQ(run("tracks_decode_thread", "--no-track-thread"), P(0, tracked));
+  const int all = run("images", "--search-tracks off --no-prefetch").first;
   EXPECT_GT(all, 40) << "the search decoded no images: nothing was tested";
-  EXPECT_EQ(run("once_prefetch", ""), all);
-  EXPECT_EQ(run("some_prefetch", "--search-images-mb 1"), 2); // 752x480 bytes each
-  EXPECT_EQ(run("some", "--search-images-mb 1 --no-prefetch"), 2);
+  EXPECT_EQ(run("images_prefetch", "--search-tracks off"), P(all, 0));
+  EXPECT_EQ(run("some_prefetch", "--search-tracks off --search-images-mb 1"), P(2, 0)); // 752x480 bytes each
+  EXPECT_EQ(run("some", "--search-tracks off --search-images-mb 1 --no-prefetch"), P(2, 0));
   const std::string a = ovtest::read_text(d / "twice.csv");
   EXPECT_GT(std::count(a.begin(), a.end(), '\n'), 50);
-  for (const char *name : {"once", "once_prefetch", "some_prefetch", "some"})
+  for (const char *name :
+       {"tracks", "tracks_threads", "tracks_decode_thread", "images", "images_prefetch", "some_prefetch", "some"})
     EXPECT_TRUE(ovtest::read_text(d / (std::string(name) + ".csv")) == a) << name << " differs";
 
   if (!ov_core::rosbag_supported())
@@ -76,6 +87,6 @@ TEST(SearchImages, ReusedImagesGiveTheByteIdenticalTrajectory) {
                   out),
             0)
       << ovtest::read_text(out + ".err");
-  EXPECT_EQ(reused(out), all);
+  EXPECT_EQ(reused(out), P(0, tracked));
   EXPECT_TRUE(ovtest::read_text(d / "bag.csv") == a) << "the bag's trajectory differs";
 }

@@ -76,6 +76,37 @@ TEST(TrackPipeline, TracksAsOneTrackerDoesWhateverIsSkipped) {
   }
 }
 
+// The coarse t_d search's tracks of the first images and its tracker, handed over: the rest is tracked as one
+// tracker tracks everything, on the pipeline's thread or on the caller's.
+TEST(TrackPipeline, GoesOnFromAGivenStart) {
+  const Dataset &d = flight();
+  const auto want = sequential(d);
+  for (bool threaded : {false, true}) {
+    TrackedStart start;
+    start.tracker = std::make_unique<TrackKLT>(CameraModel(d.cam), TrackKLTOptions{});
+    for (size_t i = 0; i < 20; ++i)
+      start.frames.push_back(
+          start.tracker->track(d.images[i].t_cam_ns, load_gray_image(d.images[i], d.cam.width, d.cam.height)));
+    size_t asked = 0;
+    TrackPipeline p(
+        d.images, std::move(start),
+        [&](size_t i) {
+          ++asked;
+          EXPECT_GE(i, 20u) << "a given image was decoded";
+          return load_gray_image(d.images[i], d.cam.width, d.cam.height);
+        },
+        threaded);
+    for (size_t i = 0; i < d.images.size(); ++i) {
+      if (i == 5 || (i >= 30 && i < 33))
+        continue; // skipped, among the given ones and after them
+      const TrackedFrame f = p.take(i);
+      EXPECT_EQ(f.on_caller_thread, !threaded || i < 20);
+      expect_same(f.features, want[i], i);
+    }
+    EXPECT_EQ(asked, d.images.size() - 20);
+  }
+}
+
 TEST(TrackPipeline, ErrorsReachTheConsumerWithTheirImage) {
   const Dataset &d = flight();
   const auto want = sequential(d);

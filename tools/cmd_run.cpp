@@ -29,6 +29,7 @@ int cmd_run(const Args &args) {
   std::string config, dataset, mode, format = "csv", init, nees_log, td_search, health;
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
   bool quiet = false, no_prefetch = false, no_track_thread = false;
+  std::string search_tracks = "on";
   RunRequest req;
   size_t keep_mb = RunRequest::kKeepSearchImagesBytes >> 20;
   desc.add_options()("help,h", "this help")                                                               //
@@ -60,6 +61,9 @@ int cmd_run(const Args &args) {
       ("search-images-mb", po::value(&keep_mb),
        "the filter reuses up to this many MB of the images the coarse t_d search decoded (0: decodes them again; "
        "same results)") //
+      ("search-tracks", po::value(&search_tracks),
+       "on|off: the filter takes the coarse t_d search's tracks of its window when it starts at the first image "
+       "(off: tracks those images again; same results)") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bar, no option listing");
   ov_core::BagOptions bag_opt;
   add_bag_options(desc, bag_opt);
@@ -68,6 +72,9 @@ int cmd_run(const Args &args) {
     return 0; // --help
   req.prefetch = !no_prefetch && std::thread::hardware_concurrency() >= 2;
   req.track_thread = !no_track_thread;
+  if (search_tracks != "on" && search_tracks != "off")
+    throw ov_core::UsageError("--search-tracks must be on or off");
+  req.reuse_search_tracks = search_tracks == "on";
   req.keep_search_images_bytes = std::min<size_t>(keep_mb, size_t{1} << 30) << 20;
   if (format != "csv" && format != "tum")
     throw ov_core::UsageError("--format must be csv or tum");
@@ -130,7 +137,7 @@ int cmd_run(const Args &args) {
   std::cout << "initialisation: " << r.init_message << "\n";
   if (r.td_search)
     std::cout << "coarse t_d search: " << r.td_search->summary() << "; the filter reused " << r.images_predecoded
-              << " of its decoded images\n";
+              << " of its decoded images and the tracks of " << r.images_pretracked << " images\n";
   const auto &acc = r.acceptance;
   if (acc.examined() > 0)
     std::cout << "update acceptance " << 100.0 * acc.acceptance() << " % of " << acc.examined() << " features ("

@@ -19,7 +19,8 @@ void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov
 }
 
 std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt,
-                                                          ov_core::DecodedImages *keep, size_t keep_bytes) {
+                                                          ov_core::DecodedImages *keep, size_t keep_bytes,
+                                                          ov_core::TrackedStart *tracked) {
   using ov_msckf_ton::TdMode;
   const bool due = opt.td.search && opt.td.mode != TdMode::Off && opt.td.mode != TdMode::Oracle;
   opt.td.search = false;
@@ -39,7 +40,7 @@ std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset
     }
     return img;
   };
-  const auto r = ov_msckf_ton::search_td(data.images, data.imu, data.cam, opt.td.init_s, so, load);
+  const auto r = ov_msckf_ton::search_td(data.images, data.imu, data.cam, opt.td.init_s, so, load, tracked);
   if (r.found) {
     opt.td.init_s = r.td_s;
     // The filter's prior must cover the search's own error.
@@ -52,12 +53,15 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   ov_msckf_ton::VioOptions opt = req.opt;
   RunResult res;
   std::shared_ptr<const ov_core::DecodedImages> decoded = req.decoded;
+  ov_core::TrackedStart tracked; // the search's tracks, when the filter can go on from them
   if (decoded)
     res.td_search = run_td_search(data, opt);
   else {
     auto kept = std::make_shared<ov_core::DecodedImages>();
-    res.td_search = run_td_search(data, opt, kept.get(), req.keep_search_images_bytes);
-    if (!kept->empty())
+    res.td_search = run_td_search(data, opt, kept.get(), req.keep_search_images_bytes,
+                                  req.reuse_search_tracks ? &tracked : nullptr);
+    // With the search's tracks the filter never looks at the window's images again.
+    if (!kept->empty() && !tracked.tracker)
       decoded = std::move(kept);
   }
   res.images_predecoded = decoded ? decoded->size() : 0;
@@ -101,7 +105,7 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   if (req.prefetch && !data.images.empty() && !data.images.front().features)
     prefetcher = std::make_unique<ov_core::ImagePrefetcher>(data.images, 2, decoded);
   // An image of the wrong size is reported with its file here, not as a tracker error without one.
-  vio.set_image_source([&prefetcher, &data, &decoded](const ov_core::ImageEntry &e) {
+  const auto image_of = [&prefetcher, &data, &decoded](const ov_core::ImageEntry &e) {
     if (!prefetcher) {
       const ov_core::ImageEntry *begin = data.images.data();
       if (decoded && &e >= begin && &e < begin + data.images.size())
@@ -112,16 +116,18 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
     cv::Mat img = prefetcher->get(e);
     ov_core::check_gray_image(img, e, data.cam.width, data.cam.height);
     return img;
-  });
-  // Declared after the prefetcher it draws from, so that it stops first.
+  };
+  vio.set_image_source(image_of);
+  // Tracking on a thread of its own, and/or going on from the search's tracks. Declared after the prefetcher it draws
+  // from, so that it stops first.
   std::unique_ptr<ov_core::TrackPipeline> pipeline;
-  if (prefetcher && req.track_thread) {
+  const bool threaded = prefetcher && req.track_thread;
+  if (threaded || tracked.tracker) {
+    if (!tracked.tracker)
+      tracked.tracker = std::make_unique<ov_core::TrackKLT>(ov_core::CameraModel(data.cam), opt.track);
+    res.images_pretracked = tracked.frames.size();
     pipeline = std::make_unique<ov_core::TrackPipeline>(
-        data.images, ov_core::CameraModel(data.cam), opt.track, [&prefetcher, &data](size_t i) {
-          cv::Mat img = prefetcher->get(i);
-          ov_core::check_gray_image(img, data.images[i], data.cam.width, data.cam.height);
-          return img;
-        });
+        data.images, std::move(tracked), [&image_of, &data](size_t i) { return image_of(data.images[i]); }, threaded);
     vio.set_frame_source([&pipeline](const ov_core::ImageEntry &e) { return pipeline->take(e); });
   }
   ProgressBar bar(req.label.empty() ? "run " + ov_msckf_ton::to_string(opt.td.mode) : req.label, !req.progress);

@@ -30,6 +30,9 @@ struct RunRequest {
   /// With prefetch, track the images on a third thread (ov_core::TrackPipeline), overlapping the filter's update. Same
   /// results; `image_load` then measures the wait for a tracked image.
   bool track_thread = true;
+  /// When the coarse t_d search's window starts at the first image, the filter takes its tracks of that window instead
+  /// of tracking the images again (the search tracks them with the filter's options). Same results.
+  bool reuse_search_tracks = true;
   /// Called after each image with (images done, images in the dataset); the benchmark samples memory here.
   std::function<void(size_t, size_t)> on_progress;
   /// The coarse t_d search keeps up to this many bytes of the images it decodes (8 s at 20 Hz of 752x480 is 58 MB) and
@@ -50,6 +53,7 @@ struct RunResult {
   ov_msckf_ton::UpdateTally acceptance;                  ///< features used / gated / failed triangulation over the run
   std::optional<ov_msckf_ton::TdSearchResult> td_search; ///< when the coarse search ran
   size_t images_predecoded = 0; ///< images the filter took decoded (by the search) instead of decoding them
+  size_t images_pretracked = 0; ///< images whose tracks the filter took from the search instead of tracking them
   double wall_s = 0.0;
   double data_span_s = 0.0; ///< camera time covered by the images replayed
   bool interrupted = false;
@@ -64,10 +68,12 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req);
 /// success opt.td_init_s becomes what it found. Either way opt.td_search is cleared, so that the runs of a comparison
 /// share one search. Returns nothing when no search was due. With `keep`, the images the search decodes are put there
 /// (by index into data.images) while their bytes stay within keep_bytes, for the filter to take instead of decoding
-/// them again: the same pixels, so the same trajectory.
+/// them again: the same pixels, so the same trajectory. With `tracked`, the search's tracks when the filter can go on
+/// from them (ov_msckf_ton::search_td).
 std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt,
                                                           ov_core::DecodedImages *keep = nullptr,
-                                                          size_t keep_bytes = RunRequest::kKeepSearchImagesBytes);
+                                                          size_t keep_bytes = RunRequest::kKeepSearchImagesBytes,
+                                                          ov_core::TrackedStart *tracked = nullptr);
 
 /// Applies the dataset's own facts to options the user did not set: Kalibr timeshift as t_d prior.
 void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov_msckf_ton::VioOptions &opt);

@@ -12,6 +12,7 @@
 #include <exception>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <thread>
@@ -22,9 +23,18 @@ namespace ov_core {
 /// One image as the tracking thread handed it over.
 struct TrackedFrame {
   std::vector<TrackedFeature> features;
-  double wait_image_ms = 0; ///< the tracking thread's wait for the decoded image [ms]
-  double track_ms = 0;      ///< the tracker's time on this image [ms]
-  std::exception_ptr error; ///< what getting or tracking the image threw; rethrown by TrackPipeline::take
+  double wait_image_ms = 0;      ///< the tracking thread's wait for the decoded image [ms]
+  double track_ms = 0;           ///< the tracker's time on this image [ms]
+  bool on_caller_thread = false; ///< tracked by take() itself, not on the pipeline's thread (or given)
+  std::exception_ptr error;      ///< what getting or tracking the image threw; rethrown by TrackPipeline::take
+};
+
+/// The start of a dataset already tracked before the replay (the coarse t_d search's window, tracked with the filter's
+/// tracker options): the features of images 0 .. frames.size() - 1 and the tracker as it was after the last of them,
+/// to go on from. Tracking them again would give the same features.
+struct TrackedStart {
+  std::vector<std::vector<TrackedFeature>> frames;
+  std::unique_ptr<TrackKLT> tracker;
 };
 
 class TrackPipeline {
@@ -37,6 +47,10 @@ public:
   /// pipeline and hold image entries only (a feature-level dataset has no tracking to overlap).
   TrackPipeline(const std::vector<ImageEntry> &images, const CameraModel &camera, const TrackKLTOptions &opt,
                 ImageGetter get_image, size_t ahead = 2);
+  /// Hands out start.frames as given, then tracks on from image start.frames.size() with start.tracker. Without a
+  /// thread (`threaded` false) take() tracks on the caller's thread: the given start is then all it saves.
+  TrackPipeline(const std::vector<ImageEntry> &images, TrackedStart start, ImageGetter get_image, bool threaded,
+                size_t ahead = 2);
   ~TrackPipeline();
   TrackPipeline(const TrackPipeline &) = delete;
   TrackPipeline &operator=(const TrackPipeline &) = delete;
@@ -53,9 +67,14 @@ public:
 private:
   void work();
   TrackedFrame track_caught(size_t index);
+  /// Tracks the next image: called with the lock held, released while tracking. The thread's loop body, and take()'s
+  /// when there is no thread.
+  void produce_locked(std::unique_lock<std::mutex> &lock);
 
   const std::vector<ImageEntry> &images_;
-  TrackKLT tracker_; ///< used by the tracking thread only
+  std::vector<std::vector<TrackedFeature>> given_; ///< images tracked before, handed out as they are
+  const bool threaded_;
+  std::unique_ptr<TrackKLT> tracker_; ///< used by the tracking thread only (or take's caller without one)
   const ImageGetter get_image_;
   const size_t ahead_;
   std::mutex mutex_;
@@ -66,7 +85,7 @@ private:
   bool failed_ = false;                  ///< the thread stopped at an error (handed out with its image)
   std::exception_ptr failure_;           ///< that error, for a consumer that skipped its image
   bool stop_ = false;
-  std::thread thread_; // last: started once everything above is constructed
+  std::thread thread_; // last: started once everything above is constructed; none when not threaded
 };
 
 } // namespace ov_core

@@ -207,9 +207,14 @@ void VioManager::on_image(const ov_core::ImageEntry &e) {
   }
   const auto t0 = Clock::now();
   if (frame_source_) {
-    const ov_core::TrackedFrame f = frame_source_(e); // waits for the tracking thread; rethrows its error
-    times_.image_load += ms_since(t0);
-    times_.tracking_thread += f.track_ms;
+    const ov_core::TrackedFrame f = frame_source_(e); // may wait for the tracking thread; rethrows its error
+    if (f.on_caller_thread) {
+      times_.image_load += f.wait_image_ms;
+      times_.tracking += f.track_ms;
+    } else {
+      times_.image_load += ms_since(t0);
+      times_.tracking_thread += f.track_ms;
+    }
     db_.add_frame(e.t_cam_ns, f.features);
     process_frame(e.t_cam_ns, t0);
     return;

@@ -32,9 +32,10 @@
 namespace ov_msckf_ton {
 
 /// Per-frame cost of each stage [ms], accumulated; the benchmark prints means. `networks` is FVON and TPN
-/// (training, prediction and FVON's triangulation); it is not part of `update`. With a frame source (tracking on
-/// its own thread) `image_load` is the filter's wait for a tracked image and `tracking` stays 0; the tracking thread's
-/// own time is `tracking_thread`, which `total` does not contain.
+/// (training, prediction and FVON's triangulation); it is not part of `update`. With a frame source that tracks on
+/// a thread of its own, `image_load` is the filter's wait for a tracked image and `tracking` stays 0; the tracking
+/// thread's own time is `tracking_thread`, which `total` does not contain. Images whose tracks were given (the coarse
+/// t_d search's) cost neither.
 struct StageTimes {
   long frames = 0;
   double image_load = 0, tracking = 0, propagation = 0, update = 0, networks = 0, total = 0;

@@ -174,11 +174,17 @@ Window choose_window(const std::vector<double> &t_img, const GyroIntegral &gyro,
 /// feature-level dataset's observations), a rotation-only fit per pair with 10 or more common features.
 std::vector<PairRate> image_pair_rates(const std::vector<ov_core::ImageEntry> &images, const Window &win,
                                        const std::vector<double> &t_img, const ov_core::CameraCalib &cam,
-                                       const TdSearchOptions &opt, const TdSearchImageLoader &load) {
+                                       const TdSearchOptions &opt, const TdSearchImageLoader &load,
+                                       ov_core::TrackedStart *tracked) {
   const ov_core::CameraModel camera(cam);
+  // A window from the first image is tracked as the filter will track it, so that the filter can take these tracks
+  // instead of tracking the images again; a later window is tracked with fewer features, for this search alone.
+  const bool as_filter = win.b == 0;
   ov_core::TrackKLTOptions track = opt.track;
-  track.num_features = std::min(track.num_features, opt.max_features);
-  ov_core::TrackKLT tracker(camera, track);
+  if (!as_filter)
+    track.num_features = std::min(track.num_features, opt.max_features);
+  auto tracker = std::make_unique<ov_core::TrackKLT>(camera, track);
+  ov_core::TrackedStart start;
   const Eigen::Matrix3d R_BC = cam.T_BC.block<3, 3>(0, 0);
   const double huber_rad = 2.0 / std::max(camera.fu(), camera.fv());
   std::unordered_map<size_t, Eigen::Vector3d> prev, curr;
@@ -192,8 +198,11 @@ std::vector<PairRate> image_pair_rates(const std::vector<ov_core::ImageEntry> &i
         curr[o.id] = camera.undistort(o.uv).homogeneous().normalized();
     } else {
       const cv::Mat img = load ? load(e) : ov_core::load_gray_image(e, cam.width, cam.height);
-      for (const auto &f : tracker.track(e.t_cam_ns, img))
+      const auto &feats = tracker->track(e.t_cam_ns, img);
+      for (const auto &f : feats)
         curr[f.id] = f.xy.homogeneous().normalized();
+      if (as_filter && tracked)
+        start.frames.push_back(feats);
     }
     if (i > win.b) {
       bear0.clear();
@@ -212,6 +221,11 @@ std::vector<PairRate> image_pair_rates(const std::vector<ov_core::ImageEntry> &i
       }
     }
     std::swap(prev, curr);
+  }
+  // Only a start the filter's tracker would have made from the first image on, every image of it tracked.
+  if (tracked && as_filter && start.frames.size() == win.e) {
+    start.tracker = std::move(tracker);
+    *tracked = std::move(start);
   }
   return pairs;
 }
@@ -233,7 +247,7 @@ std::string TdSearchResult::summary() const {
 
 TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const std::vector<ov_core::ImuData> &imu,
                          const ov_core::CameraCalib &cam, double prior_td_s, const TdSearchOptions &opt,
-                         const TdSearchImageLoader &load) {
+                         const TdSearchImageLoader &load, ov_core::TrackedStart *tracked) {
   const auto wall0 = std::chrono::steady_clock::now();
   TdSearchResult res;
   res.prior_s = res.td_s = prior_td_s;
@@ -266,7 +280,7 @@ TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const s
     return finish(why);
   }
 
-  std::vector<PairRate> pairs = image_pair_rates(images, win, t_img, cam, opt, load);
+  std::vector<PairRate> pairs = image_pair_rates(images, win, t_img, cam, opt, load, tracked);
   // Every candidate must see the same pairs: keep those the gyro covers over the whole search range.
   pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
                              [&](const PairRate &p) {
