@@ -167,6 +167,8 @@ std::vector<Field> fields(VioOptions &o) {
       field(K, "fast_threshold", tr.fast_threshold),
       field(K, "pyr_levels", tr.pyr_levels),
       field(K, "win_size", tr.win_size),
+      field(K, "lk_max_iter", tr.lk_max_iter),
+      field(K, "lk_eps", tr.lk_eps),
       field(K, "ransac_px", tr.ransac_px),
       field(K, "forward_backward", tr.forward_backward),
       enum_field<ov_core::ImageEqualization>(K, "equalization", tr.equalization, parser(kEqualization),
@@ -291,6 +293,7 @@ void validate_vio_options(const VioOptions &o) {
   require(t.num_features > 0 && t.grid_x > 0 && t.grid_y > 0, "tracker.num_features, grid_x and grid_y must be > 0");
   require(t.win_size >= 3 && t.pyr_levels >= 0 && t.min_px_dist >= 0 && t.ransac_px > 0,
           "tracker.win_size >= 3, pyr_levels >= 0, min_px_dist >= 0, ransac_px > 0");
+  require(t.lk_max_iter > 0 && t.lk_eps > 0, "tracker.lk_max_iter and lk_eps must be > 0");
 }
 
 VioOptions load_vio_options(const std::string &file, std::ostream *print) {
