@@ -18,6 +18,7 @@
 #include <iomanip>
 #include <iostream>
 #include <limits>
+#include <opencv2/core/utility.hpp>
 #include <thread>
 
 namespace po = boost::program_options;
@@ -30,6 +31,7 @@ int cmd_run(const Args &args) {
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
   bool quiet = false, no_prefetch = false, no_track_thread = false;
   std::string search_tracks = "on";
+  int opencv_threads = -1;
   RunRequest req;
   size_t keep_mb = RunRequest::kKeepSearchImagesBytes >> 20;
   desc.add_options()("help,h", "this help")                                                               //
@@ -54,8 +56,8 @@ int cmd_run(const Args &args) {
       ("nees-log", po::value(&nees_log), "with --init groundtruth: write per-frame NEES (t_ns,ori,pos,td) here")(
           "max-images", po::value(&req.max_images), "stop after this many images") //
       ("no-prefetch", po::bool_switch(&no_prefetch),
-       "decode and track images on the filter's thread (default: the next ones are decoded and tracked on threads "
-       "of their own, same results)") //
+       "decode and track images on the filter's thread, OpenCV's thread pool off too unless --opencv-threads is "
+       "given (default: the next images are decoded and tracked on threads of their own; same results)") //
       ("no-track-thread", po::bool_switch(&no_track_thread),
        "track images on the filter's thread, decode them on a second one (same results)") //
       ("search-images-mb", po::value(&keep_mb),
@@ -64,6 +66,9 @@ int cmd_run(const Args &args) {
       ("search-tracks", po::value(&search_tracks),
        "on|off: the filter takes the coarse t_d search's tracks of its window when it starts at the first image "
        "(off: tracks those images again; same results)") //
+      ("opencv-threads", po::value(&opencv_threads),
+       "threads of OpenCV's own pool inside the tracker (0: none, its work on the calling thread; default: "
+       "OpenCV's choice, 0 with --no-prefetch)") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bar, no option listing");
   ov_core::BagOptions bag_opt;
   add_bag_options(desc, bag_opt);
@@ -72,6 +77,12 @@ int cmd_run(const Args &args) {
     return 0; // --help
   req.prefetch = !no_prefetch && std::thread::hardware_concurrency() >= 2;
   req.track_thread = !no_track_thread;
+  // One thread means one: OpenCV's own pool (TBB in Debian's build, which OPENCV_FOR_THREADS_NUM does not stop) would
+  // otherwise run part of the tracker on a second core (measured: a quarter of the process's CPU on a 40 s render).
+  if (opencv_threads >= 0)
+    cv::setNumThreads(opencv_threads);
+  else if (no_prefetch)
+    cv::setNumThreads(0);
   if (search_tracks != "on" && search_tracks != "off")
     throw ov_core::UsageError("--search-tracks must be on or off");
   req.reuse_search_tracks = search_tracks == "on";

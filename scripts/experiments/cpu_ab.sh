@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Issue #15: whole-process CPU time (user + sys) of `ovton run --no-prefetch` for two or more ovton binaries,
-# alternating binary by binary, REPS rounds, one OpenCV thread, under `nice -n 10`; prints per run the CPU seconds,
+# alternating binary by binary, REPS rounds, one OpenCV thread (binaries before `--opencv-threads` existed ran
+# OpenCV's TBB pool anyway: compare like with like), under `nice -n 10`; prints per run the CPU seconds,
 # the run's APE line and its per-frame stage times, so that a speed change is measured together with its accuracy.
 # Usage: scripts/experiments/cpu_ab.sh OUT FOLDER CONFIG REPS BIN... (extra `ovton run` arguments in $EXTRA, e.g.
 #        EXTRA="--init groundtruth" for real folders). BIN's parent folder names the run (e.g. /tmp/x/base/ovton).

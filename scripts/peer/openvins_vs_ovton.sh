@@ -27,7 +27,9 @@
 #                        stopped; the table covers old and new rows)
 #   --bin FILE           the ovton binary (default build/ovton)
 # Every process runs under `nice -n 10`, one at a time. OpenVINS runs with one OpenCV thread (threads=1); ovton with
-# `--no-prefetch` and OPENCV_FOR_THREADS_NUM=1, so that the CPU times compare one core against one core.
+# `--no-prefetch`, which (since `ovton run --opencv-threads` exists) also turns OpenCV's pool off: before, Debian's
+# TBB-backed pool ignored OPENCV_FOR_THREADS_NUM=1 (still set here for older binaries) and ran part of the tracker on
+# a second core. So the CPU times compare one core against one core.
 # ms/frame excludes the PNG decode on both sides: OpenVINS's feed_measurement_camera, ovton's tracking + propagation
 # + update. CPU [s] is the whole process (user + sys), PNG decode and CSV parsing included.
 set -euo pipefail
