@@ -1,10 +1,6 @@
 // ImagePrefetcher: images decoded on a second thread are the images cv::imread gives, in any order the replay asks
-// for them, and a filter fed through it produces the same trajectory as one that decodes itself.
-#include "ov_core/io/dataset.h"
+// for them (a filter fed through it: TrackPipeline.FilterGivesTheSameTrajectoryOnAnyThreads).
 #include "ov_core/io/image_prefetcher.h"
-#include "ov_core/io/replay.h"
-#include "ov_msckf_ton/core/vio_manager.h"
-#include "ov_sim/simulator.h"
 #include "test_util.h"
 
 #include <opencv2/imgcodecs.hpp>
@@ -80,38 +76,4 @@ TEST(ImagePrefetcher, HandsOutGivenImages) {
   EXPECT_EQ(pixel(pf.get(3)), 103); // behind: from the given ones again
   EXPECT_EQ(pixel(pf.get(1)), 1);
   EXPECT_EQ(given->at(3).data, pf.get(3).data) << "the pixels are shared, not copied";
-}
-
-// A short rendered flight through the whole filter, decoding on the filter's thread and through the prefetcher.
-TEST(ImagePrefetcher, FilterGivesTheSameTrajectory) {
-  ovtest::TempDir dir;
-  ov_sim::SimOptions o;
-  o.out_dir = dir / "sim";
-  o.duration_s = 3.0;
-  o.seed = 3;
-  ov_sim::write_simulation(o);
-  const Dataset data = load_dataset(o.out_dir);
-  ov_msckf_ton::VioOptions opt;
-  opt.td.mode = ov_msckf_ton::TdMode::Sr;
-  opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
-  const auto run = [&](bool prefetch) {
-    ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
-    vio.set_groundtruth(data.groundtruth);
-    std::vector<StateSample> traj;
-    vio.set_state_callback([&](const StateSample &s) { traj.push_back(s); });
-    std::unique_ptr<ImagePrefetcher> pf;
-    if (prefetch) {
-      pf = std::make_unique<ImagePrefetcher>(data.images);
-      vio.set_image_source([&](const ImageEntry &e) { return pf->get(e); });
-    }
-    Replay(data).run(vio);
-    return traj;
-  };
-  const auto a = run(false), b = run(true);
-  ASSERT_GT(a.size(), 40u);
-  ASSERT_EQ(a.size(), b.size());
-  for (size_t i = 0; i < a.size(); ++i) {
-    EXPECT_EQ(a[i].t_ns, b[i].t_ns);
-    EXPECT_EQ((a[i].p - b[i].p).norm(), 0.0) << "pose " << i;
-  }
 }
