@@ -49,10 +49,10 @@ TEST(SearchImages, ReusedTracksAndImagesGiveTheByteIdenticalTrajectory) {
   ovtest::TempDir d;
   const std::string folder = ovtest::shared_data() + "/euroc_v1_01_moving";
   const std::string cfg = std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml";
-  const auto run = [&](const std::string &name, const std::string &extra) {
+  const auto run = [&](const std::string &name, const std::string &extra, const std::string &mode = "sr") {
     const std::string out = d / (name + ".out");
-    EXPECT_EQ(ovton("run -q -c " + cfg + " --init groundtruth -m sr -d " + folder + " -o " + (d / (name + ".csv")) +
-                        " " + extra,
+    EXPECT_EQ(ovton("run -q -c " + cfg + " --init groundtruth -m " + mode + " -d " + folder + " -o " +
+                        (d / (name + ".csv")) + " " + extra,
                     out),
               0)
         << ovtest::read_text(out + ".err");
@@ -75,6 +75,22 @@ TEST(SearchImages, ReusedTracksAndImagesGiveTheByteIdenticalTrajectory) {
   for (const char *name :
        {"tracks", "tracks_threads", "tracks_decode_thread", "images", "images_prefetch", "some_prefetch", "some"})
     EXPECT_TRUE(ovtest::read_text(d / (std::string(name) + ".csv")) == a) << name << " differs";
+
+  // `compare` shares the search's tracks among its modes: each goes on from a clone of the search's tracker, and
+  // gets the trajectory `run` gets, the mode without a search (off) as well.
+  const std::string cmp = d / "cmp";
+  ASSERT_EQ(
+      ovton("compare -c " + cfg + " --init groundtruth --modes off,sr --jobs 2 --dataset " + folder + " --out " + cmp,
+            d / "cmp.out"),
+      0)
+      << ovtest::read_text(d / "cmp.out.err");
+  EXPECT_NE(ovtest::read_text(d / "cmp.out.err").find("every mode takes its tracks of " + std::to_string(tracked)),
+            std::string::npos)
+      << ovtest::read_text(d / "cmp.out.err");
+  EXPECT_TRUE(ovtest::read_text(cmp + "/traj_sr.csv") == a) << "compare's sr differs from run's";
+  EXPECT_EQ(run("off", "--no-prefetch", "off"), P(-1, -1)); // no search: no summary line
+  EXPECT_TRUE(ovtest::read_text(cmp + "/traj_off.csv") == ovtest::read_text(d / "off.csv"))
+      << "compare's off differs from run's";
 
   if (!ov_core::rosbag_supported())
     return;

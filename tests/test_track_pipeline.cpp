@@ -107,6 +107,30 @@ TEST(TrackPipeline, GoesOnFromAGivenStart) {
   }
 }
 
+// A clone goes on as the original does, whichever is fed first: it shares no pixels with it.
+TEST(TrackPipeline, ClonedTrackerGoesOnAsTheOriginal) {
+  const Dataset &d = flight();
+  const auto want = sequential(d);
+  const auto image = [&](size_t i) { return load_gray_image(d.images[i], d.cam.width, d.cam.height); };
+  for (bool original_first : {true, false}) {
+    TrackKLT a(CameraModel(d.cam), TrackKLTOptions{});
+    for (size_t i = 0; i < 15; ++i)
+      a.track(d.images[i].t_cam_ns, image(i));
+    const auto b = a.clone();
+    std::vector<std::vector<TrackedFeature>> out_a, out_b;
+    TrackKLT &first = original_first ? a : *b, &second = original_first ? *b : a;
+    auto &out_first = original_first ? out_a : out_b, &out_second = original_first ? out_b : out_a;
+    for (size_t i = 15; i < d.images.size(); ++i)
+      out_first.push_back(first.track(d.images[i].t_cam_ns, image(i)));
+    for (size_t i = 15; i < d.images.size(); ++i)
+      out_second.push_back(second.track(d.images[i].t_cam_ns, image(i)));
+    for (size_t i = 15; i < d.images.size(); ++i) {
+      expect_same(out_a[i - 15], want[i], i);
+      expect_same(out_b[i - 15], want[i], i);
+    }
+  }
+}
+
 TEST(TrackPipeline, ErrorsReachTheConsumerWithTheirImage) {
   const Dataset &d = flight();
   const auto want = sequential(d);

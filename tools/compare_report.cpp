@@ -97,13 +97,20 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
   ov_msckf_ton::VioOptions searched = req.base, unsearched = req.base;
   searched.td.mode = TdMode::Sr;
   unsearched.td.search = false;
-  // The images the search decoded are shared read-only by every mode's filter instead of being decoded again.
+  // What the search did is shared read-only by every mode's filter instead of being done again: its tracks when its
+  // window starts at the first image (tracks do not depend on t_d), else the images it decoded.
   auto decoded = std::make_shared<ov_core::DecodedImages>();
-  if (const auto s = run_td_search(data, searched, decoded.get())) {
-    info.notes.push_back("coarse t_d search (shared by the modes that estimate t_d): " + s->summary());
+  auto tracked = std::make_shared<ov_core::TrackedStart>();
+  if (const auto s = run_td_search(data, searched, decoded.get(), RunRequest::kKeepSearchImagesBytes, tracked.get())) {
+    info.notes.push_back("coarse t_d search (shared by the modes that estimate t_d): " + s->summary() +
+                         (tracked->tracker
+                              ? "; every mode takes its tracks of " + std::to_string(tracked->frames.size()) + " images"
+                              : ""));
     if (req.log)
       *req.log << "compare: " << info.notes.back() << "\n" << std::flush;
   }
+  if (tracked->tracker)
+    decoded->clear(); // no filter looks at the window's images again
 
   const auto run_one = [&](const std::string &name) {
     RunRequest rr;
@@ -112,7 +119,9 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
     ov_msckf_ton::apply_mode_spec(spec, rr.opt);
     rr.output = (fs::path(req.out_dir) / ("traj_" + name + ".csv")).string();
     rr.max_images = req.max_images;
-    if (!decoded->empty())
+    if (tracked->tracker)
+      rr.tracked = tracked;
+    else if (!decoded->empty())
       rr.decoded = decoded;
     rr.progress = false; // parallel bars would overwrite each other; the log has one line per finished mode
     // A diverged filter (EstimatorFailure) or a run without a single pose (DataError) throws: run_parallel makes

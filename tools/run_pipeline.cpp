@@ -54,7 +54,11 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   RunResult res;
   std::shared_ptr<const ov_core::DecodedImages> decoded = req.decoded;
   ov_core::TrackedStart tracked; // the search's tracks, when the filter can go on from them
-  if (decoded)
+  if (req.tracked && req.tracked->tracker) {
+    tracked.frames = req.tracked->frames;
+    tracked.tracker = req.tracked->tracker->clone();
+  }
+  if (decoded || req.tracked)
     res.td_search = run_td_search(data, opt);
   else {
     auto kept = std::make_shared<ov_core::DecodedImages>();

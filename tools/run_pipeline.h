@@ -40,6 +40,9 @@ struct RunRequest {
   size_t keep_search_images_bytes = kKeepSearchImagesBytes;
   /// Images decoded before this run (`compare`: by the search its modes share); the run's own search keeps none then.
   std::shared_ptr<const ov_core::DecodedImages> decoded;
+  /// The first images' tracks made before this run with opt.track (`compare`: by the search its modes share): the run
+  /// takes a copy and goes on from a clone of its tracker.
+  std::shared_ptr<const ov_core::TrackedStart> tracked;
   static constexpr size_t kKeepSearchImagesBytes = size_t{128} << 20;
 };
 

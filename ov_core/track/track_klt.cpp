@@ -118,6 +118,41 @@ void TrackKLT::reset() {
   out_.clear();
 }
 
+namespace {
+
+/// A deep copy of `m` with the memory around it: the levels of cv::buildOpticalFlowPyramid are views into padded
+/// buffers, and Lucas-Kanade reads the padding near the border.
+cv::Mat clone_with_padding(const cv::Mat &m) {
+  if (m.empty())
+    return cv::Mat();
+  cv::Size whole;
+  cv::Point ofs;
+  m.locateROI(whole, ofs);
+  cv::Mat parent = m;
+  parent.adjustROI(ofs.y, whole.height - ofs.y - m.rows, ofs.x, whole.width - ofs.x - m.cols);
+  return parent.clone()(cv::Rect(ofs.x, ofs.y, m.cols, m.rows));
+}
+
+} // namespace
+
+std::unique_ptr<TrackKLT> TrackKLT::clone() const {
+  auto c = std::make_unique<TrackKLT>(camera_, opt_);
+  c->has_prev_ = has_prev_;
+  c->t_prev_ns_ = t_prev_ns_;
+  c->next_id_ = next_id_;
+  c->img_ = img_.clone();
+  // pyr_curr_ is rebuilt from the next image before it is read; the rest of the scratch is rewritten the same way.
+  for (const cv::Mat &m : pyr_prev_)
+    c->pyr_prev_.push_back(clone_with_padding(m));
+  c->ids_ = ids_;
+  c->pts_ = pts_;
+  c->xy_ = xy_;
+  c->out_ = out_;
+  c->stats_ = stats_;
+  c->totals_ = totals_;
+  return c;
+}
+
 const std::vector<TrackedFeature> &TrackKLT::track(int64_t t_cam_ns, const cv::Mat &gray) {
   if (gray.empty() || gray.type() != CV_8UC1)
     throw UsageError("TrackKLT: expected a non-empty 8-bit single-channel image");

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace ov_core {
@@ -81,6 +82,8 @@ int ransac_fundamental(const std::vector<cv::Point2f> &xy0, const std::vector<cv
 
 class TrackKLT {
 public:
+  TrackKLT(const TrackKLT &) = delete; // clone() copies the pixels
+  TrackKLT &operator=(const TrackKLT &) = delete;
   /// Throws UsageError for options that cannot work (non-positive sizes, even LK window, ...).
   TrackKLT(const CameraModel &camera, const TrackKLTOptions &opt = {});
 
@@ -91,6 +94,10 @@ public:
 
   /// Forgets all tracks (e.g. after a gap in the data); ids keep increasing so they never repeat.
   void reset();
+
+  /// An independent tracker in this one's state: fed the same images from here on, both output the same features.
+  /// (A copy would share the pyramid's pixels.)
+  std::unique_ptr<TrackKLT> clone() const;
 
   const std::vector<TrackedFeature> &current() const { return out_; }
   const TrackStats &last_stats() const { return stats_; }
