@@ -1,4 +1,5 @@
 #include "tools/compare_report.h"
+#include "ov_core/track/track_pipeline.h"
 #include "ov_core/types/errors.h"
 #include "tools/progress.h"
 #include "tools/run_pipeline.h"
@@ -109,8 +110,6 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
     if (req.log)
       *req.log << "compare: " << info.notes.back() << "\n" << std::flush;
   }
-  if (tracked->tracker)
-    decoded->clear(); // no filter looks at the window's images again
 
   const auto run_one = [&](const std::string &name) {
     RunRequest rr;

@@ -30,12 +30,18 @@ std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset
   so.range_s = opt.td.search_range_s;
   so.track = opt.track;
   size_t kept_bytes = 0;
+  bool first_load = true, keeping = keep != nullptr;
   const auto load = [&](const ov_core::ImageEntry &e) {
     cv::Mat img = ov_core::load_gray_image(e, data.cam.width, data.cam.height);
+    const auto index = ov_core::entry_index(data.images, e);
+    // A search that starts loading at the first image has its window there and hands its tracks over (search_td):
+    // the filter then needs none of these images, and keeping them would only hold their memory.
+    if (first_load && tracked && index == size_t{0})
+      keeping = false;
+    first_load = false;
     const size_t bytes = img.total() * img.elemSize();
-    const ov_core::ImageEntry *begin = data.images.data();
-    if (keep && &e >= begin && &e < begin + data.images.size() && kept_bytes + bytes <= keep_bytes) {
-      (*keep)[static_cast<size_t>(&e - begin)] = img;
+    if (keeping && index && kept_bytes + bytes <= keep_bytes) {
+      (*keep)[*index] = img;
       kept_bytes += bytes;
     }
     return img;
@@ -64,8 +70,7 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
     auto kept = std::make_shared<ov_core::DecodedImages>();
     res.td_search = run_td_search(data, opt, kept.get(), req.keep_search_images_bytes,
                                   req.reuse_search_tracks ? &tracked : nullptr);
-    // With the search's tracks the filter never looks at the window's images again.
-    if (!kept->empty() && !tracked.tracker)
+    if (!kept->empty())
       decoded = std::move(kept);
   }
   res.images_predecoded = decoded ? decoded->size() : 0;
@@ -111,9 +116,8 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   // An image of the wrong size is reported with its file here, not as a tracker error without one.
   const auto image_of = [&prefetcher, &data, &decoded](const ov_core::ImageEntry &e) {
     if (!prefetcher) {
-      const ov_core::ImageEntry *begin = data.images.data();
-      if (decoded && &e >= begin && &e < begin + data.images.size())
-        if (const auto it = decoded->find(static_cast<size_t>(&e - begin)); it != decoded->end())
+      if (const auto index = decoded ? ov_core::entry_index(data.images, e) : std::nullopt)
+        if (const auto it = decoded->find(*index); it != decoded->end())
           return it->second; // checked when the search decoded it
       return ov_core::load_gray_image(e, data.cam.width, data.cam.height);
     }
@@ -121,9 +125,8 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
     ov_core::check_gray_image(img, e, data.cam.width, data.cam.height);
     return img;
   };
-  vio.set_image_source(image_of);
-  // Tracking on a thread of its own, and/or going on from the search's tracks. Declared after the prefetcher it draws
-  // from, so that it stops first.
+  // Tracking on a thread of its own, and/or going on from the search's tracks; else the filter tracks the images
+  // itself. Declared after the prefetcher it draws from, so that it stops first.
   std::unique_ptr<ov_core::TrackPipeline> pipeline;
   const bool threaded = prefetcher && req.track_thread;
   if (threaded || tracked.tracker) {
@@ -133,6 +136,8 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
     pipeline = std::make_unique<ov_core::TrackPipeline>(
         data.images, std::move(tracked), [&image_of, &data](size_t i) { return image_of(data.images[i]); }, threaded);
     vio.set_frame_source([&pipeline](const ov_core::ImageEntry &e) { return pipeline->take(e); });
+  } else {
+    vio.set_image_source(image_of);
   }
   ProgressBar bar(req.label.empty() ? "run " + ov_msckf_ton::to_string(opt.td.mode) : req.label, !req.progress);
   const auto t0 = std::chrono::steady_clock::now();

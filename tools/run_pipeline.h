@@ -72,7 +72,7 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req);
 /// share one search. Returns nothing when no search was due. With `keep`, the images the search decodes are put there
 /// (by index into data.images) while their bytes stay within keep_bytes, for the filter to take instead of decoding
 /// them again: the same pixels, so the same trajectory. With `tracked`, the search's tracks when the filter can go on
-/// from them (ov_msckf_ton::search_td).
+/// from them (ov_msckf_ton::search_td); it then keeps no images, since the filter needs none of its window.
 std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt,
                                                           ov_core::DecodedImages *keep = nullptr,
                                                           size_t keep_bytes = RunRequest::kKeepSearchImagesBytes,

@@ -62,8 +62,8 @@ void ImagePrefetcher::work() {
 }
 
 cv::Mat ImagePrefetcher::get(const ImageEntry &e) {
-  const ImageEntry *begin = images_.data(), *end = begin + images_.size();
-  return &e >= begin && &e < end ? get(static_cast<size_t>(&e - begin)) : decode_entry(e);
+  const auto index = entry_index(images_, e);
+  return index ? get(*index) : decode_entry(e);
 }
 
 cv::Mat ImagePrefetcher::get(size_t index) {

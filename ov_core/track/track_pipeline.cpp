@@ -90,10 +90,10 @@ void TrackPipeline::produce_locked(std::unique_lock<std::mutex> &lock) {
 }
 
 TrackedFrame TrackPipeline::take(const ImageEntry &e) {
-  const ImageEntry *begin = images_.data(), *end = begin + images_.size();
-  if (&e < begin || &e >= end)
+  const auto index = entry_index(images_, e);
+  if (!index)
     throw std::logic_error("TrackPipeline::take: the entry (" + e.path + ") is not one of the pipeline's images");
-  return take(static_cast<size_t>(&e - begin));
+  return take(*index);
 }
 
 TrackedFrame TrackPipeline::take(size_t index) {

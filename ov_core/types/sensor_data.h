@@ -5,7 +5,9 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,6 +38,15 @@ struct ImageEntry {
   /// Feature-level datasets: the frame's observations instead of pixels (the image file need not exist).
   std::shared_ptr<const std::vector<PointObservation>> features;
 };
+
+/// Where `e` sits in `images`, when it is one of its entries (the replay hands out the list's own entries); nothing
+/// for a copy or an entry of another list.
+inline std::optional<size_t> entry_index(const std::vector<ImageEntry> &images, const ImageEntry &e) {
+  const std::less<const ImageEntry *> before; // a total order, also for pointers into different objects
+  if (images.empty() || before(&e, images.data()) || !before(&e, images.data() + images.size()))
+    return std::nullopt;
+  return static_cast<size_t>(&e - images.data());
+}
 
 /// A full navigation state sample (ground truth or estimate), stamped in the IMU clock.
 /// Velocity and biases are optional: position-only sources (RTK) leave has_orientation false.

@@ -1,5 +1,6 @@
 #include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_core/math/so3.h"
+#include "ov_core/track/track_pipeline.h"
 #include "ov_core/types/errors.h"
 #include "ov_core/types/state_interpolation.h"
 #include "ov_msckf_ton/state/state_helper.h"

@@ -6,7 +6,6 @@
 #include "ov_core/io/velocity_log.h"
 #include "ov_core/track/feature_database.h"
 #include "ov_core/track/track_klt.h"
-#include "ov_core/track/track_pipeline.h"
 #include "ov_msckf_ton/core/filter_health.h"
 #include "ov_msckf_ton/core/vio_options.h"
 #include "ov_msckf_ton/init/inertial_init.h"
@@ -28,6 +27,10 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <vector>
+
+namespace ov_core {
+struct TrackedFrame; // ov_core/track/track_pipeline.h
+}
 
 namespace ov_msckf_ton {
 

@@ -2,6 +2,7 @@
 #include "ov_core/cam/camera_model.h"
 #include "ov_core/io/image_io.h"
 #include "ov_core/math/so3.h"
+#include "ov_core/track/track_pipeline.h"
 
 #include <Eigen/SVD>
 

@@ -6,13 +6,16 @@
 // interval shifted by each candidate t_d, and the best candidate seeds the filter.
 #include "ov_core/cam/camera_calib.h"
 #include "ov_core/track/track_klt.h"
-#include "ov_core/track/track_pipeline.h"
 #include "ov_core/types/sensor_data.h"
 
 #include <functional>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
+
+namespace ov_core {
+struct TrackedStart; // ov_core/track/track_pipeline.h
+}
 
 namespace ov_msckf_ton {
 
