@@ -4,7 +4,9 @@
 #include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
 #include "ov_eval/diagnose.h"
+#include "ov_eval/diagnose/candidates.h"
 #include "ov_eval/diagnose/filter_calibration.h"
+#include "ov_eval/diagnose/selection.h"
 #include "ov_msckf_ton/update/residual_log.h"
 #include "test_util.h"
 
@@ -265,4 +267,34 @@ TEST(Diagnose, CalibrationLogRoundTripAndLookup) {
   ovtest::expect_data_error([&] { load_calibration_log(dir / "short.csv"); }, "short.csv", 2, "short row");
   ovtest::write_text(dir / "res.csv", ov_msckf_ton::ResidualLogWriter::header() + "\n");
   EXPECT_THROW(load_calibration_log(dir / "res.csv"), DataError);
+}
+
+// The filter's accelerometer bias absorbs the error of every effect the model lacks, so a candidate tested on it is
+// ranked after the selected candidates the images show, with a note, even when its own share is larger; alone it is
+// first and carries no such note.
+TEST(Diagnose, AccelerometerBiasEvidenceRankedAfterWhatTheImagesShow) {
+  const auto &table = diag::candidate_table();
+  size_t accel = table.size(), shutter = table.size();
+  for (size_t c = 0; c < table.size(); ++c) {
+    accel = table[c].key == "accel_scale_axes" ? c : accel;
+    shutter = table[c].key == "rolling_shutter" ? c : shutter;
+  }
+  ASSERT_LT(accel, table.size());
+  ASSERT_LT(shutter, table.size());
+  std::vector<CandidateResult> res(table.size());
+  for (size_t c = 0; c < table.size(); ++c)
+    res[c].key = table[c].key;
+  res[accel].explained = res[shutter].explained = true;
+  res[accel].explained_added = 0.08, res[accel].sigma = 9;
+  res[shutter].explained_added = 0.03, res[shutter].sigma = 8;
+
+  const auto both = diag::rank_candidates(res, {accel, shutter});
+  EXPECT_EQ(both[0].key, "rolling_shutter");
+  EXPECT_EQ(both[1].key, "accel_scale_axes");
+  EXPECT_NE(both[1].note.find("re-diagnose after modelling them"), std::string::npos) << both[1].note;
+
+  res[shutter].explained = false;
+  const auto alone = diag::rank_candidates(res, {accel});
+  EXPECT_EQ(alone[0].key, "accel_scale_axes");
+  EXPECT_EQ(alone[0].note, "");
 }

@@ -92,9 +92,23 @@ std::vector<CandidateResult> test_candidates(const Design &d, const Design *rate
 }
 
 std::vector<CandidateResult> rank_candidates(std::vector<CandidateResult> res, const std::vector<size_t> &selected) {
+  // The filter's accelerometer bias is downstream of every other effect: whatever the model lacks moves the state,
+  // and the bias takes its share (a wandering offset and a readout time were named accelerometer scale first on the
+  // sizing flights). The images-against-gyro and residual evidence never sees the accelerometer, so its selected
+  // candidates come first; a bias candidate selected beside them says that its evidence may be their echo.
+  const auto downstream = [](size_t c) { return candidate_table()[c].needs == Needs::AccelBias; };
   std::vector<size_t> order = selected;
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t b) { return res[a].explained_added > res[b].explained_added; });
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    if (downstream(a) != downstream(b))
+      return downstream(b);
+    return res[a].explained_added > res[b].explained_added;
+  });
+  const bool upstream_selected = std::any_of(order.begin(), order.end(), [&](size_t c) { return !downstream(c); });
+  for (size_t c : order)
+    if (downstream(c) && upstream_selected)
+      res[c].note = "ranked after the effects the images show: the filter's accelerometer bias also absorbs their "
+                    "error; re-diagnose after modelling them" +
+                    (res[c].note.empty() ? std::string() : "; " + res[c].note);
   std::vector<size_t> rest;
   for (size_t c = 0; c < res.size(); ++c)
     if (std::find(order.begin(), order.end(), c) == order.end())

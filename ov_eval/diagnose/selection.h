@@ -19,8 +19,9 @@ std::vector<CandidateResult> test_candidates(const Design &d, const Design *rate
                                              const DiagnoseOptions &opt, const DiagnoseReport &rep,
                                              std::vector<size_t> &selected);
 
-/// The selected candidates by the share they explain of their own data, then the rest (tested before untested, then
-/// by share); sets each rank.
+/// The selected candidates by the share they explain of their own data — those on the filter's accelerometer bias
+/// after the others, whose error that bias also absorbs — then the rest (tested before untested, then by share); sets
+/// each rank.
 std::vector<CandidateResult> rank_candidates(std::vector<CandidateResult> res, const std::vector<size_t> &selected);
 
 /// δt per time bin (the trend a drift shows), each bin fitted on its own rows of dt (kV only, nothing else removed),

@@ -132,11 +132,14 @@ void FilterHealth::check_td(const State &s) const {
   // The same a second earlier: a sustained walk, not the one-off jump of a filter converging from far off.
   if (!runaway(now) || !runaway(td_sum(now_ns - static_cast<int64_t>(opt_.td_persist_s * 1e9))))
     return;
-  char msg[400];
+  // Both readings are named: the paper's modes diverging on a fast start look like this, and so does `sr` following an
+  // offset that really wanders (diagnose_sizing.sh's wandering offset stopped two of four flights here).
+  char msg[600];
   std::snprintf(msg, sizeof msg,
                 "the time offset is running away: the updates moved t_d by %.1f ms in %.1f s where the information "
-                "they added allowed %.2f ms (%.0f sigma), and as much the second before - a diverging estimate, not "
-                "a measurement",
+                "they added allowed %.2f ms (%.0f sigma), and as much the second before - either the estimate "
+                "diverges or the true offset varies faster than this mode's t_d model lets it (`ovton diagnose` on a "
+                "--residual-log of this run tells which; modes drift and sr+random_walk let t_d move)",
                 now.moved * 1e3, opt_.td_window_s, std::sqrt(now.allowed_var) * 1e3,
                 std::abs(now.moved) / std::max(std::sqrt(now.allowed_var), 1e-12));
   throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));

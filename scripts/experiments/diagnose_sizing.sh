@@ -65,7 +65,7 @@ for C in "${CASES[@]}"; do
     [ "${DIAGNOSE_ONLY:-0}" = 1 ] && [ -f "$D/res.csv" ] || "$BIN" run --dataset "$DS" --td-mode sr --config "$D/run.yaml" --init groundtruth --output "$D/run.csv" \
       --residual-log "$D/res.csv" -q >"$D/run.txt" 2>"$D/run.err" || true
     "$BIN" diagnose --log "$D/res.csv" --dataset "$DS" --out "$D/diagnose" >"$D/diagnose.txt"
-    python3 - "$D/diagnose/diagnose.json" "$(expect "$C")" "$DS" "$C" "$S" >>"$OUT/sizing.md" <<'PY'
+    python3 - "$D/diagnose/diagnose.json" "$(expect "$C")" "$DS" "$C" "$S" "$D/res.csv" >>"$OUT/sizing.md" <<'PY'
 import json, sys, csv
 d = json.load(open(sys.argv[1]))
 key, _, ests = sys.argv[2].partition("|")
@@ -79,7 +79,12 @@ if key == "-":
     print(f"| {sys.argv[4]} | {sys.argv[5]} | {flag} | | | {'clean: nothing flagged' if ok else 'FALSE FLAG'} |")
     sys.exit()
 def truth_spread():  # RMS about their mean of the true offset's means over eighths of the used span
+    # The span the residual log covers: a run stopped early (the t_d health check) is diagnosed on what it logged.
+    with open(sys.argv[6]) as f:
+        stamps = [int(r["t_cam_ns"]) for r in csv.DictReader(f)]
+    lo, hi = min(stamps), max(stamps)
     rows = [r for r in csv.reader(open(sys.argv[3] + "/mav0/td_truth/data.csv")) if r and not r[0].startswith("#")]
+    rows = [r for r in rows if lo <= int(r[0]) <= hi]
     t = [int(r[0]) * 1e-9 for r in rows]; v = [float(r[1]) * 1e3 for r in rows]
     t0, t1 = t[0], t[-1]
     b = [[] for _ in range(8)]
