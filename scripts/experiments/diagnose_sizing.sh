@@ -109,4 +109,27 @@ print(f"| {sys.argv[4]} | {sys.argv[5]} | {flag} | {'; '.join(parts)} | {'yes' i
 PY
   done
 done
+# Where an accelerometer scale goes: a monocular filter's metric scale follows the accelerometer, so the trajectory
+# comes out too large by about the planted scale and the bias (what accel_scale_axes reads) keeps only the rest.
+# Compared per seed with the clean agile flight, whose own scale error is the filter's.
+if [[ " ${CASES[*]} " == *" accel_scale "* && " ${CASES[*]} " == *" clean "* ]]; then
+  {
+    echo
+    echo "Trajectory scale (\`ovton eval --align sim3\`: how much too large the estimate is):"
+    echo
+    echo "| seed | accel_scale 3 % [%] | clean [%] | difference [%] |"
+    echo "|---:|---:|---:|---:|"
+    for S in "${SEEDS[@]}"; do
+      for C in accel_scale clean; do
+        "$BIN" eval --est "$OUT/$C/s$S/run.csv" --gt "$OUT/$C/s$S/data/mav0/state_groundtruth_estimate0/data.csv" \
+          --align sim3 --json "$OUT/$C/s$S/eval_sim3.json" >/dev/null
+      done
+      python3 - "$OUT/accel_scale/s$S/eval_sim3.json" "$OUT/clean/s$S/eval_sim3.json" "$S" <<'PY'
+import json, sys
+a, c = (100 * (1 / json.load(open(f))["align_scale"] - 1) for f in sys.argv[1:3])
+print(f"| {sys.argv[3]} | {a:.2f} | {c:.2f} | {a - c:.2f} |")
+PY
+    done
+  } >>"$OUT/sizing.md"
+fi
 cat "$OUT/sizing.md"
