@@ -68,7 +68,81 @@ ov_core::Feature feature_of(const SlamScene &sc, const Eigen::Vector3d &p_W, dou
   return f;
 }
 
+/// Pixel errors of one track, AR(1) with correlation rho between consecutive images and stationary sigma.
+std::vector<Eigen::Vector2d> ar1_errors(int n, double sigma, double rho, std::mt19937 &rng) {
+  std::normal_distribution<double> g(0, 1);
+  std::vector<Eigen::Vector2d> e(n);
+  e[0] = sigma * Eigen::Vector2d(g(rng), g(rng));
+  for (int k = 1; k < n; ++k)
+    e[k] = rho * e[k - 1] + sigma * std::sqrt(1 - rho * rho) * Eigen::Vector2d(g(rng), g(rng));
+  return e;
+}
+
+/// Landmark NEES over Monte-Carlo trials: initialised from the first `init` of 12 images (true clones), then updated
+/// by each later image's observation, pixel errors AR(1) with `rho_true`, the filter told `rho_model`.
+double landmark_nees_with_correlated_errors(double rho_true, double rho_model) {
+  const Eigen::Vector3d p_true(0.3, 0.2, -0.1);
+  const int n = 12, init = 6;
+  std::mt19937 rng(9);
+  double nees = 0;
+  int trials = 0;
+  for (int t = 0; t < 200; ++t) {
+    SlamScene sc(n);
+    sc.state.P *= 1e-8; // the clones are the truth: only the pixel noise is uncertain
+    ov_core::CameraModel cam(sc.calib);
+    const std::vector<Eigen::Vector2d> e = ar1_errors(n, 1.0, rho_true, rng);
+    std::vector<std::pair<int64_t, Eigen::Vector2d>> uv;
+    for (const auto &[t_ns, c] : sc.state.clones) {
+      Eigen::Vector2d xy;
+      EXPECT_TRUE(sc.project(c, p_true, xy));
+      uv.emplace_back(t_ns, cam.distort(xy) + e[uv.size()]);
+    }
+    UpdaterMSCKFOptions mo;
+    mo.chi2_multiplier = 100; // this test is about the covariance, not the gate
+    UpdaterMSCKF msckf(sc.calib, mo);
+    UpdaterSlamOptions so;
+    so.chi2_multiplier = 100;
+    so.track_correlation = rho_model;
+    UpdaterSLAM slam(sc.calib, so, msckf);
+    ov_core::FeatureDatabase db;
+    for (int k = 0; k < init; ++k)
+      db.add_observation(7, uv[k].first, uv[k].second, cam.undistort(uv[k].second));
+    SlamStats st;
+    slam.initialize(sc.state, {db.get(7)}, uv[init - 1].first, TdObservation::None, VelocityProvider(), st);
+    if (st.initialised != 1)
+      continue;
+    for (int k = init; k < n; ++k) {
+      db.add_observation(7, uv[k].first, uv[k].second, cam.undistort(uv[k].second));
+      std::vector<size_t> drop;
+      slam.update(sc.state, db, uv[k].first, TdObservation::None, VelocityProvider(), st, drop);
+      EXPECT_TRUE(drop.empty());
+    }
+    const LandmarkState &l = sc.state.landmarks.at(7);
+    const Eigen::Vector3d err = p_true - l.p_W;
+    nees += err.dot(sc.state.P.block<3, 3>(l.index, l.index).ldlt().solve(err));
+    ++trials;
+  }
+  EXPECT_GT(trials, 150);
+  return nees / std::max(trials, 1);
+}
+
 } // namespace
+
+// slam.track_correlation: with a track's errors correlated from image to image, the whitened initialisation and
+// the differenced updates keep the landmark's covariance honest; taken as independent, the same errors make it
+// overconfident (the test can fail both ways).
+TEST(SlamInit, CorrelatedTrackErrorsKeepTheLandmarkConsistentWhenModelled) {
+  const double modelled = landmark_nees_with_correlated_errors(0.8, 0.8);
+  const double ignored = landmark_nees_with_correlated_errors(0.8, 0.0);
+  const double independent = landmark_nees_with_correlated_errors(0.0, 0.0);
+  std::cout << "[slam correlated] landmark NEES: modelled " << modelled << ", ignored " << ignored
+            << ", independent errors " << independent << " (3 is ideal)\n";
+  EXPECT_GT(modelled, 2.2);
+  EXPECT_LT(modelled, 4.0);
+  EXPECT_GT(ignored, 4.5);
+  EXPECT_GT(independent, 2.2);
+  EXPECT_LT(independent, 4.0);
+}
 
 TEST(SlamJacobians, LandmarkMeasurementMatchesFiniteDifferences) {
   SlamScene sc(4);

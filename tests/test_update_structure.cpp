@@ -5,8 +5,10 @@
 #include "ov_msckf_ton/update/updater_msckf.h"
 
 #include <Eigen/LU>
+#include <Eigen/QR>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 using namespace ov_msckf_ton;
@@ -103,4 +105,46 @@ TEST(UpdateStructure, ColumnEkfUpdateEqualsTheDenseUpdate) {
   EXPECT_LT((sparse.landmarks[1].p_W - (K * r).segment<3>(37)).norm(), 1e-12);
   EXPECT_THROW(state_helper::ekf_update(sparse, {0, 99}, Eigen::MatrixXd::Zero(1, 2), Eigen::VectorXd::Zero(1), 1.0),
                ov_core::UsageError);
+}
+
+// Correlated track errors (update.track_correlation): the whitening turns the AR(1) covariance into the identity, and
+// the projected innovation of whitened rows equals Q₂ᵀ W (H P Hᵀ + σ² C) Wᵀ Q₂ formed densely.
+TEST(UpdateStructure, WhitenedTrackRowsHaveIndependentErrors) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0, 1);
+  const int m = 5, rows = 2 * m, nc = 6 * m + 1;
+  const double rho = 0.77, sigma2 = 0.25;
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(rows, rows);
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j)
+      for (int c = 0; c < 2; ++c)
+        C(2 * i + c, 2 * j + c) = std::pow(rho, std::abs(i - j));
+  Eigen::MatrixXd W = Eigen::MatrixXd::Identity(rows, rows);
+  UpdaterMSCKF::whiten_track_rows(W, rho);
+  EXPECT_LT((W * C * W.transpose() - Eigen::MatrixXd::Identity(rows, rows)).norm(), 1e-12);
+  // Independent errors stay as they are; an odd row count is refused.
+  Eigen::MatrixXd I = Eigen::MatrixXd::Identity(rows, rows);
+  UpdaterMSCKF::whiten_track_rows(I, 0.0);
+  EXPECT_EQ(I, Eigen::MatrixXd::Identity(rows, rows));
+  Eigen::MatrixXd odd(3, 2);
+  EXPECT_THROW(UpdaterMSCKF::whiten_track_rows(odd, rho), ov_core::UsageError);
+
+  FeatureLinearization lin;
+  lin.obs.resize(m);
+  lin.H_x = Eigen::MatrixXd::Zero(rows, nc);
+  for (int k = 0; k < m; ++k)
+    lin.H_x.block<2, 6>(2 * k, 6 * k) = Eigen::Matrix<double, 2, 6>::NullaryExpr([&]() { return g(rng); });
+  lin.H_x.col(6 * m) = Eigen::VectorXd::NullaryExpr(rows, [&]() { return g(rng); });
+  lin.H_f = Eigen::Matrix<double, Eigen::Dynamic, 3>::NullaryExpr(rows, 3, [&]() { return g(rng); });
+  const Eigen::MatrixXd P = random_spd(nc, rng);
+  const Eigen::Matrix<double, Eigen::Dynamic, 3> Hf_w = W * lin.H_f;
+  const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(Hf_w);
+  const Eigen::MatrixXd Q = qr.householderQ();
+  const Eigen::MatrixXd Q2 = Q.rightCols(rows - 3);
+  const Eigen::MatrixXd S_ref =
+      Q2.transpose() * W * (lin.H_x * P * lin.H_x.transpose() + sigma2 * C) * W.transpose() * Q2;
+  const Eigen::MatrixXd S = UpdaterMSCKF::projected_innovation(lin, P, sigma2, rho);
+  EXPECT_LT((S - S_ref).norm(), 1e-12 * S_ref.norm());
+  // Without the whitening the same rows would be taken as independent: a different S (the test can fail).
+  EXPECT_GT((UpdaterMSCKF::projected_innovation(lin, P, sigma2) - S_ref).norm(), 1e-3 * S_ref.norm());
 }

@@ -38,6 +38,7 @@ UpdaterMSCKFOptions updater_options(const VioOptions &o) {
   u.min_observations = o.update.min_track_length;
   u.min_parallax_deg = o.update.min_parallax_deg;
   u.max_features = o.update.max_features;
+  u.track_correlation = o.update.track_correlation;
   return u;
 }
 
@@ -45,6 +46,7 @@ UpdaterSlamOptions slam_options(const VioOptions &o) {
   UpdaterSlamOptions u;
   u.sigma_px = o.slam.sigma_px > 0 ? o.slam.sigma_px : o.update.sigma_px;
   u.chi2_multiplier = o.slam.chi2_multiplier;
+  u.track_correlation = o.slam.track_correlation;
   return u;
 }
 

@@ -94,6 +94,9 @@ struct UpdateOptions {
   double sigma_px = 1.0;         ///< pixel noise of a KLT observation
   double chi2_multiplier = 1.0;  ///< scales the 95% chi-square gate
   int max_features = 80;         ///< per update
+  /// Correlation of a track's pixel errors between consecutive observations (AR(1)); 0: independent. KLT's errors
+  /// are not: 0.77 between frames on a rendered V1_02 flight (docs/results.md), which the 1 px weight covers.
+  double track_correlation = 0.0;
 };
 
 /// SLAM features (update/updater_slam.h): features tracked through the whole window become landmarks in the state.
@@ -102,6 +105,9 @@ struct SlamOptions {
   int max_init_per_frame = 10; ///< delayed initialisations per image at most
   double chi2_multiplier = 1.0;
   double sigma_px = 0.0; ///< pixel noise of a landmark observation; 0 = update.sigma_px
+  /// Correlation of a landmark's pixel errors between consecutive images (AR(1)); 0: independent. A landmark is
+  /// re-observed at every image, so a slowly wandering track error is otherwise counted again at each.
+  double track_correlation = 0.0;
 };
 
 /// Online calibration (OpenVINS-style): each estimated quantity becomes a state variable with the prior sigma given

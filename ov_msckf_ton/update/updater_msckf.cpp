@@ -35,6 +35,8 @@ UpdaterMSCKF::UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKF
     throw ov_core::UsageError("UpdaterMSCKF: chi2_confidence must be in (0, 1)");
   if (!(opt_.chi2_multiplier > 0))
     throw ov_core::UsageError("UpdaterMSCKF: chi2_multiplier must be positive");
+  if (!(opt_.track_correlation >= 0 && opt_.track_correlation < 1))
+    throw ov_core::UsageError("UpdaterMSCKF: track_correlation must be in [0, 1)");
   if (opt_.min_observations < 2)
     throw ov_core::UsageError("UpdaterMSCKF: min_observations must be at least 2 (two views leave one row)");
   if (!(opt_.min_depth > 0) || !(opt_.max_depth > opt_.min_depth))
@@ -262,8 +264,19 @@ void UpdaterMSCKF::compress(Eigen::MatrixXd &H, Eigen::VectorXd &r) {
   r = r.head(cols).eval();
 }
 
+void UpdaterMSCKF::whiten_track_rows(Eigen::Ref<Eigen::MatrixXd> M, double rho) {
+  if (rho == 0.0)
+    return;
+  if (M.rows() % 2 != 0 || !(rho > -1 && rho < 1))
+    throw ov_core::UsageError("whiten_track_rows: need an even row count and |rho| < 1");
+  const double s = 1.0 / std::sqrt(1.0 - rho * rho);
+  // From the last observation back, so that each row is combined with its predecessor's original values.
+  for (Eigen::Index k = M.rows() / 2 - 1; k >= 1; --k)
+    M.middleRows<2>(2 * k) = (M.middleRows<2>(2 * k) - rho * M.middleRows<2>(2 * k - 2)) * s;
+}
+
 Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &lin, const Eigen::MatrixXd &P_sub,
-                                                   double sigma2) {
+                                                   double sigma2, double rho) {
   const int m = static_cast<int>(lin.obs.size()), rows = 2 * m, nc = static_cast<int>(lin.H_x.cols());
   const int nd = nc - 6 * m; // t_d and calibration columns, dense
   if (m < 2 || nd < 0 || lin.H_x.rows() != rows || P_sub.rows() != nc || lin.H_f.rows() != rows)
@@ -280,7 +293,15 @@ Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &l
     S.middleCols<2>(2 * k).noalias() = T.middleCols<6>(6 * k) * lin.H_x.block<2, 6>(2 * k, 6 * k).transpose();
   if (nd > 0)
     S.noalias() += T.rightCols(nd) * lin.H_x.rightCols(nd).transpose();
-  const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(lin.H_f);
+  // Correlated track errors: W S Wᵀ and the whitened H_f, so that the noise below is σ²I again.
+  Eigen::Matrix<double, Eigen::Dynamic, 3> H_f = lin.H_f;
+  if (rho != 0.0) {
+    whiten_track_rows(S, rho);
+    S.transposeInPlace();
+    whiten_track_rows(S, rho);
+    whiten_track_rows(H_f, rho);
+  }
+  const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(H_f);
   S.applyOnTheLeft(qr.householderQ().adjoint());
   S.applyOnTheRight(qr.householderQ());
   Eigen::MatrixXd S2 = S.bottomRightCorner(rows - 3, rows - 3);
@@ -409,11 +430,19 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
     a.cols = lin_.cols;
     a.H = lin_.H_x;
     a.r = lin_.r;
-    // Projected copies: lin_ keeps the pre-projection residuals that the log reports.
-    nullspace_project(lin_.H_f, a.H, a.r);
+    // Projected copies: lin_ keeps the pre-projection residuals that the log reports. With correlated track errors
+    // the rows are whitened first, so that what is stacked has noise σ²I like every other feature's.
+    const double rho = opt_.track_correlation;
+    if (rho != 0.0) {
+      H_f_white_ = lin_.H_f;
+      whiten_track_rows(a.H, rho);
+      whiten_track_rows(a.r, rho);
+      whiten_track_rows(H_f_white_, rho);
+    }
+    nullspace_project(rho != 0.0 ? H_f_white_ : lin_.H_f, a.H, a.r);
 
     // S = H P Hᵀ + σ²I over the involved columns only, from the unprojected rows' block structure.
-    const Eigen::MatrixXd S = projected_innovation(lin_, state_helper::sub_covariance(state, a.cols), sigma2);
+    const Eigen::MatrixXd S = projected_innovation(lin_, state_helper::sub_covariance(state, a.cols), sigma2, rho);
     const double chi2 = a.r.dot(S.ldlt().solve(a.r));
     const int dof = static_cast<int>(a.r.size());
     const double thr = chi2_threshold(dof);

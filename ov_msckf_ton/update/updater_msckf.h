@@ -29,6 +29,9 @@ struct UpdaterMSCKFOptions {
   double min_parallax_deg = 0.2; ///< triangulation: below this the depth is noise
   double max_reproj_px = 10.0;   ///< triangulation: RMS reprojection error
   int triangulation_max_iterations = 20;
+  /// ρ of the AR(1) model of a track's pixel errors between consecutive observations (u and v apart): the feature's
+  /// rows are whitened before the nullspace projection. 0: independent errors (σ²I).
+  double track_correlation = 0.0;
 };
 
 struct UpdateStats {
@@ -110,7 +113,11 @@ public:
   /// columns after 6m are dense): H_x P Hₓᵀ costs O(m²) for the clone blocks instead of O(m·(6m)²) with the
   /// projected, dense rows. P_sub is P over lin.cols.
   static Eigen::MatrixXd projected_innovation(const FeatureLinearization &lin, const Eigen::MatrixXd &P_sub,
-                                              double sigma2);
+                                              double sigma2, double rho = 0.0);
+  /// Whitens the rows of one feature's stacked measurement (2m rows: u and v of observation k at 2k, 2k + 1) for
+  /// AR(1) errors with correlation ρ between consecutive observations: row k becomes (row k − ρ·row k−1)/√(1 − ρ²),
+  /// row 0 stays. Errors of covariance σ²·C (C_ij = ρ^|i−j| per coordinate) then have covariance σ²I.
+  static void whiten_track_rows(Eigen::Ref<Eigen::MatrixXd> M, double rho);
 
   /// chi2_multiplier × the chi-square quantile at chi2_confidence for `dof` degrees of freedom (cached table).
   double chi2_threshold(int dof) const;
@@ -159,6 +166,7 @@ private:
   mutable std::vector<CameraPose> poses_;
   mutable std::vector<Eigen::Vector2d> xy_;
   FeatureLinearization lin_;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> H_f_white_; ///< H_f with whitened rows (track_correlation)
   struct Accepted {
     std::vector<int> cols;
     Eigen::MatrixXd H;

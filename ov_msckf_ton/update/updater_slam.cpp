@@ -15,6 +15,8 @@ UpdaterSLAM::UpdaterSLAM(const ov_core::CameraCalib &calib, const UpdaterSlamOpt
   (void)calib; // the calibration comes from the updater's view of the state (fixed or estimated)
   if (!(opt_.sigma_px > 0) || !(opt_.chi2_multiplier > 0))
     throw ov_core::UsageError("UpdaterSLAM: sigma_px and chi2_multiplier must be positive");
+  if (!(opt_.track_correlation >= 0 && opt_.track_correlation < 1))
+    throw ov_core::UsageError("UpdaterSLAM: track_correlation must be in [0, 1)");
 }
 
 void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feature *> &features, int64_t t_cam_ns,
@@ -28,6 +30,12 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
       ++stats.init_rejected;
       continue;
     }
+    // Correlated track errors: the window's rows whitened as in the MSCKF; the observations after it are then
+    // differenced against their predecessor (update()), so the landmark's whole track is whitened.
+    const double rho = opt_.track_correlation;
+    UpdaterMSCKF::whiten_track_rows(lin_.H_x, rho);
+    UpdaterMSCKF::whiten_track_rows(lin_.H_f, rho);
+    UpdaterMSCKF::whiten_track_rows(lin_.r, rho);
     // Split the rows by the QR of H_f: the first three fix the landmark, the rest do not involve it.
     const Eigen::Index rows = lin_.r.size();
     const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(lin_.H_f);
@@ -152,6 +160,29 @@ bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &s
   return true;
 }
 
+bool UpdaterSLAM::difference_previous(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
+                                      const ov_core::Feature &f, TdObservation td_obs,
+                                      const VelocityProvider &velocities, LandmarkLinearization &lin,
+                                      LandmarkLinearization &prev, int &prev_clone_index) const {
+  const double rho = opt_.track_correlation;
+  const size_t i = f.obs.size() - 2;
+  const auto it = state.clones.find(f.obs[i].t_cam_ns);
+  if (it == state.clones.end() || !linearize(view, state, l, it->second, f, i, td_obs, velocities, prev))
+    return false;
+  // The same columns on both sides (t_d and the readout follow the velocity's availability): else not differenced.
+  if (prev.td_column != lin.td_column || prev.calib_cols != lin.calib_cols)
+    return false;
+  const double s = 1.0 / std::sqrt(1.0 - rho * rho);
+  lin.r = (lin.r - rho * prev.r) * s;
+  lin.H_clone *= s;
+  lin.H_f = (lin.H_f - rho * prev.H_f) * s;
+  lin.H_td = (lin.H_td - rho * prev.H_td) * s;
+  lin.H_calib = (lin.H_calib - rho * prev.H_calib) * s;
+  prev.H_clone *= -rho * s;
+  prev_clone_index = it->second.index;
+  return true;
+}
+
 void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64_t t_cam_ns, TdObservation td_obs,
                          const VelocityProvider &velocities, SlamStats &stats, std::vector<size_t> &drop) {
   const auto clone_it = state.clones.find(t_cam_ns);
@@ -166,8 +197,9 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
   std::vector<Eigen::Matrix<double, 2, Eigen::Dynamic>> rows_H;
   std::vector<std::vector<int>> rows_cols;
   std::vector<Eigen::Vector2d> rows_r;
-  LandmarkLinearization lin;
+  LandmarkLinearization lin, lin_prev;
   std::vector<int> cols;
+  const double rho = opt_.track_correlation;
   for (auto &[id, l] : state.landmarks) {
     const ov_core::Feature *f = db.get(id);
     if (!f || f->obs.empty() || f->newest().t_cam_ns != t_cam_ns)
@@ -176,6 +208,12 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
       drop.push_back(id);
       continue;
     }
+    // Correlated track errors (AR(1), ρ): the observation is differenced against the landmark's previous one,
+    // z_k − ρ z_{k−1} = h_k(x) − ρ h_{k−1}(x) + w_k, whose noise w_k = e_k − ρ e_{k−1} is independent of every
+    // earlier error (variance σ²(1 − ρ²)): the exact treatment while the previous image's clone is in the state.
+    int prev_index = 0;
+    const bool differenced = rho != 0.0 && f->obs.size() >= 2 &&
+                             difference_previous(view, state, l, *f, td_obs, velocities, lin, lin_prev, prev_index);
     cols.clear();
     for (int j = 0; j < 6; ++j)
       cols.push_back(c.index + j);
@@ -184,13 +222,18 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
     if (lin.td_column)
       cols.push_back(state.td_index);
     cols.insert(cols.end(), lin.calib_cols.begin(), lin.calib_cols.end());
+    if (differenced)
+      for (int j = 0; j < 6; ++j)
+        cols.push_back(prev_index + j);
     Eigen::Matrix<double, 2, Eigen::Dynamic> H(2, static_cast<Eigen::Index>(cols.size()));
     H.leftCols<6>() = lin.H_clone;
     H.middleCols<3>(6) = lin.H_f;
     int k = 9;
     if (lin.td_column)
       H.col(k++) = lin.H_td;
-    H.rightCols(lin.H_calib.cols()) = lin.H_calib;
+    H.middleCols(k, lin.H_calib.cols()) = lin.H_calib;
+    if (differenced)
+      H.rightCols<6>() = lin_prev.H_clone; // already −ρ/√(1 − ρ²) times the previous clone's block
     Eigen::Matrix2d S = H * state_helper::sub_covariance(state, cols) * H.transpose();
     S.diagonal().array() += sigma2;
     const double chi2 = lin.r.dot(S.ldlt().solve(lin.r));

@@ -19,6 +19,9 @@ struct UpdaterSlamOptions {
   double sigma_px = 1.0;
   double chi2_multiplier = 1.0;
   double min_depth = 0.1, max_depth = 60.0; ///< [m]: a landmark leaving this range is marginalised
+  /// ρ of the AR(1) model of a landmark's pixel errors between consecutive images: its window rows are whitened at
+  /// initialisation, each later observation differenced against the one before. 0: independent errors.
+  double track_correlation = 0.0;
 };
 
 struct SlamStats {
@@ -76,6 +79,14 @@ public:
                  const VelocityProvider &velocities, LandmarkLinearization &out) const;
 
 private:
+  /// With correlated track errors: linearises the landmark's previous observation of `f` (in `prev`) and turns `lin`
+  /// into the differenced measurement (lin − ρ·prev)/√(1 − ρ²), prev.H_clone into the block of the previous clone
+  /// (its state index in prev_clone_index).
+  /// False (lin untouched) when that observation's clone has left the state or its columns differ from lin's.
+  bool difference_previous(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
+                           const ov_core::Feature &f, TdObservation td_obs, const VelocityProvider &velocities,
+                           LandmarkLinearization &lin, LandmarkLinearization &prev, int &prev_clone_index) const;
+
   UpdaterSlamOptions opt_;
   const UpdaterMSCKF &msckf_;
   FeatureLinearization lin_;
