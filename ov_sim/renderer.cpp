@@ -61,6 +61,14 @@ Renderer::Renderer(const ov_core::CameraModel &cam, const Scene &scene, const Re
       R.log2_pix = static_cast<float>(std::log2(std::max(ang, 1e-9)));
     }
   }
+  row_yn_lo_.assign(h, std::numeric_limits<float>::infinity());
+  row_yn_hi_.assign(h, -std::numeric_limits<float>::infinity());
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      const float yn = rays_[static_cast<size_t>(v) * w + u].yn;
+      row_yn_lo_[v] = std::min(row_yn_lo_[v], yn);
+      row_yn_hi_[v] = std::max(row_yn_hi_[v], yn);
+    }
 }
 
 void Renderer::render(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, uint64_t noise_seed,
@@ -195,7 +203,15 @@ void Renderer::cast_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_W
   const float lod_bias = static_cast<float>(opt_.lod_bias);
   const float inf = std::numeric_limits<float>::infinity();
 
+  std::vector<BoxCull> row_cull;
+  row_cull.reserve(cull.size());
   for (int v = v_begin; v < v_end; ++v) {
+    // The boxes this row's rays can meet, in the same order: the per-pixel test below then skips the rest of the
+    // scene without looking at it (the image is the same; most boxes cover a few rows).
+    row_cull.clear();
+    for (const BoxCull &c : cull)
+      if (c.ymax >= row_yn_lo_[v] && c.ymin <= row_yn_hi_[v])
+        row_cull.push_back(c);
     for (int u = 0; u < w; ++u) {
       const Ray &ray = rays_[static_cast<size_t>(v) * w + u];
       const float d[3] = {R(0, 0) * ray.x + R(0, 1) * ray.y + R(0, 2) * ray.z,
@@ -216,7 +232,7 @@ void Renderer::cast_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_W
       // The slab test of Scene::intersect (the reference, in double), specialised for the hot loop: float, box
       // bounds pre-shifted to the camera centre, inverse directions from the ray table, screen-space culling.
       // tests/test_sim_render.cpp checks the rendered geometry against the camera model with planted markers.
-      for (const BoxCull &c : cull) {
+      for (const BoxCull &c : row_cull) {
         if (ray.xn < c.xmin || ray.xn > c.xmax || ray.yn < c.ymin || ray.yn > c.ymax)
           continue;
         float tn = -inf, tf = inf;

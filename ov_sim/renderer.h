@@ -47,6 +47,7 @@ private:
   const Scene &scene_;
   RenderOptions opt_;
   std::vector<Ray> rays_;
+  std::vector<float> row_yn_lo_, row_yn_hi_; ///< per image row, the range of its rays' yn (row culling of boxes)
 };
 
 } // namespace ov_sim
