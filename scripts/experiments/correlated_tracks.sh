@@ -43,7 +43,7 @@ VARIANTS=(
   echo "# Correlated track errors: KLT's tracks against AR(1) tracks"
   echo
   echo "Made by \`scripts/experiments/correlated_tracks.sh $OUT $2 $SIG $RHO\` at commit $(git rev-parse --short HEAD)" \
-    "(config $CONFIG, mode sr). AR(1) tracks: the KLT tracks' points projected exactly, plus AR(1) errors of sigma" \
+    "(config $CONFIG, mode sr, ground-truth initialisation). AR(1) tracks: the KLT tracks' points projected exactly, plus AR(1) errors of sigma" \
     "$SIG px and correlation $RHO between consecutive images."
   echo
   echo "| tracks | filter's model | APE [m] | ARE [deg] | NEES ori / pos |"
@@ -66,13 +66,16 @@ if p and p[0] != "-":
 yaml.safe_dump(cfg, open(sys.argv[2], "w"))
 EOF
     LOG="${CFG%.yaml}.log"
-    "$BIN" run -q -d "$OUT/$T" -c "$CFG" -m sr -o "${CFG%.yaml}.csv" >"$LOG" 2>&1
+    "$BIN" run -q -d "$OUT/$T" -c "$CFG" -m sr --init groundtruth -o "${CFG%.yaml}.csv" >"$LOG" 2>&1
     python3 - "$LOG" "$T" "$NAME" >>"$OUT/correlated_tracks.md" <<'EOF'
 import re, sys
 t = open(sys.argv[1]).read()
 ape = re.search(r"APE ([0-9.]+) m, ARE ([0-9.]+) deg", t)
 nees = re.search(r"NEES orientation ([0-9.]+), position ([0-9.]+)", t)
-print(f"| {sys.argv[2]} | {sys.argv[3]} | {ape.group(1)} | {ape.group(2)} | {nees.group(1)} / {nees.group(2)} |")
+if not ape:
+    sys.exit(f"correlated_tracks.sh: no APE in {sys.argv[1]}")
+nees_txt = f"{nees.group(1)} / {nees.group(2)}" if nees else "–"
+print(f"| {sys.argv[2]} | {sys.argv[3]} | {ape.group(1)} | {ape.group(2)} | {nees_txt} |")
 EOF
   done
 done
