@@ -293,15 +293,17 @@ Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &l
     S.middleCols<2>(2 * k).noalias() = T.middleCols<6>(6 * k) * lin.H_x.block<2, 6>(2 * k, 6 * k).transpose();
   if (nd > 0)
     S.noalias() += T.rightCols(nd) * lin.H_x.rightCols(nd).transpose();
-  // Correlated track errors: W S Wᵀ and the whitened H_f, so that the noise below is σ²I again.
-  Eigen::Matrix<double, Eigen::Dynamic, 3> H_f = lin.H_f;
+  // Correlated track errors: W S Wᵀ and the whitened H_f, so that the noise below is σ²I again. Independent errors
+  // (the default) use lin.H_f as it is, without a copy.
+  Eigen::Matrix<double, Eigen::Dynamic, 3> H_f_white;
   if (rho != 0.0) {
     whiten_track_rows(S, rho);
     S.transposeInPlace();
     whiten_track_rows(S, rho);
-    whiten_track_rows(H_f, rho);
+    H_f_white = lin.H_f;
+    whiten_track_rows(H_f_white, rho);
   }
-  const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(H_f);
+  const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(rho != 0.0 ? H_f_white : lin.H_f);
   S.applyOnTheLeft(qr.householderQ().adjoint());
   S.applyOnTheRight(qr.householderQ());
   Eigen::MatrixXd S2 = S.bottomRightCorner(rows - 3, rows - 3);
