@@ -7,6 +7,7 @@
 #include "ov_core/types/errors.h"
 #include "ov_sim/euroc_calib.h"
 #include "test_util.h"
+#include "track_test_util.h"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -22,31 +23,11 @@ using namespace ov_core;
 
 namespace {
 
-constexpr int kW = 752, kH = 480;
+constexpr int kW = ovtest::kTrackW, kH = ovtest::kTrackH;
+using ovtest::pinhole_calib;
+using ovtest::random_texture;
 constexpr int64_t kT0 = 1403715273262142976LL; // a real EuRoC stamp: large enough to break double-keyed code
 constexpr int64_t kDt = 50000000LL;            // 20 Hz
-
-/// EuRoC cam0 intrinsics without distortion, so that an image-space shift is the same shift in normalised units.
-CameraCalib pinhole_calib() {
-  CameraCalib c;
-  c.width = kW;
-  c.height = kH;
-  c.rate_hz = 20;
-  c.intrinsics = ov_sim::euroc_cam0_calib().intrinsics;
-  c.dist_coeffs.setZero();
-  return c;
-}
-
-/// Smooth random texture (blobs a few pixels wide): corners everywhere, and smooth enough for sub-pixel LK.
-cv::Mat random_texture(int w, int h, uint64_t seed) {
-  cv::RNG rng(seed);
-  cv::Mat small(h / 4 + 1, w / 4 + 1, CV_8UC1);
-  rng.fill(small, cv::RNG::UNIFORM, 0, 256);
-  cv::Mat big;
-  cv::resize(small, big, cv::Size(w, h), 0, 0, cv::INTER_CUBIC);
-  cv::GaussianBlur(big, big, cv::Size(0, 0), 1.0);
-  return big;
-}
 
 /// The centre kW x kH crop of `img`, so that warps of a larger texture have no border artefacts.
 cv::Mat centre_crop(const cv::Mat &img) {

@@ -10,6 +10,7 @@
 #include "ov_msckf_ton/core/vio_options.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
+#include "tools/run_pipeline.h"
 
 #include <boost/program_options.hpp>
 #include <chrono>
@@ -74,6 +75,7 @@ int ovton::cmd_track(const ovton::Args &args) {
         config.empty() ? ov_msckf_ton::VioOptions{} : ov_msckf_ton::load_vio_options(config);
     const ov_core::CameraModel camera(data.cam);
     ov_core::TrackKLT tracker(camera, opt.track);
+    tracker.set_rotation_prior(make_rotation_prior(data, opt));
     long n = 0, feats = 0;
     for (const auto &e : data.images) {
       if (max_images > 0 && n >= max_images)

@@ -18,6 +18,14 @@ void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov
     opt.td.init_s = data.td_prior_s;
 }
 
+std::shared_ptr<const ov_core::GyroRotationPrior> make_rotation_prior(const ov_core::Dataset &data,
+                                                                      const ov_msckf_ton::VioOptions &opt) {
+  if (!opt.track.gyro_prior || data.imu.size() < 2)
+    return nullptr;
+  const Eigen::Matrix3d R_IC = data.imu_calib.T_BI.block<3, 3>(0, 0).transpose() * data.cam.T_BC.block<3, 3>(0, 0);
+  return std::make_shared<ov_core::GyroRotationPrior>(data.imu, R_IC, opt.td.init_s);
+}
+
 std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt,
                                                           ov_core::DecodedImages *keep, size_t keep_bytes,
                                                           ov_core::TrackedStart *tracked) {
@@ -29,6 +37,7 @@ std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset
   ov_msckf_ton::TdSearchOptions so;
   so.range_s = opt.td.search_range_s;
   so.track = opt.track;
+  so.rotation_prior = make_rotation_prior(data, opt); // at the prior offset: the search has not found its own yet
   size_t kept_bytes = 0;
   bool first_load = true, keeping = keep != nullptr;
   const auto load = [&](const ov_core::ImageEntry &e) {
@@ -77,6 +86,8 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   if (res.td_search && req.progress) // before the run, so that it is seen even when the run fails
     std::fprintf(stderr, "coarse t_d search: %s\n", res.td_search->summary().c_str());
   ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
+  const auto prior = make_rotation_prior(data, opt);
+  vio.set_rotation_prior(prior);
   if (data.has_td_truth())
     vio.set_td_oracle([&data](int64_t t) { return data.td_truth_at(t); });
   else if (opt.td.mode == ov_msckf_ton::TdMode::Oracle)
@@ -132,6 +143,7 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   if (threaded || tracked.tracker) {
     if (!tracked.tracker)
       tracked.tracker = std::make_unique<ov_core::TrackKLT>(ov_core::CameraModel(data.cam), opt.track);
+    tracked.tracker->set_rotation_prior(prior); // at the offset the search found
     res.images_pretracked = tracked.frames.size();
     pipeline = std::make_unique<ov_core::TrackPipeline>(
         data.images, std::move(tracked), [&image_of, &data](size_t i) { return image_of(data.images[i]); }, threaded);

@@ -73,6 +73,11 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req);
 /// (by index into data.images) while their bytes stay within keep_bytes, for the filter to take instead of decoding
 /// them again: the same pixels, so the same trajectory. With `tracked`, the search's tracks when the filter can go on
 /// from them (ov_msckf_ton::search_td); it then keeps no images, since the filter needs none of its window.
+/// The raw gyro for the trackers' LK starting points when opt.track.gyro_prior asks for it (else null), looked up at
+/// the offset opt.td.init_s.
+std::shared_ptr<const ov_core::GyroRotationPrior> make_rotation_prior(const ov_core::Dataset &data,
+                                                                      const ov_msckf_ton::VioOptions &opt);
+
 std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt,
                                                           ov_core::DecodedImages *keep = nullptr,
                                                           size_t keep_bytes = RunRequest::kKeepSearchImagesBytes,

@@ -139,6 +139,7 @@ std::unique_ptr<TrackKLT> TrackKLT::clone() const {
   auto c = std::make_unique<TrackKLT>(camera_, opt_);
   c->has_prev_ = has_prev_;
   c->t_prev_ns_ = t_prev_ns_;
+  c->prior_ = prior_;
   c->next_id_ = next_id_;
   c->img_ = img_.clone();
   // pyr_curr_ is rebuilt from the next image before it is read; the rest of the scratch is rewritten the same way.
@@ -188,6 +189,7 @@ const std::vector<TrackedFeature> &TrackKLT::track(int64_t t_cam_ns, const cv::M
   stats_.t_pyramid_ms = ms_since(t0);
 
   stats_.num_prev = static_cast<int>(ids_.size());
+  t_curr_ns_ = t_cam_ns;
   if (has_prev_ && !ids_.empty())
     track_previous();
   merge_and_detect();
@@ -214,7 +216,22 @@ void TrackKLT::track_previous() {
   const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, opt_.lk_max_iter, opt_.lk_eps);
 
   auto t0 = Clock::now();
-  cv::calcOpticalFlowPyrLK(pyr_prev_, pyr_curr_, pts_, pts_next_, status_, err_, win, opt_.pyr_levels, crit);
+  int flags = 0;
+  if (opt_.gyro_prior && prior_)
+    if (const auto R = prior_->camera_rotation(t_prev_ns_, t_curr_ns_)) {
+      // A point's undistorted bearing turned by the camera's rotation; one that leaves the image or turns behind
+      // the camera starts where it was.
+      pts_next_.resize(n);
+      for (size_t i = 0; i < n; ++i) {
+        const Eigen::Vector3d b = *R * xy_[i].homogeneous();
+        const Eigen::Vector2d uv = b.z() > 0.1 ? camera_.distort(b.head<2>() / b.z()) : Eigen::Vector2d(-1, -1);
+        const bool inside =
+            uv.allFinite() && uv.x() >= 0 && uv.y() >= 0 && uv.x() < camera_.width() && uv.y() < camera_.height();
+        pts_next_[i] = inside ? cv::Point2f(static_cast<float>(uv.x()), static_cast<float>(uv.y())) : pts_[i];
+      }
+      flags = cv::OPTFLOW_USE_INITIAL_FLOW;
+    }
+  cv::calcOpticalFlowPyrLK(pyr_prev_, pyr_curr_, pts_, pts_next_, status_, err_, win, opt_.pyr_levels, crit, flags);
   keep_.assign(n, 1);
   // Tracks are dropped, not only detections avoided, within border_px of the edge: there the LK window hangs
   // outside the image and the solution drifts (measured: a point walked from v = 12 to v = 0.7 px over eight frames,

@@ -2,6 +2,7 @@
 // Monocular KLT front end, as OpenVINS' TrackKLT: grid-based FAST detection, pyramidal Lucas-Kanade tracking on
 // pyramids built once per image, RANSAC on the fundamental matrix in undistorted normalised coordinates.
 #include "ov_core/cam/camera_model.h"
+#include "ov_core/track/gyro_prior.h"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -32,6 +33,9 @@ struct TrackKLTOptions {
   int pyr_levels = 3; ///< OpenCV maxLevel, as OpenVINS' pyr_levels: the pyramid holds pyr_levels + 1 images
   int lk_max_iter = 30;
   double lk_eps = 0.01; ///< LK stops when the update is below this [px]
+  /// Start LK where the gyro's rotation takes each point (when the tracker is given a GyroRotationPrior); the
+  /// pyramid then only has to find the parallax.
+  bool gyro_prior = false;
   bool forward_backward = false;
   double fb_max_px = 0.5; ///< forward-backward round trip error above which a track is dropped [px]
 
@@ -92,6 +96,9 @@ public:
   /// until the next call. Throws UsageError on a wrong image type/size or a stamp not after the previous one.
   const std::vector<TrackedFeature> &track(int64_t t_cam_ns, const cv::Mat &gray);
 
+  /// The raw gyro, for options().gyro_prior (shared: clones and other trackers of the same run use the same one).
+  void set_rotation_prior(std::shared_ptr<const GyroRotationPrior> prior) { prior_ = std::move(prior); }
+
   /// Forgets all tracks (e.g. after a gap in the data); ids keep increasing so they never repeat.
   void reset();
 
@@ -115,9 +122,10 @@ private:
   CameraModel camera_;
   TrackKLTOptions opt_;
   cv::Ptr<cv::CLAHE> clahe_;
+  std::shared_ptr<const GyroRotationPrior> prior_;
 
   bool has_prev_ = false;
-  int64_t t_prev_ns_ = 0;
+  int64_t t_prev_ns_ = 0, t_curr_ns_ = 0;
   size_t next_id_ = 0;
 
   cv::Mat img_;

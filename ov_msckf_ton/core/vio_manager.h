@@ -76,6 +76,10 @@ public:
   /// or the bag message). An empty image is reported as unreadable, naming the file.
   using ImageSource = std::function<cv::Mat(const ov_core::ImageEntry &)>;
   void set_image_source(ImageSource src) { image_source_ = std::move(src); }
+  /// The raw gyro for the tracker's LK starting points (tracker.gyro_prior), when this manager tracks the images.
+  void set_rotation_prior(std::shared_ptr<const ov_core::GyroRotationPrior> prior) {
+    tracker_.set_rotation_prior(std::move(prior));
+  }
   /// Where on_image gets an image's tracked features when they are tracked elsewhere (an ov_core::TrackPipeline with
   /// this manager's tracker options and camera): set, it replaces the image source and the manager's own tracker.
   using FrameSource = std::function<ov_core::TrackedFrame(const ov_core::ImageEntry &)>;

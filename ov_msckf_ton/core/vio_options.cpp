@@ -173,6 +173,7 @@ std::vector<Field> fields(VioOptions &o) {
       field(K, "lk_eps", tr.lk_eps),
       field(K, "ransac_px", tr.ransac_px),
       field(K, "forward_backward", tr.forward_backward),
+      field(K, "gyro_prior", tr.gyro_prior),
       enum_field<ov_core::ImageEqualization>(K, "equalization", tr.equalization, parser(kEqualization),
                                              namer(kEqualization)),
       field(I, "noise_multiplier", o.imu.noise_multiplier),

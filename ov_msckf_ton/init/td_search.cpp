@@ -185,6 +185,7 @@ std::vector<PairRate> image_pair_rates(const std::vector<ov_core::ImageEntry> &i
   if (!as_filter)
     track.num_features = std::min(track.num_features, opt.max_features);
   auto tracker = std::make_unique<ov_core::TrackKLT>(camera, track);
+  tracker->set_rotation_prior(opt.rotation_prior);
   ov_core::TrackedStart start;
   const Eigen::Matrix3d R_BC = cam.T_BC.block<3, 3>(0, 0);
   const double huber_rad = 2.0 / std::max(camera.fu(), camera.fv());

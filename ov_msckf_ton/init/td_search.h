@@ -33,6 +33,8 @@ struct TdSearchOptions {
   double highpass_s = 0.5;
   int min_pairs = 40; ///< consecutive image pairs with a rotation fit
   ov_core::TrackKLTOptions track;
+  /// The raw gyro for the tracker's LK starting points (track.gyro_prior); none: LK starts where a point was.
+  std::shared_ptr<const ov_core::GyroRotationPrior> rotation_prior;
   /// A window that does not start at the first image is tracked with at most this many features (track.num_features
   /// if fewer): a rotation fit of bearings needs few, and that tracking is for the search alone. Measured at 100
   /// against 200: the same t_d within 0.3 ms and σ within 0.05 ms on the real cut and renders of V1_03 and MH_03, the
