@@ -14,7 +14,7 @@ shift || true
 SEEDS=("$@")
 [ ${#SEEDS[@]} -eq 0 ] && SEEDS=(1 2 3 4)
 BIN=${OVTON_BIN:-build/ovton}
-read -r -a CASES <<<"${CASES:-rolling_shutter extrinsic_rotation gyro_scale_z gyro_misalignment accel_scale wander_td clean clean_plain}"
+read -r -a CASES <<<"${CASES:-rolling_shutter focal extrinsic_rotation gyro_scale_z gyro_misalignment accel_scale wander_td clean clean_plain}"
 [ -x "$BIN" ] || scripts/build.sh
 mkdir -p "$OUT"
 
@@ -22,6 +22,7 @@ mkdir -p "$OUT"
 plant() {
   case $1 in
   rolling_shutter) echo "--agility 1 --readout-ms 20" ;;
+  focal) echo "--agility 1 --focal-error-pct 1" ;;
   extrinsic_rotation) echo "--agility 1 --extrinsic-rot-deg 0.3,-0.4,0.5" ;;
   gyro_scale_z) echo "--agility 1 --gyro-scale-axes-pct 0,0,3" ;;
   gyro_misalignment) echo "--agility 1 --gyro-misalignment-mrad 5,-4,3" ;;
@@ -34,6 +35,7 @@ plant() {
 expect() {
   case $1 in
   rolling_shutter) echo "rolling_shutter|readout time t_r=20" ;;
+  focal) echo "focal|relative focal error ε=1" ;;
   extrinsic_rotation) echo "extrinsic_rotation|rotation error |φ|=0.7071" ;;
   gyro_scale_z) echo "gyro_scale_axes|gyro scale error s_z=3" ;;
   # The planted (5, -4, 3) mrad plus the euroc IMU model's own symmetric off-diagonal (0.14, 0.85, 0.14 mrad).
