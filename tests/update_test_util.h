@@ -1,0 +1,155 @@
+#pragma once
+// Synthetic MSCKF scenes for the update tests: a smooth body trajectory, points seen by every clone, a state whose
+// clones sit at the truth, noisy observations.
+#include "ov_core/cam/camera_model.h"
+#include "ov_core/math/so3.h"
+#include "ov_core/track/feature_database.h"
+#include "ov_msckf_ton/state/state.h"
+#include "ov_msckf_ton/update/feature_jacobians.h"
+#include "ov_sim/euroc_calib.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <utility>
+#include <vector>
+
+namespace updtest {
+
+using namespace ov_msckf_ton;
+using ov_core::so3_exp;
+using ov_core::so3_log;
+
+/// EuRoC cam0 with the rotation of its T_BS re-orthonormalised: the Jacobians take R_BC⁻¹ = R_BCᵀ, and the
+/// finite-difference checks below compare at 1e-7.
+inline ov_core::CameraCalib euroc_cam0() {
+  ov_core::CameraCalib c = ov_sim::euroc_cam0_calib();
+  const Eigen::Quaterniond q(Eigen::Matrix3d(c.T_BC.topLeftCorner<3, 3>()));
+  c.T_BC.topLeftCorner<3, 3>() = q.normalized().toRotationMatrix();
+  return c;
+}
+
+struct Pose {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d p;
+};
+
+/// A smooth body trajectory with non-constant angular and linear velocity (so that a time shift is not a rigid
+/// transform of the window, which would make t_d unobservable). `rate` scales the motion.
+inline Pose body_pose(double t, double rate) {
+  const Eigen::Vector3d th(0.25 * std::sin(rate * 1.3 * t), 0.3 * std::sin(rate * 0.9 * t + 0.5),
+                           0.2 * std::sin(rate * 1.7 * t + 1.0));
+  Pose P;
+  P.R = so3_exp(th);
+  P.p = Eigen::Vector3d(0.5 * std::sin(rate * 0.8 * t), 0.3 * std::sin(rate * 1.1 * t + 0.3),
+                        0.2 * std::sin(rate * 0.7 * t));
+  return P;
+}
+
+constexpr int64_t kT0 = 1403636579763555584; // a EuRoC-sized stamp: differences must stay exact in int64
+
+struct Scene {
+  ov_core::CameraCalib calib = euroc_cam0();
+  ov_core::CameraModel cam{calib};
+  Eigen::Matrix3d R_BC = calib.T_BC.topLeftCorner<3, 3>();
+  Eigen::Vector3d p_BC = calib.T_BC.topRightCorner<3, 1>();
+  double rate = 1.0;
+  double td_true = 0.0; ///< observations are taken at IMU time t_cam + td_true
+  std::vector<int64_t> stamps;
+  std::vector<Eigen::Vector3d> points;
+
+  double t_of(int64_t t_cam_ns) const { return static_cast<double>(t_cam_ns - kT0) * 1e-9; }
+  Pose pose_at(double t_imu) const { return body_pose(t_imu, rate); }
+  /// Undistorted normalised projection of a world point by the body pose at IMU time t.
+  bool project(const Pose &P, const Eigen::Vector3d &p_W, Eigen::Vector2d &xy) const {
+    return project_in_clone(P.R, P.p, R_BC, p_BC, p_W, xy, nullptr, nullptr, 0.2);
+  }
+  bool visible(const Pose &P, const Eigen::Vector3d &p_W) const {
+    Eigen::Vector2d xy;
+    return project(P, p_W, xy) && cam.in_image(cam.distort(xy), 10.0);
+  }
+};
+
+/// n_clones images at 20 Hz and points at 3–6 m seen by every one of them (at truth, with td_true).
+inline Scene make_scene(int n_clones, int n_points, double rate, double td_true, unsigned seed) {
+  Scene sc;
+  sc.rate = rate;
+  sc.td_true = td_true;
+  for (int k = 0; k < n_clones; ++k)
+    sc.stamps.push_back(kT0 + static_cast<int64_t>(k) * 50'000'000);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> ux(-0.5, 0.5), ud(3.0, 6.0);
+  const Pose P0 = sc.pose_at(sc.t_of(sc.stamps[n_clones / 2]) + td_true);
+  int tries = 0;
+  while (static_cast<int>(sc.points.size()) < n_points && ++tries < 100000) {
+    const double d = ud(rng);
+    const Eigen::Vector3d p_C(ux(rng) * d, 0.6 * ux(rng) * d, d);
+    const Eigen::Vector3d p_W = P0.R * (sc.R_BC * p_C + sc.p_BC) + P0.p;
+    bool all = true;
+    for (int64_t t : sc.stamps)
+      all = all && sc.visible(sc.pose_at(sc.t_of(t) + td_true), p_W);
+    if (all)
+      sc.points.push_back(p_W);
+  }
+  return sc;
+}
+
+/// A state whose clones sit at the truth pose of IMU time t_cam + td_ref, with independent priors per clone.
+inline State make_state(const Scene &sc, double td_ref, double sig_th, double sig_p, double sig_td) {
+  State s(true);
+  const int n = ImuState::kSize + 1 + CloneState::kSize * static_cast<int>(sc.stamps.size());
+  s.P = Eigen::MatrixXd::Zero(n, n);
+  s.P.topLeftCorner<15, 15>() = 1e-4 * Eigen::Matrix<double, 15, 15>::Identity();
+  s.td = td_ref;
+  s.P(s.td_index, s.td_index) = sig_td * sig_td;
+  int idx = ImuState::kSize + 1;
+  for (int64_t t : sc.stamps) {
+    CloneState c;
+    c.t_cam_ns = t;
+    c.td_ref = td_ref;
+    c.t_imu_ns = t + static_cast<int64_t>(std::llround(td_ref * 1e9));
+    const Pose P = sc.pose_at(sc.t_of(t) + td_ref);
+    c.R = P.R;
+    c.p = P.p;
+    c.index = idx;
+    for (int j = 0; j < 3; ++j) {
+      s.P(idx + j, idx + j) = sig_th * sig_th;
+      s.P(idx + 3 + j, idx + 3 + j) = sig_p * sig_p;
+    }
+    idx += CloneState::kSize;
+    s.clones[t] = c;
+  }
+  return s;
+}
+
+/// Observes every point in every image (at IMU time t_cam + td_true) with Gaussian pixel noise.
+inline void observe(const Scene &sc, ov_core::FeatureDatabase &db, double noise_px, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, noise_px);
+  for (int64_t t : sc.stamps) {
+    const Pose P = sc.pose_at(sc.t_of(t) + sc.td_true);
+    for (size_t id = 0; id < sc.points.size(); ++id) {
+      Eigen::Vector2d xy;
+      ASSERT_TRUE(sc.project(P, sc.points[id], xy));
+      const Eigen::Vector2d uv = sc.cam.distort(xy) + Eigen::Vector2d(n(rng), n(rng));
+      db.add_observation(id, t, uv, sc.cam.undistort(uv));
+    }
+  }
+}
+
+inline std::vector<const ov_core::Feature *> all_features(const ov_core::FeatureDatabase &db) {
+  std::vector<const ov_core::Feature *> out;
+  db.features_older_than(std::numeric_limits<int64_t>::max(), out);
+  return out;
+}
+
+/// Rotation and position error of a clone against the truth pose of its IMU time.
+inline std::pair<double, double> clone_error(const Scene &sc, const CloneState &c, double td) {
+  const Pose P = sc.pose_at(sc.t_of(c.t_cam_ns) + td);
+  return {so3_log(P.R.transpose() * c.R).norm(), (c.p - P.p).norm()};
+}
+
+} // namespace updtest
