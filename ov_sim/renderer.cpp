@@ -22,6 +22,24 @@ inline float fast_log2(float x) {
   return e + ((-1.0f / 3.0f) * m + 2.0f) * m - 2.0f / 3.0f;
 }
 
+/// 1 / 2^l, exact (powers of two): the mip scale without a division per pixel.
+constexpr float kInvPow2[16] = {1.0f,
+                                0.5f,
+                                0.25f,
+                                0.125f,
+                                0.0625f,
+                                0.03125f,
+                                0.015625f,
+                                0.0078125f,
+                                0.00390625f,
+                                0.001953125f,
+                                0.0009765625f,
+                                0.00048828125f,
+                                0.000244140625f,
+                                0.0001220703125f,
+                                0.00006103515625f,
+                                0.000030517578125f};
+
 struct Level {
   const uint8_t *data;
   int w, h;
@@ -264,7 +282,7 @@ void Renderer::cast_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_W
       const float fl = lod - l0;
       // Level l texel i is centred at level-0 coordinate 2^l i (cv::pyrDown keeps even samples).
       const float x0 = su * inv_texel - 0.5f, y0 = sv * inv_texel - 0.5f;
-      const float sc0 = 1.0f / static_cast<float>(1 << l0), sc1 = 1.0f / static_cast<float>(1 << l1);
+      const float sc0 = kInvPow2[l0], sc1 = kInvPow2[l1];
       float val = bilinear(levels[face * kMaxLevels + l0], x0 * sc0, y0 * sc0);
       if (fl > 0.0f)
         val += fl * (bilinear(levels[face * kMaxLevels + l1], x0 * sc1, y0 * sc1) - val);
