@@ -3,6 +3,7 @@
 
 #include "ov_core/types/errors.h"
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -22,23 +23,19 @@ inline float fast_log2(float x) {
   return e + ((-1.0f / 3.0f) * m + 2.0f) * m - 2.0f / 3.0f;
 }
 
+/// Mip levels per surface the ray caster looks at.
+constexpr int kMaxLevels = 16;
+
 /// 1 / 2^l, exact (powers of two): the mip scale without a division per pixel.
-constexpr float kInvPow2[16] = {1.0f,
-                                0.5f,
-                                0.25f,
-                                0.125f,
-                                0.0625f,
-                                0.03125f,
-                                0.015625f,
-                                0.0078125f,
-                                0.00390625f,
-                                0.001953125f,
-                                0.0009765625f,
-                                0.00048828125f,
-                                0.000244140625f,
-                                0.0001220703125f,
-                                0.00006103515625f,
-                                0.000030517578125f};
+constexpr std::array<float, kMaxLevels> kInvPow2 = [] {
+  std::array<float, kMaxLevels> a{};
+  float v = 1.0f;
+  for (float &x : a) {
+    x = v;
+    v *= 0.5f;
+  }
+  return a;
+}();
 
 struct Level {
   const uint8_t *data;
@@ -63,6 +60,8 @@ Renderer::Renderer(const ov_core::CameraModel &cam, const Scene &scene, const Re
     : cam_(cam), scene_(scene), opt_(opt) {
   const int w = cam.width(), h = cam.height();
   rays_.resize(static_cast<size_t>(w) * h);
+  row_yn_lo_.assign(h, std::numeric_limits<float>::infinity());
+  row_yn_hi_.assign(h, -std::numeric_limits<float>::infinity());
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
       const Eigen::Vector2d xn = cam.undistort(Eigen::Vector2d(u, v));
@@ -77,16 +76,10 @@ Renderer::Renderer(const ov_core::CameraModel &cam, const Scene &scene, const Re
       R.xn = static_cast<float>(xn.x());
       R.yn = static_cast<float>(xn.y());
       R.log2_pix = static_cast<float>(std::log2(std::max(ang, 1e-9)));
+      row_yn_lo_[v] = std::min(row_yn_lo_[v], R.yn);
+      row_yn_hi_[v] = std::max(row_yn_hi_[v], R.yn);
     }
   }
-  row_yn_lo_.assign(h, std::numeric_limits<float>::infinity());
-  row_yn_hi_.assign(h, -std::numeric_limits<float>::infinity());
-  for (int v = 0; v < h; ++v)
-    for (int u = 0; u < w; ++u) {
-      const float yn = rays_[static_cast<size_t>(v) * w + u].yn;
-      row_yn_lo_[v] = std::min(row_yn_lo_[v], yn);
-      row_yn_hi_[v] = std::max(row_yn_hi_[v], yn);
-    }
 }
 
 void Renderer::render(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, uint64_t noise_seed,
@@ -151,7 +144,6 @@ void Renderer::cast_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_W
   const auto &room = scene_.room();
 
   // Per-frame tables: mip levels of every surface, and boxes with their image-plane bounds.
-  constexpr int kMaxLevels = 16;
   std::vector<Level> levels(surfs.size() * kMaxLevels);
   std::vector<int> n_levels(surfs.size());
   for (size_t s = 0; s < surfs.size(); ++s) {

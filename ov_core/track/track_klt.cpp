@@ -189,9 +189,8 @@ const std::vector<TrackedFeature> &TrackKLT::track(int64_t t_cam_ns, const cv::M
   stats_.t_pyramid_ms = ms_since(t0);
 
   stats_.num_prev = static_cast<int>(ids_.size());
-  t_curr_ns_ = t_cam_ns;
   if (has_prev_ && !ids_.empty())
-    track_previous();
+    track_previous(t_cam_ns);
   merge_and_detect();
 
   out_.resize(ids_.size());
@@ -210,7 +209,7 @@ const std::vector<TrackedFeature> &TrackKLT::track(int64_t t_cam_ns, const cv::M
   return out_;
 }
 
-void TrackKLT::track_previous() {
+void TrackKLT::track_previous(int64_t t_cam_ns) {
   const size_t n = ids_.size();
   const cv::Size win(opt_.win_size, opt_.win_size);
   const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, opt_.lk_max_iter, opt_.lk_eps);
@@ -218,7 +217,7 @@ void TrackKLT::track_previous() {
   auto t0 = Clock::now();
   int flags = 0;
   if (opt_.gyro_prior && prior_)
-    if (const auto R = prior_->camera_rotation(t_prev_ns_, t_curr_ns_)) {
+    if (const auto R = prior_->camera_rotation(t_prev_ns_, t_cam_ns)) {
       // A point's undistorted bearing turned by the camera's rotation; one that leaves the image or turns behind
       // the camera starts where it was.
       pts_next_.resize(n);

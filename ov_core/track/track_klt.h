@@ -114,7 +114,7 @@ public:
   const cv::Mat &last_image() const { return img_; }
 
 private:
-  void track_previous();
+  void track_previous(int64_t t_cam_ns);
   void merge_and_detect();
   /// Drops features i with keep[i] == 0 from the parallel per-feature arrays.
   void compact(const std::vector<unsigned char> &keep);
@@ -125,7 +125,7 @@ private:
   std::shared_ptr<const GyroRotationPrior> prior_;
 
   bool has_prev_ = false;
-  int64_t t_prev_ns_ = 0, t_curr_ns_ = 0;
+  int64_t t_prev_ns_ = 0;
   size_t next_id_ = 0;
 
   cv::Mat img_;

@@ -243,10 +243,13 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
 
 void UpdaterMSCKF::nullspace_project(const Eigen::Matrix<double, Eigen::Dynamic, 3> &H_f, Eigen::MatrixXd &H_x,
                                      Eigen::VectorXd &r) {
-  const Eigen::Index rows = H_f.rows();
+  nullspace_project(FeatureQR(H_f), H_x, r);
+}
+
+void UpdaterMSCKF::nullspace_project(const FeatureQR &qr, Eigen::MatrixXd &H_x, Eigen::VectorXd &r) {
+  const Eigen::Index rows = qr.rows();
   if (rows <= 3 || H_x.rows() != rows || r.size() != rows)
     throw ov_core::UsageError("nullspace_project: need matching blocks with more than 3 rows");
-  const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(H_f);
   // Qᵀ applied by its Householder reflectors, never forming the 2m × 2m Q.
   H_x.applyOnTheLeft(qr.householderQ().adjoint());
   r.applyOnTheLeft(qr.householderQ().adjoint());
@@ -277,9 +280,18 @@ void UpdaterMSCKF::whiten_track_rows(Eigen::Ref<Eigen::MatrixXd> M, double rho) 
 
 Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &lin, const Eigen::MatrixXd &P_sub,
                                                    double sigma2, double rho) {
+  if (rho == 0.0)
+    return projected_innovation(lin, FeatureQR(lin.H_f), P_sub, sigma2, rho);
+  Eigen::Matrix<double, Eigen::Dynamic, 3> H_f_white = lin.H_f;
+  whiten_track_rows(H_f_white, rho);
+  return projected_innovation(lin, FeatureQR(H_f_white), P_sub, sigma2, rho);
+}
+
+Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &lin, const FeatureQR &qr,
+                                                   const Eigen::MatrixXd &P_sub, double sigma2, double rho) {
   const int m = static_cast<int>(lin.obs.size()), rows = 2 * m, nc = static_cast<int>(lin.H_x.cols());
   const int nd = nc - 6 * m; // t_d and calibration columns, dense
-  if (m < 2 || nd < 0 || lin.H_x.rows() != rows || P_sub.rows() != nc || lin.H_f.rows() != rows)
+  if (m < 2 || nd < 0 || lin.H_x.rows() != rows || P_sub.rows() != nc || qr.rows() != rows)
     throw ov_core::UsageError("projected_innovation: linearisation and covariance differ in size");
   // T = H_x P, block row by block row.
   Eigen::MatrixXd T = Eigen::MatrixXd::Zero(rows, nc);
@@ -293,17 +305,12 @@ Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &l
     S.middleCols<2>(2 * k).noalias() = T.middleCols<6>(6 * k) * lin.H_x.block<2, 6>(2 * k, 6 * k).transpose();
   if (nd > 0)
     S.noalias() += T.rightCols(nd) * lin.H_x.rightCols(nd).transpose();
-  // Correlated track errors: W S Wᵀ and the whitened H_f, so that the noise below is σ²I again. Independent errors
-  // (the default) use lin.H_f as it is, without a copy.
-  Eigen::Matrix<double, Eigen::Dynamic, 3> H_f_white;
+  // Correlated track errors: W S Wᵀ (qr is then of the whitened H_f), so that the noise below is σ²I again.
   if (rho != 0.0) {
     whiten_track_rows(S, rho);
     S.transposeInPlace();
     whiten_track_rows(S, rho);
-    H_f_white = lin.H_f;
-    whiten_track_rows(H_f_white, rho);
   }
-  const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>> qr(rho != 0.0 ? H_f_white : lin.H_f);
   S.applyOnTheLeft(qr.householderQ().adjoint());
   S.applyOnTheRight(qr.householderQ());
   Eigen::MatrixXd S2 = S.bottomRightCorner(rows - 3, rows - 3);
@@ -441,10 +448,11 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
       whiten_track_rows(a.r, rho);
       whiten_track_rows(H_f_white_, rho);
     }
-    nullspace_project(rho != 0.0 ? H_f_white_ : lin_.H_f, a.H, a.r);
+    qr_.compute(rho != 0.0 ? H_f_white_ : lin_.H_f); // once, for the projection and its covariance
+    nullspace_project(qr_, a.H, a.r);
 
     // S = H P Hᵀ + σ²I over the involved columns only, from the unprojected rows' block structure.
-    const Eigen::MatrixXd S = projected_innovation(lin_, state_helper::sub_covariance(state, a.cols), sigma2, rho);
+    const Eigen::MatrixXd S = projected_innovation(lin_, qr_, state_helper::sub_covariance(state, a.cols), sigma2, rho);
     const double chi2 = a.r.dot(S.ldlt().solve(a.r));
     const int dof = static_cast<int>(a.r.size());
     const double thr = chi2_threshold(dof);

@@ -11,6 +11,7 @@
 #include "ov_msckf_ton/update/triangulation.h"
 
 #include <Eigen/Core>
+#include <Eigen/QR>
 #include <array>
 #include <functional>
 #include <optional>
@@ -105,6 +106,9 @@ public:
   /// because Q₂ has orthonormal columns.
   static void nullspace_project(const Eigen::Matrix<double, Eigen::Dynamic, 3> &H_f, Eigen::MatrixXd &H_x,
                                 Eigen::VectorXd &r);
+  /// The same with H_f's QR already made (the update makes it once for this and projected_innovation).
+  using FeatureQR = Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 3>>;
+  static void nullspace_project(const FeatureQR &qr, Eigen::MatrixXd &H_x, Eigen::VectorXd &r);
   /// When H has more rows than columns, replaces (H, r) by (R, Q₁ᵀr) of H's QR: the same information in at most
   /// dim rows, noise still σ²I.
   static void compress(Eigen::MatrixXd &H, Eigen::VectorXd &r);
@@ -114,6 +118,9 @@ public:
   /// projected, dense rows. P_sub is P over lin.cols.
   static Eigen::MatrixXd projected_innovation(const FeatureLinearization &lin, const Eigen::MatrixXd &P_sub,
                                               double sigma2, double rho = 0.0);
+  /// The same with the QR of lin.H_f (its rows whitened when rho != 0) already made.
+  static Eigen::MatrixXd projected_innovation(const FeatureLinearization &lin, const FeatureQR &qr,
+                                              const Eigen::MatrixXd &P_sub, double sigma2, double rho);
   /// Whitens the rows of one feature's stacked measurement (2m rows: u and v of observation k at 2k, 2k + 1) for
   /// AR(1) errors with correlation ρ between consecutive observations: row k becomes (row k − ρ·row k−1)/√(1 − ρ²),
   /// row 0 stays. Errors of covariance σ²·C (C_ij = ρ^|i−j| per coordinate) then have covariance σ²I.
@@ -167,6 +174,7 @@ private:
   mutable std::vector<Eigen::Vector2d> xy_;
   FeatureLinearization lin_;
   Eigen::Matrix<double, Eigen::Dynamic, 3> H_f_white_; ///< H_f with whitened rows (track_correlation)
+  FeatureQR qr_;                                       ///< the feature's H_f QR, kept to reuse its storage
   struct Accepted {
     std::vector<int> cols;
     Eigen::MatrixXd H;

@@ -72,16 +72,7 @@ for Q in $SEQS; do for S in $SEED_LIST; do echo "$Q $S"; done; done |
 
 # 2. Configs: CONFIG with slam.max_features N and the SET overrides.
 for L in $SLAMS; do
-  python3 - "$CONFIG" "$OUT/cfg/slam$L.yaml" "$L" $SET <<'EOF'
-import sys, yaml
-cfg = yaml.safe_load(open(sys.argv[1])) or {}
-cfg.setdefault("slam", {})["max_features"] = int(sys.argv[3])
-for kv in sys.argv[4:]:
-    key, value = kv.split("=", 1)
-    section, k = key.split(".", 1)
-    cfg.setdefault(section, {})[k] = yaml.safe_load(value)
-yaml.safe_dump(cfg, open(sys.argv[2], "w"), sort_keys=False)
-EOF
+  python3 scripts/config_override.py "$CONFIG" "$OUT/cfg/slam$L.yaml" "slam.max_features=$L" $SET
 done
 
 # 3. Runs: one line of runs.csv each (exit status 4 = the health check stopped it).

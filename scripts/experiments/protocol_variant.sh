@@ -16,15 +16,7 @@ BIN=${OVTON_BIN:-build/ovton}
 CONFIG=${CONFIG:-config/sim/estimator_config.yaml}
 [ -x "$BIN" ] || scripts/build.sh
 mkdir -p "$OUT"
-python3 - "$CONFIG" "$OUT/config.yaml" "$@" <<'PY'
-import sys, yaml
-cfg = yaml.safe_load(open(sys.argv[1]))
-for kv in sys.argv[3:]:
-    key, value = kv.split("=", 1)
-    section, k = key.split(".", 1)
-    cfg.setdefault(section, {})[k] = yaml.safe_load(value)
-yaml.safe_dump(cfg, open(sys.argv[2], "w"))
-PY
+python3 scripts/config_override.py "$CONFIG" "$OUT/config.yaml" "$@"
 n=0
 for d in "$DATA"/${CELLS:-t3_*_s1}; do
   [ -f "$d/sim.yaml" ] || continue

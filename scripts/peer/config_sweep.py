@@ -14,9 +14,13 @@ import os
 import re
 import subprocess
 
+import sys
+
 import yaml
 
 REPO = os.path.realpath(os.path.join(os.path.dirname(__file__), "..", ".."))
+sys.path.insert(0, os.path.join(REPO, "scripts"))
+from config_override import apply_overrides  # noqa: E402
 
 
 def main():
@@ -32,10 +36,7 @@ def main():
         folder = os.path.realpath(folder)
         sim = os.path.isdir(os.path.join(folder, "mav0", "td_truth"))
         cfg = yaml.safe_load(open(os.path.join(REPO, "config", "sim" if sim else "euroc_mav", "estimator_config.yaml")))
-        for kv in a.set:
-            key, value = kv.split("=", 1)
-            section, k = key.split(".", 1)
-            cfg.setdefault(section, {})[k] = yaml.safe_load(value)
+        apply_overrides(cfg, a.set)
         pre = os.path.join(a.out, f"{a.name}_{os.path.basename(folder)}")
         yaml.safe_dump(cfg, open(pre + ".yaml", "w"))
         cmd = ["nice", "-n", "10", "/usr/bin/time", "-f", "%U %S", "-o", pre + ".time", a.bin, "run", "-q",
