@@ -175,6 +175,53 @@ TEST(TdModels, AdaptiveNoiseMakesAnUnderestimatedRandomWalkHonestOnADriftingOffs
   EXPECT_GT(nees_adaptive, 0.5);
 }
 
+TEST(TdModels, BlockNoiseAdapterSeesALagThePerImageSamplesMiss) {
+  // The adapter fed the corrections of a filter at steady state (each image adds q0²·dt and its update removes it)
+  // whose prediction trails the offset by r = 0.1 ms/s: every image's correction is the white part plus r·dt.
+  // Per image the trend adds r²·dt to the sample (1/40 of q0²: invisible); summed over T-s blocks it adds r²·T.
+  const double q0 = 2e-4, dt = 0.05, r = 1e-4, v = q0 * q0 * dt, T = 3.0;
+  double q2_image[2], q2_block[2]; // white, trailing
+  for (const int trailing : {0, 1}) {
+    TdNoiseAdapter per_image(q0), block(q0, T);
+    std::mt19937 rng(7);
+    std::normal_distribution<double> n(0, 1);
+    double sum_image = 0, sum_block = 0;
+    int count = 0;
+    for (int k = 0; k < 20000; ++k) { // 1000 s
+      const double d = std::sqrt(v) * n(rng) + trailing * r * dt;
+      for (TdNoiseAdapter *a : {&per_image, &block}) {
+        a->add_process(v);
+        a->add_update(0.0, 2 * v, d, v);
+        a->close_image(dt);
+      }
+      if (k >= 2000) {
+        sum_image += per_image.q() * per_image.q();
+        sum_block += block.q() * block.q();
+        ++count;
+      }
+    }
+    q2_image[trailing] = sum_image / count;
+    q2_block[trailing] = sum_block / count;
+    std::cout << "[td models] adapter on " << (trailing ? "trailing" : "white") << " corrections: q "
+              << std::sqrt(q2_image[trailing]) * 1e3 << " ms/sqrt(s) per image, "
+              << std::sqrt(q2_block[trailing]) * 1e3 << " over 3-s blocks (floor 0.2)\n";
+  }
+  // White corrections: both near the floor, the blocks above it by the noise of their mean (the floor clips it).
+  EXPECT_LT(q2_image[0], 1.1 * q0 * q0);
+  EXPECT_LT(q2_block[0], 1.4 * q0 * q0);
+  // Trailing ones add r²·dt per image (invisible) and r²·T over a block.
+  EXPECT_LT(q2_image[1] - q2_image[0], 0.1 * r * r * T);
+  EXPECT_NEAR(q2_block[1] - q2_block[0], r * r * T, 0.25 * r * r * T);
+  // In a filter whose random walk is the truth's, the blocks must not make it under-confident.
+  VioOptions honest = with_process(TdMode::Sr, TdProcess::RandomWalk);
+  honest.td.random_walk = 1e-4;
+  honest.td.adaptive_block_s = T;
+  const double nees_rw = mean_nees(honest, 0.0, 1e-4, 2e-4);
+  std::cout << "[td models] true 0.1 ms/sqrt(s) random walk, 3-s blocks: t_d NEES " << nees_rw << "\n";
+  EXPECT_GT(nees_rw, 0.6);
+  EXPECT_LT(nees_rw, 1.5);
+}
+
 TEST(TdModels, NoiseAdapterConvergesToTheTrueRandomWalk) {
   VioOptions o = with_process(TdMode::Sr, TdProcess::RandomWalk);
   o.td.random_walk = 1e-5; // ten times too small; the floor

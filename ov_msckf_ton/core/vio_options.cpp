@@ -116,6 +116,7 @@ std::vector<Field> fields(VioOptions &o) {
       field(T, "rate_random_walk", td.rate_random_walk),
       field(T, "rate_max", td.rate_max),
       field(T, "adaptive_noise", td.adaptive_noise),
+      field(T, "adaptive_block_s", td.adaptive_block_s),
       field(T, "jacobian_rate_window_s", td.jacobian_rate_window_s),
       enum_field<SirVelocity>(T, "sir_velocity", td.sir_velocity, parser(kSirVelocity), namer(kSirVelocity)),
       enum_field<FirstVelocity>(T, "first_velocity", td.first_velocity, parser(kFirstVelocity), namer(kFirstVelocity)),
@@ -245,6 +246,7 @@ void validate_vio_options(const VioOptions &o) {
           "time_offset random walks must be >= 0");
   require(td.rate_sigma_init > 0, "time_offset.rate_sigma_init must be > 0");
   require(td.rate_max >= 0, "time_offset.rate_max must be >= 0");
+  require(td.adaptive_block_s >= 0 && td.adaptive_block_s <= 60, "time_offset.adaptive_block_s must lie in [0, 60] s");
   require(td.jacobian_rate_window_s >= 0 && td.jacobian_rate_window_s <= 1.0,
           "time_offset.jacobian_rate_window_s must lie in [0, 1] s");
   const auto &n = o.ton;

@@ -17,7 +17,7 @@ public:
   explicit DriftTdModel(const TimeOffsetOptions &o)
       : q_td_(o.random_walk), q_rate_(o.rate_random_walk), sigma_rate0_(o.rate_sigma_init) {
     if (o.adaptive_noise)
-      adapter_.emplace(o.random_walk);
+      adapter_.emplace(o.random_walk, o.adaptive_block_s);
     stats_.process_sigma = q_td_;
   }
   TdProcess kind() const override { return TdProcess::Drift; }

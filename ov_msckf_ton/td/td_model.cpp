@@ -17,7 +17,7 @@ std::unique_ptr<TdModel> make_td_model(const VioOptions &opt, std::function<doub
   case TdProcess::Drift:
     return make_drift_model(o);
   case TdProcess::RandomWalk:
-    return make_random_walk_model(o.random_walk, o.adaptive_noise);
+    return make_random_walk_model(o.random_walk, o.adaptive_noise, o.adaptive_block_s);
   default: // a constant stays a constant (OpenVINS' model): adaptive noise would make it a random walk
     return make_random_walk_model(0.0, false);
   }

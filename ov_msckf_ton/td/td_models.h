@@ -6,7 +6,8 @@
 namespace ov_msckf_ton {
 
 /// t_d constant (q = 0: OpenVINS' model) or a random walk of q [s/sqrt(s)]; t_d at an image is the current mean.
-std::unique_ptr<TdModel> make_random_walk_model(double q, bool adaptive);
+/// adaptive: covariance matching (td_noise_adapter.h) over blocks of block_s seconds.
+std::unique_ptr<TdModel> make_random_walk_model(double q, bool adaptive, double block_s = 0.0);
 
 /// Beyond the paper: t_d and its rate ṫ_d in the state, the paper's eq. 4 (cumulative bias + noise) as a Kalman
 /// process model: t_d' = t_d + ṫ_d·dt + w_td, ṫ_d' = ṫ_d + w_r.

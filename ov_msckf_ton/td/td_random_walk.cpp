@@ -10,9 +10,9 @@ namespace {
 
 class RandomWalkTdModel : public TdModel {
 public:
-  RandomWalkTdModel(double q, bool adaptive) : q_(q) {
+  RandomWalkTdModel(double q, bool adaptive, double block_s) : q_(q) {
     if (adaptive)
-      adapter_.emplace(q);
+      adapter_.emplace(q, block_s);
     stats_.process_sigma = q;
   }
   TdProcess kind() const override { return q_ > 0 || adapter_ ? TdProcess::RandomWalk : TdProcess::Constant; }
@@ -45,8 +45,8 @@ private:
 
 } // namespace
 
-std::unique_ptr<TdModel> make_random_walk_model(double q, bool adaptive) {
-  return std::make_unique<RandomWalkTdModel>(q, adaptive);
+std::unique_ptr<TdModel> make_random_walk_model(double q, bool adaptive, double block_s) {
+  return std::make_unique<RandomWalkTdModel>(q, adaptive, block_s);
 }
 
 } // namespace ov_msckf_ton

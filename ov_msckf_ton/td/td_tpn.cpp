@@ -27,7 +27,7 @@ public:
   TpnTdModel(const TimeOffsetOptions &o, const TonOptions &ton)
       : driver_(driver_options(o, ton)), q_(o.random_walk_tpn), start_sigma_s_(ton.tpn_start_sigma_s) {
     if (o.adaptive_noise)
-      adapter_.emplace(o.random_walk_tpn);
+      adapter_.emplace(o.random_walk_tpn, o.adaptive_block_s);
     stats_.process_sigma = q_;
   }
   TdProcess kind() const override { return TdProcess::Tpn; }
