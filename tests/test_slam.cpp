@@ -186,6 +186,31 @@ TEST(SlamJacobians, LandmarkMeasurementMatchesFiniteDifferences) {
                                                                               << H_fd;
 }
 
+TEST(SlamJacobians, PredictedImageVelocityIsTheProjectionsTimeDerivative) {
+  // The body turning at ω (Ṙ_WB = R_WB [ω]×) and moving at v: the landmark's normalised image point over time,
+  // differentiated numerically, against predicted_image_velocity.
+  const Eigen::Matrix3d R_WB = ov_core::so3_exp(Eigen::Vector3d(0.2, -0.4, 1.1));
+  const Eigen::Vector3d p_WB(0.3, -0.2, 1.0), p_W(2.5, 0.8, 1.4);
+  const Eigen::Matrix3d R_BC = ov_core::so3_exp(Eigen::Vector3d(-1.2, 0.1, -1.5));
+  const Eigen::Vector3d p_BC(0.05, -0.02, 0.01);
+  BodyMotion m;
+  m.w_B = Eigen::Vector3d(0.7, -1.3, 0.4);
+  m.v_W = Eigen::Vector3d(-0.6, 0.9, 0.3);
+  auto z_at = [&](const Eigen::Matrix<double, 1, 1> &t) {
+    Eigen::Vector2d z;
+    const bool ok = project_in_clone(R_WB * ov_core::so3_exp(m.w_B * t(0)), p_WB + m.v_W * t(0), R_BC, p_BC, p_W, z);
+    EXPECT_TRUE(ok);
+    return z;
+  };
+  Eigen::Vector2d vel;
+  ASSERT_TRUE(predicted_image_velocity(R_WB, p_WB, R_BC, p_BC, p_W, m, vel));
+  const Eigen::MatrixXd numeric = ovtest::numeric_jacobian(z_at, Eigen::Matrix<double, 1, 1>::Zero().eval(), 1e-6);
+  EXPECT_GT(vel.norm(), 0.1); // a real motion on the image
+  EXPECT_LT((numeric.col(0) - vel).norm(), 1e-6 * vel.norm()) << numeric.transpose() << " vs " << vel.transpose();
+  // Behind the camera: no velocity.
+  EXPECT_FALSE(predicted_image_velocity(R_WB, p_WB, R_BC, p_BC, p_WB - 3.0 * (R_WB * R_BC).col(2), m, vel));
+}
+
 TEST(SlamInit, DelayedInitialisationIsConsistentOverMonteCarloTrials) {
   // The same window, noisy observations: the initialised landmark's error against the truth, normalised by its
   // covariance, averages 3 (its dimension) when the initialisation's covariance is right.

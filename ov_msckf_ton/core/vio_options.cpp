@@ -148,6 +148,7 @@ std::vector<Field> fields(VioOptions &o) {
       field(L, "chi2_multiplier", o.slam.chi2_multiplier),
       field(L, "sigma_px", o.slam.sigma_px),
       field(L, "track_correlation", o.slam.track_correlation),
+      field(L, "state_velocity", o.slam.state_velocity),
       field(C, "extrinsics", cal.extrinsics),
       field(C, "sigma_ext_rot", cal.sigma_ext_rot),
       field(C, "sigma_ext_pos", cal.sigma_ext_pos),

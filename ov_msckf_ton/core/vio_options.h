@@ -113,6 +113,9 @@ struct SlamOptions {
   /// Correlation of a landmark's pixel errors between consecutive images (AR(1)); 0: independent. A landmark is
   /// re-observed at every image, so a slowly wandering track error is otherwise counted again at each.
   double track_correlation = 0.0;
+  /// Image-plane modes: a landmark's t_d row uses the image velocity its state predicts, not the tracked backward
+  /// difference that shares the row's pixel noise (UpdaterSlamOptions::state_velocity; docs/results.md).
+  bool state_velocity = true;
 };
 
 /// Online calibration (OpenVINS-style): each estimated quantity becomes a state variable with the prior sigma given

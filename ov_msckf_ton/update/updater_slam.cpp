@@ -10,6 +10,43 @@
 
 namespace ov_msckf_ton {
 
+namespace {
+
+/// One observation's velocity given from outside; every other one as the base provider gives it.
+class OneObservationVelocity : public VelocityProvider {
+public:
+  OneObservationVelocity(const VelocityProvider &base, size_t feature_id, size_t obs_index, const Eigen::Vector2d &vel)
+      : base_(base), id_(feature_id), index_(obs_index), vel_(vel) {}
+  bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
+                int &source) const override {
+    if (feature.id != id_ || obs_index != index_)
+      return base_.velocity(feature, obs_index, vel_xy, source);
+    vel_xy = vel_;
+    source = kVelocityTracked;
+    return true;
+  }
+
+private:
+  const VelocityProvider &base_;
+  size_t id_, index_;
+  Eigen::Vector2d vel_;
+};
+
+} // namespace
+
+bool predicted_image_velocity(const Eigen::Matrix3d &R_WB, const Eigen::Vector3d &p_WB, const Eigen::Matrix3d &R_BC,
+                              const Eigen::Vector3d &p_BC, const Eigen::Vector3d &p_W, const BodyMotion &m,
+                              Eigen::Vector2d &vel_xy) {
+  const Eigen::Vector3d p_B = R_WB.transpose() * (p_W - p_WB);
+  const Eigen::Vector3d p_C = R_BC.transpose() * (p_B - p_BC);
+  if (!(p_C.z() > 1e-9))
+    return false;
+  const Eigen::Vector3d dp_C = R_BC.transpose() * (-m.w_B.cross(p_B) - R_WB.transpose() * m.v_W);
+  const double iz = 1.0 / p_C.z();
+  vel_xy = Eigen::Vector2d(dp_C.x() - p_C.x() * iz * dp_C.z(), dp_C.y() - p_C.y() * iz * dp_C.z()) * iz;
+  return true;
+}
+
 UpdaterSLAM::UpdaterSLAM(const ov_core::CameraCalib &calib, const UpdaterSlamOptions &opt, const UpdaterMSCKF &msckf)
     : opt_(opt), msckf_(msckf) {
   (void)calib; // the calibration comes from the updater's view of the state (fixed or estimated)
@@ -184,7 +221,8 @@ bool UpdaterSLAM::difference_previous(const UpdaterMSCKF::CameraView &view, cons
 }
 
 void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64_t t_cam_ns, TdObservation td_obs,
-                         const VelocityProvider &velocities, SlamStats &stats, std::vector<size_t> &drop) {
+                         const VelocityProvider &velocities, SlamStats &stats, std::vector<size_t> &drop,
+                         const BodyMotion *motion) {
   const auto clone_it = state.clones.find(t_cam_ns);
   if (clone_it == state.clones.end() || state.landmarks.empty())
     return;
@@ -204,7 +242,12 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
     const ov_core::Feature *f = db.get(id);
     if (!f || f->obs.empty() || f->newest().t_cam_ns != t_cam_ns)
       continue; // not seen in this image: the caller marginalises it
-    if (!linearize(view, state, l, c, *f, f->obs.size() - 1, td_obs, velocities, lin)) {
+    const size_t newest = f->obs.size() - 1;
+    Eigen::Vector2d vel_pred = Eigen::Vector2d::Zero();
+    const bool predicted = motion && opt_.state_velocity && td_obs == TdObservation::ImagePlane &&
+                           predicted_image_velocity(c.R, c.p, view.R_BC, view.p_BC, l.p_W, *motion, vel_pred);
+    const OneObservationVelocity with_predicted(velocities, id, newest, vel_pred);
+    if (!linearize(view, state, l, c, *f, newest, td_obs, predicted ? with_predicted : velocities, lin)) {
       drop.push_back(id);
       continue;
     }

@@ -22,7 +22,24 @@ struct UpdaterSlamOptions {
   /// ρ of the AR(1) model of a landmark's pixel errors between consecutive images: its window rows are whitened at
   /// initialisation, each later observation differenced against the one before. 0: independent errors.
   double track_correlation = 0.0;
+  /// Image-plane modes: a landmark's row takes the image velocity its state predicts (landmark, camera pose,
+  /// body rate and velocity at the image) instead of the tracked one. A landmark is always updated with its newest
+  /// observation, where the tracked velocity is the backward difference of eq. 2, whose pixel noise is also the
+  /// row's own (errors in variables): with 25 landmarks that bias drove TPN's t_d 5-9 ms ahead of a 0.5 ms/s drift.
+  bool state_velocity = true;
 };
+
+/// The body's motion at the newest clone's time: the rate the clone was placed with and the IMU state's velocity.
+struct BodyMotion {
+  Eigen::Vector3d w_B = Eigen::Vector3d::Zero(); ///< body rate, bias-corrected [rad/s]
+  Eigen::Vector3d v_W = Eigen::Vector3d::Zero(); ///< velocity in the world frame [m/s]
+};
+
+/// The normalised image velocity [1/s] of a point at p_W seen from a camera on the body at (R_WB, p_WB) that moves
+/// with `m` (p_C = R_BCᵀ (R_WBᵀ (p_W − p_WB) − p_BC); ṗ_B = −ω × p_B − R_WBᵀ v). False behind the camera.
+bool predicted_image_velocity(const Eigen::Matrix3d &R_WB, const Eigen::Vector3d &p_WB, const Eigen::Matrix3d &R_BC,
+                              const Eigen::Vector3d &p_BC, const Eigen::Vector3d &p_W, const BodyMotion &m,
+                              Eigen::Vector2d &vel_xy);
 
 struct SlamStats {
   int initialised = 0, init_rejected = 0; ///< delayed initialisations done / refused (triangulation or chi2)
@@ -60,9 +77,11 @@ public:
 
   /// Updates every landmark observed at t_cam_ns (the newest clone) with that observation: one chi-square test per
   /// landmark (2 dof), the passing ones stacked into one EKF update. Landmarks that can no longer be linearised
-  /// (behind the camera, outside the depth range) are appended to `drop` for the caller to marginalise.
+  /// (behind the camera, outside the depth range) are appended to `drop` for the caller to marginalise. `motion`:
+  /// the body's motion at t_cam_ns, for the predicted velocities of image-plane modes (state_velocity).
   void update(State &state, const ov_core::FeatureDatabase &db, int64_t t_cam_ns, TdObservation td_obs,
-              const VelocityProvider &velocities, SlamStats &stats, std::vector<size_t> &drop);
+              const VelocityProvider &velocities, SlamStats &stats, std::vector<size_t> &drop,
+              const BodyMotion *motion = nullptr);
 
   /// Residual and Jacobians of landmark `l` seen at observation `obs_index` of `feature` in `clone`; false when
   /// the landmark is behind the camera or outside the depth range.

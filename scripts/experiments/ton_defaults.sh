@@ -42,7 +42,10 @@ D2="$OUT/wc_features"
 for cfg in sim paper; do
   [[ $PARTS == *2* ]] || break
   C=$SIM; [ $cfg = paper ] && C=$PAPER
-  sed 's/sigma_px: 0.5/sigma_px: 1.0/' "$C" >"$OUT/wc_$cfg.yaml" # feature-level folders carry 1 px of noise
+  # Feature-level folders carry 1 px of i.i.d. noise: weight and gate it as such (config/sim weights KLT's
+  # correlated errors at 1 px but gates at 0.5 px, which refuses most 1-px features and stops every mode).
+  python3 scripts/config_override.py "$C" "$OUT/wc_$cfg.yaml" update.sigma_px=1.0 update.chi2_multiplier=1 \
+    slam.sigma_px=0 slam.chi2_multiplier=1
   [ -f "$OUT/cmp_wc_$cfg/results.csv" ] || "$BIN" compare --dataset "$D2" --modes sr,sr+random_walk,drift,tpn,ton,oracle \
     --config "$OUT/wc_$cfg.yaml" --out "$OUT/cmp_wc_$cfg" --jobs 2 >/dev/null 2>&1 || true
 done
