@@ -203,8 +203,8 @@ TEST(TdModels, BlockNoiseAdapterSeesALagThePerImageSamplesMiss) {
     q2_image[trailing] = sum_image / count;
     q2_block[trailing] = sum_block / count;
     std::cout << "[td models] adapter on " << (trailing ? "trailing" : "white") << " corrections: q "
-              << std::sqrt(q2_image[trailing]) * 1e3 << " ms/sqrt(s) per image, "
-              << std::sqrt(q2_block[trailing]) * 1e3 << " over 3-s blocks (floor 0.2)\n";
+              << std::sqrt(q2_image[trailing]) * 1e3 << " ms/sqrt(s) per image, " << std::sqrt(q2_block[trailing]) * 1e3
+              << " over 3-s blocks (floor 0.2)\n";
   }
   // White corrections: both near the floor, the blocks above it by the noise of their mean (the floor clips it).
   EXPECT_LT(q2_image[0], 1.1 * q0 * q0);
