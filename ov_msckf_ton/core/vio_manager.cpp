@@ -539,15 +539,12 @@ void VioManager::slam_update(int64_t t_cam_ns, const std::vector<const ov_core::
   SlamStats st;
   // OpenVINS' order: existing landmarks with this image's observation, then new ones from the window.
   std::vector<size_t> lost;
-  // The body's motion at this image (the newest clone): the rate the clone was placed with, the state's velocity.
-  BodyMotion motion;
+  // The body's motion at this image: the rate its clone was placed with and the state's velocity (this image's clone
+  // is the newest, and the state is at its time).
   const auto rate = clone_rates_.find(t_cam_ns);
-  if (rate != clone_rates_.end())
-    motion.w_B = rate->second;
-  motion.v_W = s.imu.v;
-  const bool have_motion = rate != clone_rates_.end() && !s.clones.empty() && s.clones.rbegin()->first == t_cam_ns;
-  td_tracked_update(
-      [&] { slam_.update(s, db_, t_cam_ns, td_obs, velocities, st, lost, have_motion ? &motion : nullptr); });
+  const std::optional<BodyMotion> motion =
+      rate != clone_rates_.end() ? std::optional<BodyMotion>(BodyMotion{rate->second, s.imu.v}) : std::nullopt;
+  td_tracked_update([&] { slam_.update(s, db_, t_cam_ns, td_obs, velocities, st, lost, motion ? &*motion : nullptr); });
   if (!init.empty())
     td_tracked_update([&] { slam_.initialize(s, init, t_cam_ns, td_obs, velocities, st); });
   // Landmarks the tracker lost in this image (or that left the camera's depth range) leave the state.

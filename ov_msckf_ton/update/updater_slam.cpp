@@ -10,30 +10,6 @@
 
 namespace ov_msckf_ton {
 
-namespace {
-
-/// One observation's velocity given from outside; every other one as the base provider gives it.
-class OneObservationVelocity : public VelocityProvider {
-public:
-  OneObservationVelocity(const VelocityProvider &base, size_t feature_id, size_t obs_index, const Eigen::Vector2d &vel)
-      : base_(base), id_(feature_id), index_(obs_index), vel_(vel) {}
-  bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
-                int &source) const override {
-    if (feature.id != id_ || obs_index != index_)
-      return base_.velocity(feature, obs_index, vel_xy, source);
-    vel_xy = vel_;
-    source = kVelocityTracked;
-    return true;
-  }
-
-private:
-  const VelocityProvider &base_;
-  size_t id_, index_;
-  Eigen::Vector2d vel_;
-};
-
-} // namespace
-
 bool predicted_image_velocity(const Eigen::Matrix3d &R_WB, const Eigen::Vector3d &p_WB, const Eigen::Matrix3d &R_BC,
                               const Eigen::Vector3d &p_BC, const Eigen::Vector3d &p_W, const BodyMotion &m,
                               Eigen::Vector2d &vel_xy) {
@@ -134,8 +110,8 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
 
 bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
                             const CloneState &c, const ov_core::Feature &feature, size_t obs_index,
-                            TdObservation td_obs, const VelocityProvider &velocities,
-                            LandmarkLinearization &out) const {
+                            TdObservation td_obs, const VelocityProvider &velocities, LandmarkLinearization &out,
+                            const BodyMotion *motion) const {
   Eigen::Vector2d zhat, z_lin;
   Eigen::Vector3d p_C;
   CloneMeasurementJacobians J;
@@ -148,7 +124,9 @@ bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &s
   const ov_core::FeatureObservation &o = feature.obs[obs_index];
   Eigen::Vector2d vel;
   int src = kVelocityNone;
-  const bool has_vel = velocities.velocity(feature, obs_index, vel, src);
+  const bool predicted = motion && opt_.state_velocity && td_obs == TdObservation::ImagePlane &&
+                         predicted_image_velocity(c.R, c.p, view.R_BC, view.p_BC, l.p_W, *motion, vel);
+  const bool has_vel = predicted || velocities.velocity(feature, obs_index, vel, src);
   out.td_column = td_obs == TdObservation::ImagePlane && state.estimates_td() && has_vel;
   Eigen::Vector2d shift = Eigen::Vector2d::Zero();
   if (out.td_column)
@@ -242,12 +220,7 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
     const ov_core::Feature *f = db.get(id);
     if (!f || f->obs.empty() || f->newest().t_cam_ns != t_cam_ns)
       continue; // not seen in this image: the caller marginalises it
-    const size_t newest = f->obs.size() - 1;
-    Eigen::Vector2d vel_pred = Eigen::Vector2d::Zero();
-    const bool predicted = motion && opt_.state_velocity && td_obs == TdObservation::ImagePlane &&
-                           predicted_image_velocity(c.R, c.p, view.R_BC, view.p_BC, l.p_W, *motion, vel_pred);
-    const OneObservationVelocity with_predicted(velocities, id, newest, vel_pred);
-    if (!linearize(view, state, l, c, *f, newest, td_obs, predicted ? with_predicted : velocities, lin)) {
+    if (!linearize(view, state, l, c, *f, f->obs.size() - 1, td_obs, velocities, lin, motion)) {
       drop.push_back(id);
       continue;
     }

@@ -92,10 +92,12 @@ public:
   }
   /// The same with the calibration view of the update (UpdaterMSCKF::camera_view), computed once per update. The
   /// calibration columns (extrinsics, intrinsics, readout: those the state estimates) are H_calib, in the order of
-  /// `calib_cols`.
+  /// `calib_cols`. `motion` (the body's at the clone): in image-plane modes with state_velocity the observation's
+  /// velocity is the one the landmark's state predicts, not the provider's.
   bool linearize(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
                  const CloneState &clone, const ov_core::Feature &feature, size_t obs_index, TdObservation td_obs,
-                 const VelocityProvider &velocities, LandmarkLinearization &out) const;
+                 const VelocityProvider &velocities, LandmarkLinearization &out,
+                 const BodyMotion *motion = nullptr) const;
 
 private:
   /// With correlated track errors: linearises the landmark's previous observation of `f` (in `prev`) and turns `lin`
