@@ -39,6 +39,7 @@ UpdaterMSCKFOptions updater_options(const VioOptions &o) {
   u.min_parallax_deg = o.update.min_parallax_deg;
   u.max_features = o.update.max_features;
   u.track_correlation = o.update.track_correlation;
+  u.td_velocity_debias = o.td.velocity_debias;
   return u;
 }
 
@@ -59,8 +60,9 @@ TdObservation td_observation(TdMode m) {
   return TdObservation::None;
 }
 
-FvonProviderOptions fvon_options(const TonOptions &o) {
+FvonProviderOptions fvon_options(const TonOptions &o, bool stencils) {
   FvonProviderOptions f;
+  f.stencils = stencils;
   f.max_labels = o.fvon_max_labels;
   f.min_f2f_labels = o.fvon_min_f2f_labels;
   f.gate_px_s = o.fvon_gate_px_s;
@@ -117,7 +119,7 @@ VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, c
     inertial_init_ = std::make_unique<InertialInitializer>(
         inertial_init_options(opt), cam.T_BC, 0.5 * (cam.intrinsics(0) + cam.intrinsics(1)), opt.imu.gravity_mag);
   if (uses_fvon(opt.td.mode))
-    fvon_ = std::make_unique<FvonVelocityProvider>(cam, fvon_options(opt.ton));
+    fvon_ = std::make_unique<FvonVelocityProvider>(cam, fvon_options(opt.ton, opt.td.velocity_debias != 0.0));
   td_model_ = make_td_model(opt_, [this](int64_t t_cam_ns) {
     if (!td_oracle_)
       throw ov_core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");

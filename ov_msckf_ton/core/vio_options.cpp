@@ -120,6 +120,7 @@ std::vector<Field> fields(VioOptions &o) {
       field(T, "jacobian_rate_window_s", td.jacobian_rate_window_s),
       enum_field<SirVelocity>(T, "sir_velocity", td.sir_velocity, parser(kSirVelocity), namer(kSirVelocity)),
       enum_field<FirstVelocity>(T, "first_velocity", td.first_velocity, parser(kFirstVelocity), namer(kFirstVelocity)),
+      field(T, "velocity_debias", td.velocity_debias),
       field(T, "search", td.search),
       field(T, "search_range_s", td.search_range_s),
       field(N, "fvon_max_labels", ton.fvon_max_labels),
@@ -250,6 +251,7 @@ void validate_vio_options(const VioOptions &o) {
   require(td.adaptive_block_s >= 0 && td.adaptive_block_s <= 60, "time_offset.adaptive_block_s must lie in [0, 60] s");
   require(td.jacobian_rate_window_s >= 0 && td.jacobian_rate_window_s <= 1.0,
           "time_offset.jacobian_rate_window_s must lie in [0, 1] s");
+  require(td.velocity_debias >= 0 && td.velocity_debias <= 1, "time_offset.velocity_debias must lie in [0, 1]");
   const auto &n = o.ton;
   require(n.fvon_max_labels >= 1 && n.fvon_min_f2f_labels >= 1, "ton.fvon_max_labels and fvon_min_f2f_labels >= 1");
   require(n.its_epochs >= 0 && n.f2f_epochs >= 0 && n.tpn_epochs >= 0, "ton epochs must be >= 0");

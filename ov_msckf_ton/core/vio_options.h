@@ -57,6 +57,11 @@ struct TimeOffsetOptions {
   /// start.
   SirVelocity sir_velocity = SirVelocity::Central;
   FirstVelocity first_velocity = FirstVelocity::Next;
+  /// Image-plane modes: take the errors-in-variables bias of the tracked velocities out of each update, scaled by
+  /// this (UpdaterMSCKFOptions::td_velocity_debias: 1 for independent pixel errors of the declared σ, as the
+  /// feature-level simulations have; KLT's correlated errors make the bias ~0.03 of that, so 0, off, for images).
+  /// Measured in docs/results.md ("Errors in variables"); not in the paper.
+  double velocity_debias = 0.0;
   /// Before the filter starts, in the modes that estimate t_d: search init_s ± search_range_s with the images' rotation
   /// rate against the gyro (init/td_search.h) and start from what it finds. Started 100+ ms off, the filter diverges
   /// (docs/robustness.md); within a few ms it converges in about a second.

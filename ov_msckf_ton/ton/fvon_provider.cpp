@@ -53,12 +53,31 @@ bool FvonVelocityProvider::keep_prediction(const ov_core::Feature &f, const Pred
   return true;
 }
 
-Eigen::Vector2d FvonVelocityProvider::predict_its(const ov_core::Feature &f) {
+Eigen::Vector2d FvonVelocityProvider::predict_its(const ov_core::Feature &f, VelocityStencil *stencil) {
   const int n = later_velocities(f);
   its_seq_.clear();
   for (int i = 1; i <= n; ++i)
     its_seq_.push_back(f.obs[i].vel_xy * focal_);
   const Eigen::Vector2d v = its_.predict(its_seq_) / focal_;
+  if (stencil) {
+    // ∂prediction/∂V_i by central differences (ITS works in px/s: the focal cancels), each V_i through eq. 2's stencil.
+    stencil->clear();
+    constexpr double kStep = 1.0; // px/s, small against the tens to hundreds of px/s the labels span
+    VelocityStencil of_input;
+    for (int i = 1; i <= n; ++i) {
+      Eigen::Matrix2d J;
+      for (int c = 0; c < 2; ++c) {
+        const Eigen::Vector2d keep = its_seq_[i - 1];
+        its_seq_[i - 1](c) = keep(c) + kStep;
+        const Eigen::Vector2d plus = its_.predict(its_seq_);
+        its_seq_[i - 1](c) = keep(c) - kStep;
+        J.col(c) = (plus - its_.predict(its_seq_)) / (2 * kStep);
+        its_seq_[i - 1] = keep;
+      }
+      VelocityProvider::stencil(f, static_cast<size_t>(i), of_input);
+      stencil->add(of_input, J);
+    }
+  }
   FvonCandidates &c = candidates_[f.id];
   c.has_its = true;
   c.its = v;
@@ -113,7 +132,7 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
       }
       Prediction p;
       p.t_cam_ns = f->obs.front().t_cam_ns;
-      p.vel_xy = predict_its(*f);
+      p.vel_xy = predict_its(*f, opt_.stencils ? &p.stencil : nullptr);
       p.source = kVelocityItsFvon;
       ++stats_.its_predictions;
       keep_prediction(*f, p);
@@ -232,6 +251,18 @@ bool FvonVelocityProvider::velocity(const ov_core::Feature &feature, size_t obs_
   vel_xy = it->second.vel_xy;
   source = it->second.source;
   return true;
+}
+
+void FvonVelocityProvider::stencil(const ov_core::Feature &feature, size_t obs_index, VelocityStencil &out) const {
+  if (feature.obs[obs_index].vel_valid) {
+    tracked_for_update_->stencil(feature, obs_index, out);
+    return;
+  }
+  const auto it = predictions_.find(feature.id);
+  if (it == predictions_.end() || it->second.t_cam_ns != feature.obs[obs_index].t_cam_ns)
+    out.clear();
+  else
+    out = it->second.stencil;
 }
 
 } // namespace ov_msckf_ton

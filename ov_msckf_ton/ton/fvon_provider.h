@@ -40,6 +40,9 @@ struct FvonProviderOptions {
   /// did not pick (ITS where F2F was chosen, and the reverse), on a copy of F2F so the filter's own predictions and
   /// hence its trajectory are unchanged. Costs one more F2F training per frame.
   bool evaluate_both = false;
+  /// Give each ITS prediction its stencil (the network's input Jacobian, by central differences: 2 predictions per
+  /// input velocity), for the update's errors-in-variables correction (time_offset.velocity_debias).
+  bool stencils = false;
 };
 
 /// What the networks said about one first observation (for the velocity log). Velocities in normalised units/s.
@@ -72,6 +75,9 @@ public:
   /// Tracked observations get the velocity of `tracked` (eq. 2's backward difference by default, or the central
   /// difference of time_offset.sir_velocity); first observations FVON's prediction, when it made one.
   bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy, int &source) const override;
+  /// Tracked observations: `tracked`'s; ITS predictions through the later velocities they came from (with
+  /// `stencils`); F2F's dependence on the points (through its triangulated input) is left out.
+  void stencil(const ov_core::Feature &feature, size_t obs_index, VelocityStencil &out) const override;
   /// The provider for tracked observations (must outlive this one); default: eq. 2.
   void set_tracked(const VelocityProvider *tracked) { tracked_for_update_ = tracked ? tracked : &tracked_; }
 
@@ -87,12 +93,14 @@ private:
     int64_t t_cam_ns = 0;
     Eigen::Vector2d vel_xy = Eigen::Vector2d::Zero();
     int source = kVelocityNone;
+    VelocityStencil stencil; ///< ITS with `stencils`: through the later velocities it was predicted from
   };
 
   /// Stores the prediction unless the sanity check rejects it; returns whether it was kept.
   bool keep_prediction(const ov_core::Feature &f, const Prediction &p);
   /// ITS-FVON's prediction for a first observation from the track's later velocities (ITS must be trained).
-  Eigen::Vector2d predict_its(const ov_core::Feature &f);
+  /// With `stencil`, also how the prediction depends on the track's points (through its input velocities).
+  Eigen::Vector2d predict_its(const ov_core::Feature &f, VelocityStencil *stencil = nullptr);
   /// F2F-FVON over the frames of `need` (first observations): one training of `net` per frame on the other features'
   /// 3D points and tracked velocities, then `out(feature, velocity)` for each point it can predict. Features of a
   /// frame without enough labels, or untriangulable, are passed to `none`.

@@ -4,7 +4,10 @@
 #include "ov_core/track/feature_database.h"
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstddef>
+#include <utility>
+#include <vector>
 
 namespace ov_msckf_ton {
 
@@ -32,6 +35,32 @@ enum VelocitySource : int {
 };
 constexpr int kNumVelocitySources = 4;
 
+/// How an observation's velocity depends on the measured points of its own track, to first order:
+/// δvel_xy = Σ W_j·δxy_j over the track's observations j (exact for the differences below, which are linear in the
+/// points; a network's prediction through its input Jacobian). The update needs it because such a velocity shares
+/// pixel noise with the residual rows it multiplies, which biases t̂_d (errors in variables;
+/// UpdaterMSCKFOptions::td_velocity_debias). Empty: the velocity does not depend on the track's points, as far as
+/// is modelled.
+struct VelocityStencil {
+  std::vector<std::pair<size_t, Eigen::Matrix2d>> terms;
+
+  void clear() { terms.clear(); }
+  void add(size_t obs_index, const Eigen::Matrix2d &weight) {
+    for (auto &[i, w] : terms)
+      if (i == obs_index) {
+        w += weight;
+        return;
+      }
+    terms.emplace_back(obs_index, weight);
+  }
+  void add(size_t obs_index, double weight) { add(obs_index, weight * Eigen::Matrix2d::Identity()); }
+  /// Adds scale · other (the stencil of a velocity that is a linear map of another velocity).
+  void add(const VelocityStencil &other, const Eigen::Matrix2d &scale) {
+    for (const auto &[i, w] : other.terms)
+      add(i, scale * w);
+  }
+};
+
 /// Supplies the image-plane velocity of one observation in undistorted normalised coordinates per second.
 /// The default is the constant-speed model of the front end (paper eq. 2); FVON overrides it for observations
 /// without a previous one.
@@ -49,6 +78,23 @@ public:
     vel_xy = o.vel_xy;
     source = kVelocityTracked;
     return true;
+  }
+  /// What velocity() returns for this observation as a combination of the track's points (eq. 2 here). Must follow
+  /// velocity(): an override of one overrides the other.
+  virtual void stencil(const ov_core::Feature &feature, size_t obs_index, VelocityStencil &out) const {
+    out.clear();
+    const auto &obs = feature.obs;
+    if (!obs[obs_index].vel_valid)
+      return;
+    // (xy_k − xy_{k−1}) / dt. When the previous observation has already been used and removed from the track (it
+    // is then in no residual either), its interval is not kept: assume the next one's.
+    const size_t j = obs_index > 0 ? obs_index - 1 : obs_index + 1;
+    if (j >= obs.size())
+      return;
+    const double dt = 1e-9 * std::abs(static_cast<double>(obs[obs_index].t_cam_ns - obs[j].t_cam_ns));
+    out.add(obs_index, 1.0 / dt);
+    if (obs_index > 0)
+      out.add(obs_index - 1, -1.0 / dt);
   }
 };
 
@@ -69,6 +115,15 @@ public:
     source = kVelocityNone;
     return false;
   }
+  void stencil(const ov_core::Feature &feature, size_t obs_index, VelocityStencil &out) const override {
+    Eigen::Vector2d v;
+    int src = kVelocityNone;
+    out.clear();
+    if (base_.velocity(feature, obs_index, v, src))
+      base_.stencil(feature, obs_index, out);
+    else if (obs_index + 1 < feature.obs.size() && base_.velocity(feature, obs_index + 1, v, src))
+      base_.stencil(feature, obs_index + 1, out);
+  }
 
 private:
   const VelocityProvider &base_;
@@ -88,17 +143,38 @@ public:
       source = kVelocityNone;
       return false;
     }
-    if (obs_index + 1 < obs.size() && obs[obs_index + 1].vel_valid) {
-      const double dt1 = 1e-9 * static_cast<double>(obs[obs_index + 1].t_cam_ns - obs[obs_index].t_cam_ns);
-      // The previous observation may belong to the part of the track already used and removed (its velocity was
-      // kept): then assume the frame interval was the same.
-      const double dt0 =
-          obs_index > 0 ? 1e-9 * static_cast<double>(obs[obs_index].t_cam_ns - obs[obs_index - 1].t_cam_ns) : dt1;
+    double dt0 = 0.0, dt1 = 0.0;
+    if (central(feature, obs_index, dt0, dt1))
       vel_xy = (obs[obs_index].vel_xy * dt0 + obs[obs_index + 1].vel_xy * dt1) / (dt0 + dt1);
-    } else {
+    else
       vel_xy = obs[obs_index].vel_xy;
-    }
     source = kVelocityTracked;
+    return true;
+  }
+  void stencil(const ov_core::Feature &feature, size_t obs_index, VelocityStencil &out) const override {
+    double dt0 = 0.0, dt1 = 0.0;
+    if (!central(feature, obs_index, dt0, dt1)) {
+      VelocityProvider::stencil(feature, obs_index, out);
+      return;
+    }
+    VelocityStencil back, next;
+    VelocityProvider::stencil(feature, obs_index, back);
+    VelocityProvider::stencil(feature, obs_index + 1, next);
+    out.clear();
+    out.add(back, dt0 / (dt0 + dt1) * Eigen::Matrix2d::Identity());
+    out.add(next, dt1 / (dt0 + dt1) * Eigen::Matrix2d::Identity());
+  }
+
+private:
+  /// Whether the observation has a valid neighbour on each side, and the two intervals.
+  static bool central(const ov_core::Feature &feature, size_t obs_index, double &dt0, double &dt1) {
+    const auto &obs = feature.obs;
+    if (!(obs[obs_index].vel_valid && obs_index + 1 < obs.size() && obs[obs_index + 1].vel_valid))
+      return false;
+    dt1 = 1e-9 * static_cast<double>(obs[obs_index + 1].t_cam_ns - obs[obs_index].t_cam_ns);
+    // The previous observation may belong to the part of the track already used and removed (its velocity was
+    // kept): then assume the frame interval was the same.
+    dt0 = obs_index > 0 ? 1e-9 * static_cast<double>(obs[obs_index].t_cam_ns - obs[obs_index - 1].t_cam_ns) : dt1;
     return true;
   }
 };

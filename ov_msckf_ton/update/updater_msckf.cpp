@@ -37,6 +37,8 @@ UpdaterMSCKF::UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKF
     throw ov_core::UsageError("UpdaterMSCKF: chi2_multiplier must be positive");
   if (!(opt_.track_correlation >= 0 && opt_.track_correlation < 1))
     throw ov_core::UsageError("UpdaterMSCKF: track_correlation must be in [0, 1)");
+  if (!(opt_.td_velocity_debias >= 0 && opt_.td_velocity_debias <= 1))
+    throw ov_core::UsageError("UpdaterMSCKF: td_velocity_debias must be in [0, 1]");
   if (opt_.min_observations < 2)
     throw ov_core::UsageError("UpdaterMSCKF: min_observations must be at least 2 (two views leave one row)");
   if (!(opt_.min_depth > 0) || !(opt_.max_depth > opt_.min_depth))
@@ -231,6 +233,7 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
     out.H_f.block<2, 3>(2 * k, 0) = Jd * J.H_f;
     if (o.td_column)
       out.H_x.block<2, 1>(2 * k, c_td) = Jd * o.vel_xy;
+    o.Jd = Jd;
     if (view.est_ext) {
       out.H_x.block<2, 3>(2 * k, c_ext) = Jd * J.H_ext_theta;
       out.H_x.block<2, 3>(2 * k, c_ext + 3) = Jd * J.H_ext_p;
@@ -239,6 +242,45 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
       out.H_x.block<2, 1>(2 * k, c_ro) = Jd * o.vel_xy * rho;
   }
   return true;
+}
+
+double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ov_core::Feature &feature,
+                                      const VelocityProvider &velocities, const FeatureQR &qr) {
+  const int m = static_cast<int>(lin.obs.size());
+  if (m == 0 || !lin.obs.front().td_column)
+    return 0.0;
+  // Row of each observation index (-1: no clone, so its noise is in no row).
+  std::vector<int> row_of(feature.obs.size(), -1);
+  for (int k = 0; k < m; ++k)
+    row_of[lin.obs[k].obs_index] = k;
+  // D: row block k's t_d entry is J_k·V_k with δV_k = Σ W_j·δxy_j and xy_j's noise J_j⁻¹·n_j (n_j the pixel noise of
+  // row block j, as the residual carries it), so D_kj = J_k·W_j·J_j⁻¹.
+  Eigen::MatrixXd D = Eigen::MatrixXd::Zero(2 * m, 2 * m);
+  VelocityStencil st;
+  bool any = false;
+  for (int k = 0; k < m; ++k) {
+    velocities.stencil(feature, lin.obs[k].obs_index, st);
+    for (const auto &[i, w] : st.terms) {
+      const int j = i < row_of.size() ? row_of[i] : -1;
+      if (j < 0)
+        continue;
+      D.block<2, 2>(2 * k, 2 * j) += lin.obs[k].Jd * w * lin.obs[j].Jd.inverse();
+      any = true;
+    }
+  }
+  if (!any)
+    return 0.0;
+  // tr(Q₂ᵀDQ₂) = tr(D) − tr(Q₁ᵀDQ₁): Q₁ (the first three columns of H_f's Q) is thin.
+  const Eigen::MatrixXd Q1 = qr.householderQ() * Eigen::MatrixXd::Identity(2 * m, 3);
+  return D.trace() - (Q1.transpose() * D * Q1).trace();
+}
+
+double UpdaterMSCKF::remove_td_bias(State &state, double bias) {
+  if (bias == 0.0)
+    return 0.0;
+  const Eigen::VectorXd dx = -bias * state.P.col(state.td_index);
+  state.boxplus(dx);
+  return dx(state.td_index);
 }
 
 void UpdaterMSCKF::nullspace_project(const Eigen::Matrix<double, Eigen::Dynamic, 3> &H_f, Eigen::MatrixXd &H_x,
@@ -418,6 +460,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
 
   const double sigma2 = opt_.sigma_px * opt_.sigma_px;
   size_t n_acc = 0;
+  double td_bias = 0.0; // Σ_f tr(Q₂ᵀDQ₂) (td_velocity_debias)
   std::vector<std::pair<size_t, const CloneState *>> usable;
   for (const auto &[count, fp] : order) {
     const ov_core::Feature &f = *fp;
@@ -470,6 +513,8 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
     }
     ++n_acc;
     ++st.features_used;
+    if (opt_.td_velocity_debias != 0.0 && rho == 0.0 && td_obs == TdObservation::ImagePlane)
+      td_bias += opt_.td_velocity_debias * td_velocity_bias(lin_, f, velocities, qr_);
     st.rows_stacked += dof;
     bool any = false;
     for (const auto &o : lin_.obs)
@@ -506,6 +551,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
   compress(H, r);
   st.rows_update = static_cast<int>(r.size());
   st.mahalanobis = state_helper::ekf_update(state, cols_, H, r, sigma2);
+  st.td_debias_s = remove_td_bias(state, td_bias);
   st.td_after = state.td;
   return st;
 }

@@ -33,6 +33,18 @@ struct UpdaterMSCKFOptions {
   /// ρ of the AR(1) model of a track's pixel errors between consecutive observations (u and v apart): the feature's
   /// rows are whitened before the nullspace projection. 0: independent errors (σ²I).
   double track_correlation = 0.0;
+  /// Image-plane t_d rows: take out the bias a tracked velocity puts into t̂_d. The t_d column V_k of a row is a
+  /// difference of the track's measured points, so its noise correlates with the residuals' (errors in variables):
+  /// eq. 2's V_k contains observation k's own noise, the central difference its neighbours', and the nullspace
+  /// projection mixes rows. With D the map from the rows' pixel noise n to the noise of the t_d column (from each
+  /// velocity's VelocityStencil) and independent errors of the declared σ, E[hᵀr] over a feature's projected rows
+  /// gains σ²·tr(Q₂ᵀDQ₂) whatever t_d is; the update's information vector for t_d is off by b = Σ_f tr(Q₂ᵀDQ₂),
+  /// and its correction by P⁺·e_td·b, which is subtracted after the update.
+  /// The value scales b: the covariance of a point's error with its change since the previous image, over σ².
+  /// 1 for independent errors of the declared σ (feature-level simulations); σ_true²(1 − ρ)/σ² for errors with
+  /// lag-one correlation ρ, ≈ 0.03 for KLT on the renders (σ 0.36 px, ρ ≈ 0.8, weighted as 1 px), where the
+  /// bias is negligible. 0: off. Only with track_correlation 0.
+  double td_velocity_debias = 0.0;
 };
 
 struct UpdateStats {
@@ -51,6 +63,7 @@ struct UpdateStats {
   /// Observations of used features whose row carried a t_d entry, by VelocitySource (index 0 stays 0).
   std::array<int, kNumVelocitySources> td_obs_used{};
   int td_features_used = 0; ///< used features with at least one t_d entry
+  double td_debias_s = 0.0; ///< the t_d part of the errors-in-variables correction (td_velocity_debias) [s]
   double td_before = 0.0, td_after = 0.0;
   double mahalanobis = 0.0; ///< rᵀS⁻¹r of the final stacked update
 };
@@ -66,6 +79,7 @@ struct FeatureLinearization {
     int vel_source = kVelocityNone;
     bool td_column = false;
     double depth = 0.0;
+    Eigen::Matrix2d Jd = Eigen::Matrix2d::Identity(); ///< d(distorted pixel)/d(normalised point) at the observation
   };
   std::vector<int> cols;
   Eigen::MatrixXd H_x;                          ///< 2m × cols.size()
@@ -125,6 +139,14 @@ public:
   /// AR(1) errors with correlation ρ between consecutive observations: row k becomes (row k − ρ·row k−1)/√(1 − ρ²),
   /// row 0 stays. Errors of covariance σ²·C (C_ij = ρ^|i−j| per coordinate) then have covariance σ²I.
   static void whiten_track_rows(Eigen::Ref<Eigen::MatrixXd> M, double rho);
+
+  /// tr(Q₂ᵀDQ₂) of one linearised feature (td_velocity_debias): the expected spurious part of hᵀr/σ² over its
+  /// projected rows, h its t_d column. 0 when its rows carry no t_d column.
+  static double td_velocity_bias(const FeatureLinearization &lin, const ov_core::Feature &feature,
+                                 const VelocityProvider &velocities, const FeatureQR &qr);
+  /// After an EKF update whose t_d information vector was off by `bias` (Σ td_velocity_bias): the state moves by
+  /// −P⁺·e_td·bias (the gain's information form, P⁺Hᵀr/σ²). Returns the change of t̂_d.
+  static double remove_td_bias(State &state, double bias);
 
   /// chi2_multiplier × the chi-square quantile at chi2_confidence for `dof` degrees of freedom (cached table).
   double chi2_threshold(int dof) const;

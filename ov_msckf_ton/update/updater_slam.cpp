@@ -102,8 +102,15 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
     state.P.block(l.index, 0, 3, n) = P_xf.transpose();
     state.landmarks[l.id] = l;
     // The rest of the window's information, now that the landmark is in the state.
-    if (r2.size() > 0)
+    if (r2.size() > 0) {
+      // Its t_d column is the window's tracked velocities, as in an MSCKF update: the same errors-in-variables bias.
+      const double k = msckf_.options().td_velocity_debias;
+      const double bias = k != 0.0 && rho == 0.0 && td_obs == TdObservation::ImagePlane
+                              ? k * UpdaterMSCKF::td_velocity_bias(lin_, *f, velocities, qr)
+                              : 0.0;
       state_helper::ekf_update(state, lin_.cols, H2, r2, sigma2);
+      UpdaterMSCKF::remove_td_bias(state, bias);
+    }
     ++stats.initialised;
   }
 }
