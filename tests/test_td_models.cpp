@@ -9,6 +9,7 @@
 #include "test_util.h"
 
 #include <Eigen/Cholesky>
+#include <iostream>
 #include <random>
 
 using namespace ov_msckf_ton;
@@ -220,6 +221,40 @@ TEST(TdModels, BlockNoiseAdapterSeesALagThePerImageSamplesMiss) {
   std::cout << "[td models] true 0.1 ms/sqrt(s) random walk, 3-s blocks: t_d NEES " << nees_rw << "\n";
   EXPECT_GT(nees_rw, 0.6);
   EXPECT_LT(nees_rw, 1.5);
+}
+
+// TPN learns from the filter's estimates. Per image they jitter by more than a drift moves them (here 0.05 ms against
+// 0.025 ms per image), and a label per image (the paper) teaches the LSTM the jitter's mean reversion instead of the
+// trend; labels that are means over ton.tpn_label_images images recover it.
+TEST(TdModels, TpnBlockLabelsFindTheRateUnderPerImageJitter) {
+  const double rate = 5e-4, dt = 0.05, jitter = 5e-5;
+  double mean_rate[2] = {0, 0};
+  for (int M : {1, 10}) {
+    VioOptions o = with_process(TdMode::Tpn, TdProcess::Auto);
+    o.ton.tpn_label_images = M;
+    o.td.adaptive_noise = false;
+    auto m = make_td_model(o);
+    State s = initialised_state(*m, 1e-4);
+    std::mt19937 rng(5);
+    std::normal_distribution<double> n(0, jitter);
+    double sum = 0;
+    int cnt = 0;
+    const int64_t t0 = 1'000'000'000, step = 50'000'000;
+    for (int k = 0; k < 800; ++k) {
+      s.td = 0.01 + rate * dt * k + n(rng); // the filter's estimate after image k
+      m->after_image(s, t0 + k * step);
+      const double next = m->td_at_image(s, t0 + (k + 1) * step, t0 + k * step);
+      if (k >= 400) {
+        sum += (next - s.td) / dt;
+        ++cnt;
+      }
+    }
+    mean_rate[M == 1 ? 0 : 1] = sum / cnt;
+  }
+  std::cout << "[ TPN labels ] true rate 0.5 ms/s, jitter 0.05 ms per image: propagated rate " << mean_rate[0] * 1e3
+            << " ms/s with a label per image, " << mean_rate[1] * 1e3 << " ms/s with 10-image labels\n";
+  EXPECT_LT(std::abs(mean_rate[1] - rate), 0.15 * rate);
+  EXPECT_GT(std::abs(mean_rate[0] - rate), 0.3 * rate) << "per-image labels were expected to miss the trend";
 }
 
 TEST(TdModels, NoiseAdapterConvergesToTheTrueRandomWalk) {

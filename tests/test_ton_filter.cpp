@@ -191,7 +191,10 @@ TEST(TonFilter, TpnOnNoiseFreeDrift) {
   // against the next posterior t̂_d(K) is circular (the posterior starts from it). Only the truth is a fair
   // reference here, and it is printed, not asserted: the sir estimate this runs on is biased by far more than the
   // 5 us per frame the offset drifts (see the report in the output), so neither predictor is near the truth.
-  const ModeRun tpn = run_mode(*data, TdMode::Tpn, fast_networks());
+  // A label and a prediction per image, as in the paper (the default's 10-image labels predict per block).
+  VioOptions per_image = fast_networks();
+  per_image.ton.tpn_label_images = 1;
+  const ModeRun tpn = run_mode(*data, TdMode::Tpn, per_image);
   ASSERT_GT(tpn.td_hat.size(), 100u);
   const PredictionErrors loop_truth = prediction_errors(tpn, truth);
   std::cout << "[ton filter] tpn mode, " << loop_truth.n << " predictions: mean |t_d^TPN(K) - truth(K)| "

@@ -131,6 +131,7 @@ std::vector<Field> fields(VioOptions &o) {
       field(N, "tpn_epochs", ton.tpn_epochs),
       field(N, "tpn_min_labels", ton.tpn_min_labels),
       field(N, "tpn_start_sigma_s", ton.tpn_start_sigma_s),
+      field(N, "tpn_label_images", ton.tpn_label_images),
       field(N, "its_residual", ton.its_residual),
       field(N, "tpn_residual", ton.tpn_residual),
       field(N, "f2f_inverse_depth", ton.f2f_inverse_depth),
@@ -256,6 +257,7 @@ void validate_vio_options(const VioOptions &o) {
   require(n.fvon_max_labels >= 1 && n.fvon_min_f2f_labels >= 1, "ton.fvon_max_labels and fvon_min_f2f_labels >= 1");
   require(n.its_epochs >= 0 && n.f2f_epochs >= 0 && n.tpn_epochs >= 0, "ton epochs must be >= 0");
   require(n.tpn_min_labels >= 2, "ton.tpn_min_labels must be >= 2");
+  require(n.tpn_label_images >= 1 && n.tpn_label_images <= 200, "ton.tpn_label_images must lie in [1, 200]");
   require(n.fvon_gate_px_s >= 0, "ton.fvon_gate_px_s must be >= 0");
   require(n.plateau_epochs >= 0 && n.plateau_rel >= 0, "ton.plateau_epochs and ton.plateau_rel must be >= 0");
   const auto &u = o.update;

@@ -39,11 +39,11 @@ struct TimeOffsetOptions {
   double rate_max = 0.001;
   /// Covariance matching (td/td_noise_adapter.h): the process noise follows the t_d corrections the updates make,
   /// so that σ(t_d) stays honest when the model's prediction is off. Applies to random walk, drift and tpn (a
-  /// constant stays constant). Measured in docs/results.md: TPN's t_d NEES 4.9 -> 1.0 on the worked case.
+  /// constant stays constant). Measured in docs/ton.md: TPN's t_d NEES 4.9 -> 1.0 on the worked case.
   bool adaptive_noise = true;
   /// Covariance matching sums the t_d corrections over the last this-many seconds (0: one image per sample). A
   /// prediction that trails the offset corrects it by many small steps of one sign that no single image shows.
-  /// Measured in docs/results.md ("t_d noise over blocks"): on the 40-s protocol cells ton's t_d NEES 2.27 -> 1.23
+  /// Measured in docs/ton.md ("t_d noise over blocks"): on the 40-s protocol cells ton's t_d NEES 2.27 -> 1.23
   /// at 6 s; unchanged on the 20-s Monte-Carlo renders.
   double adaptive_block_s = 6.0;
   /// The body rate in the clone's t_d Jacobian: 0 = the gyro reading at the image time; > 0 = the mean reading over
@@ -51,7 +51,7 @@ struct TimeOffsetOptions {
   /// vibrating IMU otherwise makes t_d look observable on a gentle flight (docs/robustness.md, "Weak excitation"),
   /// and `diagnose` then read the pulled t_d as a 0.4-0.6 deg camera-IMU rotation on clean flights (docs/diagnose.md).
   double jacobian_rate_window_s = 0.1;
-  /// Defaults measured in docs/results.md (the paper's choices, backward / none, are config/paper/): eq. 2's
+  /// Defaults measured in docs/ton.md (the paper's choices, backward / none, are config/paper/): eq. 2's
   /// backward difference shares the observation's own noise with its residual and biases t̂_d (errors in variables;
   /// TPN then learns and amplifies the bias), and without a first velocity the image-plane modes diverge on a fast
   /// start.
@@ -60,7 +60,7 @@ struct TimeOffsetOptions {
   /// Image-plane modes: take the errors-in-variables bias of the tracked velocities out of each update, scaled by
   /// this (UpdaterMSCKFOptions::td_velocity_debias: 1 for independent pixel errors of the declared σ, as the
   /// feature-level simulations have; KLT's correlated errors make the bias ~0.03 of that, so 0, off, for images).
-  /// Measured in docs/results.md ("Errors in variables"); not in the paper.
+  /// Measured in docs/ton.md ("Errors in variables"); not in the paper.
   double velocity_debias = 0.0;
   /// Before the filter starts, in the modes that estimate t_d: search init_s ± search_range_s with the images' rotation
   /// rate against the gyro (init/td_search.h) and start from what it finds. Started 100+ ms off, the filter diverges
@@ -82,7 +82,13 @@ struct TonOptions {
   int tpn_epochs = 1000;            ///< TPN epochs per frame (Table I)
   int tpn_min_labels = 5;           ///< TPN drives t_d only once its buffer holds this many estimates
   double tpn_start_sigma_s = 0.001; ///< TPN learns from t̂_d only once its σ is below this (past convergence)
-  /// Beyond the paper (docs/results.md): ITS and TPN learn the change from their last input (a skip connection
+  /// Images per TPN label: each label is the mean of t̂_d over this many images, and the propagation moves t_d at
+  /// (t_d^TPN − last label) / the labels' spacing. 1 is the paper (a label per image). Why 10: per image, the
+  /// filter's estimate jitters by more than a drift moves it, and the LSTM then learns the jitter's mean reversion,
+  /// not the trend — on the worked case's +0.5 ms/s drift TPN drove t_d at −0.5 to −0.7 ms/s and the noise adapter
+  /// made up for it (docs/ton.md, "TPN's labels"; protocol t_d RMSE −27 to −32 % with 10).
+  int tpn_label_images = 10;
+  /// Beyond the paper (docs/ton.md): ITS and TPN learn the change from their last input (a skip connection
   /// around the same LSTM), F2F sees the 3D point as (X/Z, Y/Z, 1/Z). All false in config/paper/.
   bool its_residual = true;
   bool tpn_residual = true;
@@ -119,7 +125,7 @@ struct SlamOptions {
   /// re-observed at every image, so a slowly wandering track error is otherwise counted again at each.
   double track_correlation = 0.0;
   /// Image-plane modes: a landmark's t_d row uses the image velocity its state predicts, not the tracked backward
-  /// difference that shares the row's pixel noise (UpdaterSlamOptions::state_velocity; docs/results.md).
+  /// difference that shares the row's pixel noise (UpdaterSlamOptions::state_velocity; docs/ton.md).
   bool state_velocity = true;
 };
 

@@ -1,6 +1,8 @@
 // The paper's TPN in the filter (Sec. IV-C, eq. 14, Algorithm 1 stages 3-4): after each image the filter's estimate
 // t̂_d(K−1) is a label, the network predicts t_d^TPN(K), and the propagation to image K moves the mean at
-// J_td = (t_d^TPN(K) − t̂_d(K−1)) / dt, bounded by rate_max; t_d carries random-walk noise.
+// J_td = (t_d^TPN(K) − t̂_d(K−1)) / dt, bounded by rate_max; t_d carries random-walk noise. With
+// ton.tpn_label_images M > 1 a label is the mean of M images' estimates and J_td = (t_d^TPN − last label) / the
+// labels' spacing, held until the next label.
 #include "ov_core/types/sensor_data.h"
 #include "ov_msckf_ton/td/td_models.h"
 #include "ov_msckf_ton/td/td_noise_adapter.h"
@@ -25,7 +27,8 @@ TpnDriverOptions driver_options(const TimeOffsetOptions &o, const TonOptions &to
 class TpnTdModel : public TdModel {
 public:
   TpnTdModel(const TimeOffsetOptions &o, const TonOptions &ton)
-      : driver_(driver_options(o, ton)), q_(o.random_walk_tpn), start_sigma_s_(ton.tpn_start_sigma_s) {
+      : driver_(driver_options(o, ton)), q_(o.random_walk_tpn), start_sigma_s_(ton.tpn_start_sigma_s),
+        label_images_(ton.tpn_label_images) {
     if (o.adaptive_noise)
       adapter_.emplace(o.random_walk_tpn, o.adaptive_block_s);
     stats_.process_sigma = q_;
@@ -40,7 +43,12 @@ public:
     if (last_image_ns < 0 || t_cam_ns <= last_image_ns)
       return s.td;
     const double dt = ov_core::ns_to_s(t_cam_ns - last_image_ns);
-    return s.td + driver_.rate(s.td, dt, &last_clamped_) * dt;
+    if (label_images_ == 1)
+      return s.td + driver_.rate(s.td, dt, &last_clamped_) * dt;
+    // Block labels: the rate from the last label to the predicted next one, over their spacing.
+    if (!(label_spacing_s_ > 0))
+      return s.td;
+    return s.td + driver_.rate(last_label_, label_spacing_s_, &last_clamped_) * dt;
   }
 
   void propagate(State &s, double td_end, double dt_s) override {
@@ -62,7 +70,7 @@ public:
       adapter_->add_update(td0, v0, td1, v1);
   }
 
-  void after_image(const State &s, int64_t) override {
+  void after_image(const State &s, int64_t t_cam_ns) override {
     if (adapter_) {
       adapter_->close_image(dt_since_image_);
       stats_.process_sigma = adapter_->q();
@@ -71,9 +79,30 @@ public:
     // The labels are the filter's own estimates: while t_d is still converging (σ above tpn_start_sigma_s) they
     // trace the convergence transient, not the offset's motion, and a network trained on them extrapolates the
     // transient (measured: on a constant +10 ms offset, t_d overshot to 14 ms and the trajectory diverged).
-    if (s.td_sigma() > start_sigma_s_)
+    if (s.td_sigma() > start_sigma_s_) {
+      block_n_ = 0;
+      block_td_ = block_t_ = 0.0;
       return;
-    driver_.step(s.td);
+    }
+    if (label_images_ == 1) {
+      driver_.step(s.td);
+      ++stats_.learning_steps;
+      return;
+    }
+    if (first_image_ns_ < 0)
+      first_image_ns_ = t_cam_ns;
+    block_td_ += s.td;
+    block_t_ += ov_core::ns_to_s(t_cam_ns - first_image_ns_);
+    if (++block_n_ < label_images_)
+      return;
+    const double label = block_td_ / block_n_, t_label = block_t_ / block_n_;
+    label_spacing_s_ = has_label_ ? t_label - last_label_t_ : 0.0;
+    last_label_ = label;
+    last_label_t_ = t_label;
+    has_label_ = true;
+    block_n_ = 0;
+    block_td_ = block_t_ = 0.0;
+    driver_.step(label);
     ++stats_.learning_steps;
   }
 
@@ -83,6 +112,12 @@ private:
   std::optional<TdNoiseAdapter> adapter_;
   double dt_since_image_ = 0.0;
   mutable bool last_clamped_ = false;
+  // Block labels (label_images_ > 1): the running block and the last label, times in seconds from the first image.
+  int label_images_ = 1, block_n_ = 0;
+  double block_td_ = 0.0, block_t_ = 0.0;
+  double last_label_ = 0.0, last_label_t_ = 0.0, label_spacing_s_ = 0.0;
+  bool has_label_ = false;
+  int64_t first_image_ns_ = -1;
 };
 
 } // namespace

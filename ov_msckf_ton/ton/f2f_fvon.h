@@ -23,7 +23,7 @@ struct F2fFvonOptions {
   /// Feed the 3D position as (X/Z, Y/Z, 1/Z) instead of (X, Y, Z): the same point, in coordinates in which the image
   /// velocity is a low-order polynomial (ω enters through x, y; translation through 1/Z), so that new features —
   /// detected where no tracked feature is, i.e. outside the labels — are less of an extrapolation. Not the paper's
-  /// input; measured in docs/results.md. (min_position_range then applies to these coordinates.)
+  /// input; measured in docs/ton.md. (min_position_range then applies to these coordinates.)
   bool inverse_depth_input = true;
 };
 

@@ -21,7 +21,7 @@ struct ItsFvonOptions {
   double min_velocity_range = 1.0;
   /// Learn the change V^k − V^{k+1} instead of V^k (a skip connection around the same LSTM): an untrained or
   /// mistrained net then predicts ≈ V^{k+1} (the constant-speed rule) instead of an arbitrary velocity. Not the
-  /// paper's output; measured against the truth in docs/results.md (`ovton velocities`).
+  /// paper's output; measured against the truth in docs/ton.md (`ovton velocities`).
   bool residual = true;
 };
 

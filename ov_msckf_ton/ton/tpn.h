@@ -23,7 +23,7 @@ struct TpnOptions {
   double min_range_s = 1e-5;
   /// Learn the step t_d(j+1) − t_d(j) instead of t_d(j+1) (a skip connection around the same LSTM): the net then
   /// only has to represent the drift rate, and an untrained net predicts "no change" instead of an arbitrary value.
-  /// Not the paper's output; measured in docs/results.md.
+  /// Not the paper's output; measured in docs/ton.md.
   bool residual = true;
 };
 

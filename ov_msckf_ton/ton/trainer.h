@@ -18,7 +18,7 @@ struct TrainOptions {
   /// Plateau stop (beyond Table I, for the per-frame cost): every `plateau_epochs` steps, stop when the loss fell
   /// by less than `plateau_rel` of itself since the previous check. Warm-started from the previous frame, whose
   /// window differs by a few labels, the weights are usually near their optimum after a few dozen steps and the
-  /// remaining epochs of the paper's budget buy nothing measurable (docs/results.md). 0 disables it.
+  /// remaining epochs of the paper's budget buy nothing measurable (docs/ton.md). 0 disables it.
   int plateau_epochs = 0;
   double plateau_rel = 1e-3;
 };

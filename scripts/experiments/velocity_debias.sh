@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# The errors-in-variables bias of the image-plane modes (time_offset.velocity_debias, docs/results.md "Errors in
+# The errors-in-variables bias of the image-plane modes (time_offset.velocity_debias, docs/ton.md "Errors in
 # variables"): feature-level simulations of V1_03_difficult (1 px independent pixel noise, the folders' own truth)
 # with a constant +10 ms offset and with the worked case's drift (10 ms, +0.5 ms/s, 0.1 ms/sqrt(s)), SEEDS seeds
 # each, DURATION_S s from 5 s; modes sir, tpn, ton (and sr for reference) with the correction off (0) and at the
 # value these folders' noise calls for (1). Per mode and setting, means over seeds of: t_d error mean over the first
 # 5 s and after it [ms] (the bias), t_d RMSE after 5 s, t_d NEES, TPE [mm], APE [mm].
 # Usage: scripts/experiments/velocity_debias.sh [OUT] [SEEDS] [DURATION_S]   (~10 min for 4 seeds of 30 s)
-#   OVTON_BIN overrides the binary, PYTHON the interpreter (needs numpy). Needs ../shared/data. Runs already in OUT
+#   OVTON_BIN overrides the binary, PYTHON the interpreter (needs numpy), SET adds config overrides to every run
+#   (e.g. SET="ton.tpn_label_images=10"). Needs ../shared/data. Runs already in OUT
 #   are kept. Writes OUT/summary.md.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -23,7 +24,7 @@ mkdir -p "$OUT"
 for k in 0 1; do
   # Feature-level folders carry 1 px of independent noise: weighted and gated as such (as ton_defaults.sh part 2).
   python3 scripts/config_override.py config/sim/estimator_config.yaml "$OUT/k$k.yaml" update.sigma_px=1.0 \
-    update.chi2_multiplier=1 slam.sigma_px=0 slam.chi2_multiplier=1 time_offset.velocity_debias=$k >/dev/null
+    update.chi2_multiplier=1 slam.sigma_px=0 slam.chi2_multiplier=1 time_offset.velocity_debias=$k ${SET:-} >/dev/null
 done
 for kind in const drift; do
   args="--td0-ms 10"
@@ -50,10 +51,10 @@ for kind in const drift; do
   done
 done
 
-"$PY" - "$OUT" "$SEEDS" "$DUR" "$(git rev-parse --short HEAD)" >"$OUT/summary.md" <<'PY'
+"$PY" - "$OUT" "$SEEDS" "$DUR" "$(git rev-parse --short HEAD)" "${SET:-}" >"$OUT/summary.md" <<'PY'
 import collections, re, sys
 import numpy as np
-out, seeds, dur, commit = sys.argv[1:5]
+out, seeds, dur, commit, extra = sys.argv[1:6]
 acc = collections.defaultdict(list)
 for line in open(f"{out}/runs.txt"):
     kind, seed, mode, k, status, est, d = line.split()
@@ -74,7 +75,8 @@ for line in open(f"{out}/runs.txt"):
                                  np.mean((err / sig) ** 2), tpe, ape))
 print(f"# Errors in variables: the image-plane modes with and without `time_offset.velocity_debias`\n")
 print(f"Made by `scripts/experiments/velocity_debias.sh {out} {seeds} {dur}` (commit {commit}): feature-level "
-      f"V1_03_difficult, {dur} s from 5 s, 1 px independent noise, seeds 1-{seeds}; means over seeds.\n")
+      f"V1_03_difficult, {dur} s from 5 s, 1 px independent noise, seeds 1-{seeds}; means over seeds"
+      + (f"; every run with {extra}" if extra else "") + ".\n")
 print("| offset | mode | velocity_debias | runs (stopped) | t_d error, first 5 s [ms] | t_d error after 5 s [ms] "
       "| t_d RMSE after 5 s [ms] | t_d NEES | TPE [mm] | APE [mm] |")
 print("|---|---|---:|---|---:|---:|---:|---:|---:|---:|")
