@@ -1,8 +1,9 @@
 // The errors-in-variables bias of image-plane t_d rows (UpdaterMSCKFOptions::td_velocity_debias): a tracked velocity
 // is a difference of the track's own noisy points, so the t_d column and the residual share noise. Checked here:
 // each velocity's stencil reproduces the velocity, the predicted spurious correlation tr(Q₂ᵀDQ₂) matches a Monte
-// Carlo of hᵀr over one feature's projected rows, and whole updates at the true t_d move t̂_d off it on average
-// without the correction and not with it.
+// Carlo of hᵀr over one feature's projected rows, ITS-FVON's stencil is its prediction's derivative, and whole
+// updates at the true t_d move t̂_d off it on average without the correction and not with it.
+#include "ov_msckf_ton/ton/fvon_provider.h"
 #include "ov_msckf_ton/update/td_observation.h"
 #include "ov_msckf_ton/update/updater_msckf.h"
 #include "update_test_util.h"
@@ -137,4 +138,70 @@ TEST(TdDebias, CorrectedUpdatesLeaveTdUnbiased) {
       EXPECT_GT(dtd.mean(), 5 * dtd.se()) << "eq. 2's shared noise pushes t_d ahead";
     }
   }
+}
+
+// ITS-FVON predicts a new track's first velocity from its later (eq. 2) velocities: the stencil it hands the update
+// must be the prediction's derivative with respect to the track's points.
+TEST(TdDebias, ItsPredictionStencilIsItsDerivative) {
+  const Scene sc = make_scene(12, 40, 2.5, 0.0, 41);
+  ASSERT_GE(sc.points.size(), 30u);
+  ov_core::FeatureDatabase db;
+  std::mt19937 rng(9);
+  std::normal_distribution<double> n(0.0, 0.3);
+  // Points 0-19 seen throughout (their first observations dropped below, so they are "well tracked": ITS's
+  // labels); points 20-29 new from image 6 on (first observation without a velocity, five later ones).
+  for (size_t k = 0; k < sc.stamps.size(); ++k) {
+    const Pose P = sc.pose_at(sc.t_of(sc.stamps[k]));
+    for (size_t id = 0; id < 30; ++id) {
+      if (id >= 20 && k < 6)
+        continue;
+      Eigen::Vector2d xy;
+      ASSERT_TRUE(sc.project(P, sc.points[id], xy));
+      const Eigen::Vector2d uv = sc.cam.distort(xy) + Eigen::Vector2d(n(rng), n(rng));
+      db.add_observation(id, sc.stamps[k], uv, sc.cam.undistort(uv));
+    }
+  }
+  db.remove_observations_older_than(sc.stamps[2]);
+  FvonProviderOptions o;
+  o.stencils = true;
+  o.gate_px_s = 0; // the derivative is checked whatever the prediction's quality
+  o.its.train.max_epochs = 300;
+  FvonVelocityProvider fvon(sc.calib, o);
+  UpdaterMSCKF up(sc.calib);
+  const State s = make_state(sc, 0.0, 0.002, 0.004, 0.005);
+  fvon.prepare(s, all_features(db), up);
+  const double focal = 0.5 * (sc.calib.intrinsics(0) + sc.calib.intrinsics(1));
+  int checked = 0;
+  for (size_t id = 20; id < 30; ++id) {
+    const ov_core::Feature &f = *db.get(id);
+    Eigen::Vector2d v;
+    int src = kVelocityNone;
+    if (!fvon.velocity(f, 0, v, src) || src != kVelocityItsFvon)
+      continue; // gated
+    VelocityStencil st;
+    fvon.stencil(f, 0, st);
+    ASSERT_EQ(st.terms.size(), f.obs.size()) << "every point from the first to the last later velocity";
+    // ITS's prediction from the track with point j moved by h along axis c, velocities recomputed by eq. 2.
+    const auto predict = [&](size_t j, int c, double h) {
+      std::vector<Eigen::Vector2d> seq;
+      for (size_t i = 1; i < f.obs.size(); ++i) {
+        Eigen::Vector2d a = f.obs[i].xy, b = f.obs[i - 1].xy;
+        a(c) += i == j ? h : 0.0;
+        b(c) += i - 1 == j ? h : 0.0;
+        seq.push_back((a - b) / (1e-9 * static_cast<double>(f.obs[i].t_cam_ns - f.obs[i - 1].t_cam_ns)) * focal);
+      }
+      return Eigen::Vector2d(fvon.its().predict(seq) / focal);
+    };
+    EXPECT_LT((predict(0, 0, 0.0) - v).norm(), 1e-9 * (1 + v.norm())) << "the same prediction as the provider's";
+    const double h = 1e-6;
+    for (const auto &[j, W] : st.terms)
+      for (int c = 0; c < 2; ++c) {
+        const Eigen::Vector2d num = (predict(j, c, h) - predict(j, c, -h)) / (2 * h);
+        EXPECT_LT((num - W.col(c)).norm(), 1e-3 * (1 + W.col(c).norm())) << "feature " << id << ", point " << j;
+      }
+    ++checked;
+  }
+  EXPECT_GT(checked, 3) << "too few ITS predictions to check: ITS trainings " << fvon.stats().its_trainings
+                        << ", predictions " << fvon.stats().its_predictions << ", gated " << fvon.stats().gated
+                        << ", F2F " << fvon.stats().f2f_predictions;
 }

@@ -250,10 +250,17 @@ TEST(TdModels, TpnBlockLabelsFindTheRateUnderPerImageJitter) {
       }
     }
     mean_rate[M == 1 ? 0 : 1] = sum / cnt;
+    if (M > 1) {
+      // Converging again (σ above ton.tpn_start_sigma_s): no drive at the old labels' rate until new labels come.
+      s.P(s.td_index, s.td_index) = 4e-6;
+      m->after_image(s, t0 + 800 * step);
+      EXPECT_EQ(m->td_at_image(s, t0 + 801 * step, t0 + 800 * step), s.td);
+    }
   }
   std::cout << "[ TPN labels ] true rate 0.5 ms/s, jitter 0.05 ms per image: propagated rate " << mean_rate[0] * 1e3
             << " ms/s with a label per image, " << mean_rate[1] * 1e3 << " ms/s with 10-image labels\n";
   EXPECT_LT(std::abs(mean_rate[1] - rate), 0.15 * rate);
+  // The scenario must be one where the jitter matters, or the test would not show what the block labels fix.
   EXPECT_GT(std::abs(mean_rate[0] - rate), 0.3 * rate) << "per-image labels were expected to miss the trend";
 }
 

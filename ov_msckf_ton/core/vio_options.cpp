@@ -252,7 +252,10 @@ void validate_vio_options(const VioOptions &o) {
   require(td.adaptive_block_s >= 0 && td.adaptive_block_s <= 60, "time_offset.adaptive_block_s must lie in [0, 60] s");
   require(td.jacobian_rate_window_s >= 0 && td.jacobian_rate_window_s <= 1.0,
           "time_offset.jacobian_rate_window_s must lie in [0, 1] s");
-  require(td.velocity_debias >= 0 && td.velocity_debias <= 1, "time_offset.velocity_debias must lie in [0, 1]");
+  require(td.velocity_debias >= 0 && td.velocity_debias <= 10, "time_offset.velocity_debias must lie in [0, 10]");
+  require(td.velocity_debias == 0 || (o.update.track_correlation == 0 && o.slam.track_correlation == 0),
+          "time_offset.velocity_debias assumes independent pixel errors: it needs update.track_correlation and "
+          "slam.track_correlation 0");
   const auto &n = o.ton;
   require(n.fvon_max_labels >= 1 && n.fvon_min_f2f_labels >= 1, "ton.fvon_max_labels and fvon_min_f2f_labels >= 1");
   require(n.its_epochs >= 0 && n.f2f_epochs >= 0 && n.tpn_epochs >= 0, "ton epochs must be >= 0");

@@ -85,7 +85,7 @@ struct TonOptions {
   /// Images per TPN label: each label is the mean of t̂_d over this many images, and the propagation moves t_d at
   /// (t_d^TPN − last label) / the labels' spacing. 1 is the paper (a label per image). Why 10: per image, the
   /// filter's estimate jitters by more than a drift moves it, and the LSTM then learns the jitter's mean reversion,
-  /// not the trend — on the worked case's +0.5 ms/s drift TPN drove t_d at −0.5 to −0.7 ms/s and the noise adapter
+  /// not the trend — on the worked case's +0.5 ms/s drift TPN drove t_d at −0.3 to −0.7 ms/s and the noise adapter
   /// made up for it (docs/ton.md, "TPN's labels"; protocol t_d RMSE −27 to −32 % with 10).
   int tpn_label_images = 10;
   /// Beyond the paper (docs/ton.md): ITS and TPN learn the change from their last input (a skip connection

@@ -80,8 +80,14 @@ public:
     // trace the convergence transient, not the offset's motion, and a network trained on them extrapolates the
     // transient (measured: on a constant +10 ms offset, t_d overshot to 14 ms and the trajectory diverged).
     if (s.td_sigma() > start_sigma_s_) {
+      // Converging again: the block labels start over, and t_d is not driven at the last labels' rate meanwhile.
       block_n_ = 0;
       block_td_ = block_t_ = 0.0;
+      if (label_images_ > 1 && has_label_) {
+        has_label_ = false;
+        label_spacing_s_ = 0.0;
+        driver_.clear_labels();
+      }
       return;
     }
     if (label_images_ == 1) {

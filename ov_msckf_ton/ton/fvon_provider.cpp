@@ -62,16 +62,18 @@ Eigen::Vector2d FvonVelocityProvider::predict_its(const ov_core::Feature &f, Vel
   if (stencil) {
     // ∂prediction/∂V_i by central differences (ITS works in px/s: the focal cancels), each V_i through eq. 2's stencil.
     stencil->clear();
-    constexpr double kStep = 1.0; // px/s, small against the tens to hundreds of px/s the labels span
+    // A step small against the normaliser's spread, so that it stays a derivative of the LSTM's tanh units even
+    // when a flat window shrinks the spread to its 1 px/s floor.
+    const Eigen::Vector2d step = 1e-3 * its_.input_scale();
     VelocityStencil of_input;
     for (int i = 1; i <= n; ++i) {
       Eigen::Matrix2d J;
       for (int c = 0; c < 2; ++c) {
         const Eigen::Vector2d keep = its_seq_[i - 1];
-        its_seq_[i - 1](c) = keep(c) + kStep;
+        its_seq_[i - 1](c) = keep(c) + step(c);
         const Eigen::Vector2d plus = its_.predict(its_seq_);
-        its_seq_[i - 1](c) = keep(c) - kStep;
-        J.col(c) = (plus - its_.predict(its_seq_)) / (2 * kStep);
+        its_seq_[i - 1](c) = keep(c) - step(c);
+        J.col(c) = (plus - its_.predict(its_seq_)) / (2 * step(c));
         its_seq_[i - 1] = keep;
       }
       VelocityProvider::stencil(f, static_cast<size_t>(i), of_input);

@@ -57,6 +57,8 @@ public:
   const ItsLstm &network() const { return net_; }
   const TrainReport &last_report() const { return last_report_; }
   const ItsFvonOptions &options() const { return options_; }
+  /// The fitted normaliser's spread per dimension [px/s] (the scale a derivative step must be small against).
+  const Eigen::Vector2d &input_scale() const { return norm_.scale(); }
 
 private:
   ItsFvonOptions options_;

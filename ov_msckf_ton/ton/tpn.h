@@ -37,6 +37,8 @@ public:
   /// Stage 3: appends the filter's estimate t_d(K-1) [s], dropping the oldest once the buffer is full.
   void push_estimate(double td_s);
   int num_labels() const { return static_cast<int>(buffer_.size()); }
+  /// Empties the label buffer, keeping the weights and the optimiser state.
+  void clear_labels() { buffer_.clear(); }
   const std::vector<double> &labels() const { return buffer_; }
 
   /// Stage 4: trains on the buffer as one sequence, input t_d(j) -> target t_d(j+1), continuing from the previous

@@ -25,6 +25,11 @@ public:
   /// is available (enough labels).
   bool step(double td_estimate_s);
   bool has_prediction() const { return has_prediction_; }
+  /// Forgets the labels (not the weights) and the prediction: the next labels do not continue the old sequence.
+  void clear_labels() {
+    tpn_.clear_labels();
+    has_prediction_ = false;
+  }
   /// t_d^TPN(K) [s]; only meaningful when has_prediction().
   double prediction() const { return prediction_; }
 

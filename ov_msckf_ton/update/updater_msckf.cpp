@@ -37,8 +37,8 @@ UpdaterMSCKF::UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKF
     throw ov_core::UsageError("UpdaterMSCKF: chi2_multiplier must be positive");
   if (!(opt_.track_correlation >= 0 && opt_.track_correlation < 1))
     throw ov_core::UsageError("UpdaterMSCKF: track_correlation must be in [0, 1)");
-  if (!(opt_.td_velocity_debias >= 0 && opt_.td_velocity_debias <= 1))
-    throw ov_core::UsageError("UpdaterMSCKF: td_velocity_debias must be in [0, 1]");
+  if (!(opt_.td_velocity_debias >= 0 && opt_.td_velocity_debias <= 10))
+    throw ov_core::UsageError("UpdaterMSCKF: td_velocity_debias must be in [0, 10]");
   if (opt_.min_observations < 2)
     throw ov_core::UsageError("UpdaterMSCKF: min_observations must be at least 2 (two views leave one row)");
   if (!(opt_.min_depth > 0) || !(opt_.max_depth > opt_.min_depth))

@@ -41,9 +41,11 @@ struct UpdaterMSCKFOptions {
   /// gains σ²·tr(Q₂ᵀDQ₂) whatever t_d is; the update's information vector for t_d is off by b = Σ_f tr(Q₂ᵀDQ₂),
   /// and its correction by P⁺·e_td·b, which is subtracted after the update.
   /// The value scales b: the covariance of a point's error with its change since the previous image, over σ².
-  /// 1 for independent errors of the declared σ (feature-level simulations); σ_true²(1 − ρ)/σ² for errors with
-  /// lag-one correlation ρ, ≈ 0.03 for KLT on the renders (σ 0.36 px, ρ ≈ 0.8, weighted as 1 px), where the
-  /// bias is negligible. 0: off. Only with track_correlation 0.
+  /// 1 for independent errors of the declared σ (feature-level simulations); larger when the true errors are.
+  /// For errors with lag-one correlation ρ the backward difference's share is σ_true²(1 − ρ)/σ² (≈ 0.03 for KLT on
+  /// the renders: σ 0.36 px, ρ ≈ 0.8, weighted as 1 px) and the central difference's ~0: negligible, so 0 (off)
+  /// for images. Only with track_correlation 0. Not covered: landmark updates that use tracked velocities
+  /// (slam.state_velocity off), the readout column's velocity.
   double td_velocity_debias = 0.0;
 };
 
