@@ -59,31 +59,34 @@ Eigen::Vector2d FvonVelocityProvider::predict_its(const ov_core::Feature &f, Vel
   for (int i = 1; i <= n; ++i)
     its_seq_.push_back(f.obs[i].vel_xy * focal_);
   const Eigen::Vector2d v = its_.predict(its_seq_) / focal_;
-  if (stencil) {
-    // ∂prediction/∂V_i by central differences (ITS works in px/s: the focal cancels), each V_i through eq. 2's stencil.
-    stencil->clear();
-    // A step small against the normaliser's spread, so that it stays a derivative of the LSTM's tanh units even
-    // when a flat window shrinks the spread to its 1 px/s floor.
-    const Eigen::Vector2d step = 1e-3 * its_.input_scale();
-    VelocityStencil of_input;
-    for (int i = 1; i <= n; ++i) {
-      Eigen::Matrix2d J;
-      for (int c = 0; c < 2; ++c) {
-        const Eigen::Vector2d keep = its_seq_[i - 1];
-        its_seq_[i - 1](c) = keep(c) + step(c);
-        const Eigen::Vector2d plus = its_.predict(its_seq_);
-        its_seq_[i - 1](c) = keep(c) - step(c);
-        J.col(c) = (plus - its_.predict(its_seq_)) / (2 * step(c));
-        its_seq_[i - 1] = keep;
-      }
-      VelocityProvider::stencil(f, static_cast<size_t>(i), of_input);
-      stencil->add(of_input, J);
-    }
-  }
+  if (stencil)
+    its_stencil(f, n, *stencil);
   FvonCandidates &c = candidates_[f.id];
   c.has_its = true;
   c.its = v;
   return v;
+}
+
+void FvonVelocityProvider::its_stencil(const ov_core::Feature &f, int n, VelocityStencil &stencil) {
+  // ∂prediction/∂V_i by central differences (ITS works in px/s: the focal cancels), each V_i through eq. 2's
+  // stencil. The step is small against the normaliser's spread, so that it stays a derivative of the LSTM's tanh
+  // units even when a flat window shrinks the spread to its 1 px/s floor.
+  stencil.clear();
+  const Eigen::Vector2d step = 1e-3 * its_.input_scale();
+  VelocityStencil of_input;
+  for (int i = 1; i <= n; ++i) {
+    Eigen::Matrix2d J;
+    for (int c = 0; c < 2; ++c) {
+      const Eigen::Vector2d keep = its_seq_[i - 1];
+      its_seq_[i - 1](c) = keep(c) + step(c);
+      const Eigen::Vector2d plus = its_.predict(its_seq_);
+      its_seq_[i - 1](c) = keep(c) - step(c);
+      J.col(c) = (plus - its_.predict(its_seq_)) / (2 * step(c));
+      its_seq_[i - 1] = keep;
+    }
+    VelocityProvider::stencil(f, static_cast<size_t>(i), of_input);
+    stencil.add(of_input, J);
+  }
 }
 
 void FvonVelocityProvider::prepare(const State &state, const std::vector<const ov_core::Feature *> &features,
@@ -240,18 +243,23 @@ void FvonVelocityProvider::f2f_pass(
   }
 }
 
+const FvonVelocityProvider::Prediction *FvonVelocityProvider::prediction_for(const ov_core::Feature &feature,
+                                                                             size_t obs_index) const {
+  const auto it = predictions_.find(feature.id);
+  return it != predictions_.end() && it->second.t_cam_ns == feature.obs[obs_index].t_cam_ns ? &it->second : nullptr;
+}
+
 bool FvonVelocityProvider::velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
                                     int &source) const {
-  const ov_core::FeatureObservation &o = feature.obs[obs_index];
-  if (o.vel_valid)
+  if (feature.obs[obs_index].vel_valid)
     return tracked_for_update_->velocity(feature, obs_index, vel_xy, source);
-  const auto it = predictions_.find(feature.id);
-  if (it == predictions_.end() || it->second.t_cam_ns != o.t_cam_ns) {
+  const Prediction *p = prediction_for(feature, obs_index);
+  if (!p) {
     source = kVelocityNone;
     return false;
   }
-  vel_xy = it->second.vel_xy;
-  source = it->second.source;
+  vel_xy = p->vel_xy;
+  source = p->source;
   return true;
 }
 
@@ -260,11 +268,11 @@ void FvonVelocityProvider::stencil(const ov_core::Feature &feature, size_t obs_i
     tracked_for_update_->stencil(feature, obs_index, out);
     return;
   }
-  const auto it = predictions_.find(feature.id);
-  if (it == predictions_.end() || it->second.t_cam_ns != feature.obs[obs_index].t_cam_ns)
-    out.clear();
+  const Prediction *p = prediction_for(feature, obs_index);
+  if (p)
+    out = p->stencil;
   else
-    out = it->second.stencil;
+    out.clear();
 }
 
 } // namespace ov_msckf_ton

@@ -101,6 +101,10 @@ private:
   /// ITS-FVON's prediction for a first observation from the track's later velocities (ITS must be trained).
   /// With `stencil`, also how the prediction depends on the track's points (through its input velocities).
   Eigen::Vector2d predict_its(const ov_core::Feature &f, VelocityStencil *stencil = nullptr);
+  /// The stencil of the prediction predict_its just made from the track's n later velocities (in its_seq_).
+  void its_stencil(const ov_core::Feature &f, int n, VelocityStencil &stencil);
+  /// The prediction kept for this (first) observation by the last prepare(), or nullptr.
+  const Prediction *prediction_for(const ov_core::Feature &feature, size_t obs_index) const;
   /// F2F-FVON over the frames of `need` (first observations): one training of `net` per frame on the other features'
   /// 3D points and tracked velocities, then `out(feature, velocity)` for each point it can predict. Features of a
   /// frame without enough labels, or untriangulable, are passed to `none`.

@@ -108,24 +108,30 @@ public:
   explicit NextForFirstVelocityProvider(const VelocityProvider &base) : base_(base) {}
   bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
                 int &source) const override {
-    if (base_.velocity(feature, obs_index, vel_xy, source))
-      return true;
-    if (obs_index + 1 < feature.obs.size() && base_.velocity(feature, obs_index + 1, vel_xy, source))
-      return true;
-    source = kVelocityNone;
-    return false;
+    size_t used = 0;
+    return taken_from(feature, obs_index, vel_xy, source, used);
   }
   void stencil(const ov_core::Feature &feature, size_t obs_index, VelocityStencil &out) const override {
     Eigen::Vector2d v;
     int src = kVelocityNone;
-    out.clear();
-    if (base_.velocity(feature, obs_index, v, src))
-      base_.stencil(feature, obs_index, out);
-    else if (obs_index + 1 < feature.obs.size() && base_.velocity(feature, obs_index + 1, v, src))
-      base_.stencil(feature, obs_index + 1, out);
+    size_t used = 0;
+    if (taken_from(feature, obs_index, v, src, used))
+      base_.stencil(feature, used, out);
+    else
+      out.clear();
   }
 
 private:
+  /// The base's velocity of this observation, else of the next one; `used` says whose.
+  bool taken_from(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy, int &source,
+                  size_t &used) const {
+    for (used = obs_index; used <= obs_index + 1 && used < feature.obs.size(); ++used)
+      if (base_.velocity(feature, used, vel_xy, source))
+        return true;
+    source = kVelocityNone;
+    return false;
+  }
+
   const VelocityProvider &base_;
 };
 

@@ -39,6 +39,9 @@ UpdaterMSCKF::UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKF
     throw ov_core::UsageError("UpdaterMSCKF: track_correlation must be in [0, 1)");
   if (!(opt_.td_velocity_debias >= 0 && opt_.td_velocity_debias <= 10))
     throw ov_core::UsageError("UpdaterMSCKF: td_velocity_debias must be in [0, 10]");
+  if (opt_.td_velocity_debias != 0 && opt_.track_correlation != 0)
+    throw ov_core::UsageError(
+        "UpdaterMSCKF: td_velocity_debias assumes independent pixel errors (track_correlation 0)");
   if (opt_.min_observations < 2)
     throw ov_core::UsageError("UpdaterMSCKF: min_observations must be at least 2 (two views leave one row)");
   if (!(opt_.min_depth > 0) || !(opt_.max_depth > opt_.min_depth))
@@ -255,6 +258,9 @@ double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ov_
     row_of[lin.obs[k].obs_index] = k;
   // D: row block k's t_d entry is J_k·V_k with δV_k = Σ W_j·δxy_j and xy_j's noise J_j⁻¹·n_j (n_j the pixel noise of
   // row block j, as the residual carries it), so D_kj = J_k·W_j·J_j⁻¹.
+  std::vector<Eigen::Matrix2d> Jd_inv(m);
+  for (int k = 0; k < m; ++k)
+    Jd_inv[k] = lin.obs[k].Jd.inverse();
   Eigen::MatrixXd D = Eigen::MatrixXd::Zero(2 * m, 2 * m);
   VelocityStencil st;
   bool any = false;
@@ -264,7 +270,7 @@ double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ov_
       const int j = i < row_of.size() ? row_of[i] : -1;
       if (j < 0)
         continue;
-      D.block<2, 2>(2 * k, 2 * j) += lin.obs[k].Jd * w * lin.obs[j].Jd.inverse();
+      D.block<2, 2>(2 * k, 2 * j) += lin.obs[k].Jd * w * Jd_inv[j];
       any = true;
     }
   }
@@ -273,6 +279,12 @@ double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ov_
   // tr(Q₂ᵀDQ₂) = tr(D) − tr(Q₁ᵀDQ₁): Q₁ (the first three columns of H_f's Q) is thin.
   const Eigen::MatrixXd Q1 = qr.householderQ() * Eigen::MatrixXd::Identity(2 * m, 3);
   return D.trace() - (Q1.transpose() * D * Q1).trace();
+}
+
+double UpdaterMSCKF::td_bias_to_remove(const FeatureLinearization &lin, const ov_core::Feature &feature,
+                                       const VelocityProvider &velocities, const FeatureQR &qr) const {
+  return opt_.td_velocity_debias != 0.0 ? opt_.td_velocity_debias * td_velocity_bias(lin, feature, velocities, qr)
+                                        : 0.0;
 }
 
 double UpdaterMSCKF::remove_td_bias(State &state, double bias) {
@@ -513,8 +525,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
     }
     ++n_acc;
     ++st.features_used;
-    if (opt_.td_velocity_debias != 0.0 && rho == 0.0 && td_obs == TdObservation::ImagePlane)
-      td_bias += opt_.td_velocity_debias * td_velocity_bias(lin_, f, velocities, qr_);
+    td_bias += td_bias_to_remove(lin_, f, velocities, qr_);
     st.rows_stacked += dof;
     bool any = false;
     for (const auto &o : lin_.obs)

@@ -146,6 +146,10 @@ public:
   /// projected rows, h its t_d column. 0 when its rows carry no t_d column.
   static double td_velocity_bias(const FeatureLinearization &lin, const ov_core::Feature &feature,
                                  const VelocityProvider &velocities, const FeatureQR &qr);
+  /// td_velocity_debias × td_velocity_bias: what an update with this feature is to remove (0 when off or when the
+  /// feature's rows carry no t_d column, i.e. outside the image-plane modes).
+  double td_bias_to_remove(const FeatureLinearization &lin, const ov_core::Feature &feature,
+                           const VelocityProvider &velocities, const FeatureQR &qr) const;
   /// After an EKF update whose t_d information vector was off by `bias` (Σ td_velocity_bias): the state moves by
   /// −P⁺·e_td·bias (the gain's information form, P⁺Hᵀr/σ²). Returns the change of t̂_d.
   static double remove_td_bias(State &state, double bias);

@@ -30,6 +30,8 @@ UpdaterSLAM::UpdaterSLAM(const ov_core::CameraCalib &calib, const UpdaterSlamOpt
     throw ov_core::UsageError("UpdaterSLAM: sigma_px and chi2_multiplier must be positive");
   if (!(opt_.track_correlation >= 0 && opt_.track_correlation < 1))
     throw ov_core::UsageError("UpdaterSLAM: track_correlation must be in [0, 1)");
+  if (msckf_.options().td_velocity_debias != 0 && opt_.track_correlation != 0)
+    throw ov_core::UsageError("UpdaterSLAM: td_velocity_debias assumes independent pixel errors (track_correlation 0)");
 }
 
 void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feature *> &features, int64_t t_cam_ns,
@@ -104,10 +106,7 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
     // The rest of the window's information, now that the landmark is in the state.
     if (r2.size() > 0) {
       // Its t_d column is the window's tracked velocities, as in an MSCKF update: the same errors-in-variables bias.
-      const double k = msckf_.options().td_velocity_debias;
-      const double bias = k != 0.0 && rho == 0.0 && td_obs == TdObservation::ImagePlane
-                              ? k * UpdaterMSCKF::td_velocity_bias(lin_, *f, velocities, qr)
-                              : 0.0;
+      const double bias = msckf_.td_bias_to_remove(lin_, *f, velocities, qr);
       state_helper::ekf_update(state, lin_.cols, H2, r2, sigma2);
       UpdaterMSCKF::remove_td_bias(state, bias);
     }
