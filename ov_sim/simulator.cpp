@@ -4,6 +4,7 @@
 #include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
 #include "ov_sim/euroc_calib.h"
+#include "ov_sim/gt_alignment.h"
 #include "ov_sim/random.h"
 #include <Eigen/Geometry>
 
@@ -108,12 +109,24 @@ std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt) {
     throw ov_core::UsageError("duration must be positive");
   if (opt.gt_file.empty())
     return std::make_unique<LissajousTrajectory>(opt.duration_s, LissajousTrajectory::kDefaultBeginNs, opt.agility);
-  const std::vector<ov_core::StateSample> gt = ov_core::read_trajectory(opt.gt_file);
+  std::vector<ov_core::StateSample> gt = ov_core::read_trajectory(opt.gt_file);
   if (gt.empty())
     throw ov_core::DataError(opt.gt_file, "no poses");
+  std::string source = "fit:" + opt.gt_file;
+  if (!opt.align_gt_to.empty()) {
+    ov_core::LoadOptions lo;
+    lo.check_images_exist = false;
+    const ov_core::Dataset real = ov_core::load_dataset(opt.align_gt_to, lo);
+    const GtAlignment a = align_gt_to_imu(real.imu, gt, real.groundtruth, opt.knot_dt_s);
+    gt = apply_gt_alignment(gt, a);
+    source += "; " + describe_gt_alignment(a) + " of " + opt.align_gt_to;
+    if (opt.align_blend_hz > 0.0 && !real.groundtruth.empty()) {
+      gt = blend_gt(real.groundtruth, gt, opt.align_blend_hz, 0.1);
+      source += "; below " + std::to_string(opt.align_blend_hz).substr(0, 4) + " Hz the motion of its ground truth";
+    }
+  }
   const int64_t t0 = gt.front().t_ns + ov_core::s_to_ns(opt.start_s);
-  return std::make_unique<SplineTrajectory>(gt, t0, t0 + ov_core::s_to_ns(opt.duration_s), opt.knot_dt_s,
-                                            "fit:" + opt.gt_file);
+  return std::make_unique<SplineTrajectory>(gt, t0, t0 + ov_core::s_to_ns(opt.duration_s), opt.knot_dt_s, source);
 }
 
 ov_core::CameraCalib true_camera(const SimOptions &opt) {

@@ -17,7 +17,14 @@ namespace ov_sim {
 
 struct SimOptions {
   std::string out_dir;
-  std::string gt_file;  ///< ground truth to follow; empty: the built-in Lissajous flight
+  std::string gt_file; ///< ground truth to follow; empty: the built-in Lissajous flight
+  /// An EuRoC folder whose real IMU log (and IMU-frame ground truth, for the lever arm) gt_file is first moved onto:
+  /// its clock, axes, gravity and origin (gt_alignment.h). For a fine reference that a semi-real folder's images
+  /// follow as closely as the real IMU does. Empty: gt_file as it is.
+  std::string align_gt_to;
+  /// With align_gt_to's own ground truth: below this frequency the motion is that ground truth's, above it gt_file's
+  /// (blend_gt). 0: gt_file's alone.
+  double align_blend_hz = 1.5;
   double agility = 0.0; ///< built-in flight only: faster roll/pitch/yaw oscillations (LissajousTrajectory)
   double start_s = 0.0; ///< from the first ground-truth pose
   double duration_s = 20.0;

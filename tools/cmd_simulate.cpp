@@ -100,9 +100,16 @@ int cmd_simulate(const Args &args) {
   double td_wander_ms = 4.0, td_wander_period_s = 10.0;
   std::string gyro_axes = "0,0,0", gyro_mis = "0,0,0", accel_axes = "0,0,0", accel_mis = "0,0,0";
   std::string ext_rot = "0,0,0", ext_trans = "0,0,0";
-  desc.add_options()("help,h", "this help")                                                               //
-      ("out,o", po::value(&out), "output folder (mav0/ and sim.yaml are written inside)")                 //
-      ("gt", po::value(&gt), "ground-truth trajectory to follow (EuRoC .txt/.csv, project CSV)")          //
+  desc.add_options()("help,h", "this help")                                                      //
+      ("out,o", po::value(&out), "output folder (mav0/ and sim.yaml are written inside)")        //
+      ("gt", po::value(&gt), "ground-truth trajectory to follow (EuRoC .txt/.csv, project CSV)") //
+      ("align-gt", po::value(&o.align_gt_to),
+       "move --gt onto the real IMU of this EuRoC folder first (its clock, axes, gravity; the lever arm against the "
+       "folder's ground truth) and keep only its motion above --align-blend-hz on top of that ground truth: with a "
+       "200 Hz pose file and --knot-dt-s 0.03, semi-real images follow the motion the real IMU saw "
+       "(docs/simulate.md, \"Semi-real folders\")") //
+      ("align-blend-hz", po::value(&o.align_blend_hz)->default_value(1.5),
+       "--align-gt: below this frequency the folder's ground truth, above it --gt (0: --gt alone)")       //
       ("builtin", "follow the built-in Lissajous flight in a 6x6x3 m room (default when --gt is absent)") //
       ("agility", po::value(&o.agility)->default_value(0.0),
        "built-in flight: add faster roll/pitch/yaw oscillations, angular accelerations ~A x 1 rad/s^2 [0-3]") //
@@ -202,6 +209,8 @@ int cmd_simulate(const Args &args) {
     throw ov_core::UsageError("--gt and --builtin are exclusive");
   if (vm.count("features-only") && vm.count("no-images"))
     throw ov_core::UsageError("--features-only and --no-images are exclusive");
+  if (!o.align_gt_to.empty() && gt.empty())
+    throw ov_core::UsageError("--align-gt needs --gt (the reference to align)");
   if (!o.imu_from.empty() && gt.empty())
     throw ov_core::UsageError("--imu-from needs --gt with the ground truth of the same sequence");
   if (o.agility != 0.0 && !gt.empty())
