@@ -328,3 +328,33 @@ TEST(Nees, SamplesDrawnFromTheCovarianceAverageTheirDimension) {
   EXPECT_NEAR(acc.stats().pos(), 3.0, 0.25);
   EXPECT_NEAR(acc.stats().td(), 1.0, 0.1);
 }
+
+TEST(TdModels, CloneTrendGivesAnOlderCloneTheOffsetOfItsOwnImage) {
+  // TPN drives t_d at 0.5 ms/s; with time_offset.clone_trend a clone 0.8 s old is shifted by t̂_d − 0.4 ms − td_ref,
+  // the newest by t̂_d − td_ref; without it both by t̂_d − td_ref.
+  for (const bool trend : {false, true}) {
+    VioOptions o = with_process(TdMode::Tpn, TdProcess::Tpn);
+    o.td.clone_trend = trend;
+    o.td.adaptive_noise = false;
+    auto m = make_td_model(o);
+    State s = initialised_state(*m, 1e-3);
+    s.td = 0.010;
+    s.t_imu_ns = 2000000000;
+    m->propagate(s, 0.010 + 0.5e-3 * 0.05, 0.05); // TPN's drive over one image interval: 0.5 ms/s
+    CloneState old_clone, new_clone;
+    old_clone.t_imu_ns = s.t_imu_ns - 800000000;
+    old_clone.td_ref = 0.0095;
+    new_clone.t_imu_ns = s.t_imu_ns;
+    new_clone.td_ref = s.td;
+    EXPECT_NEAR(s.td_offset_at(new_clone), 0.0, 1e-12);
+    EXPECT_NEAR(s.td_offset_at(old_clone), s.td - (trend ? 0.4e-3 : 0.0) - 0.0095, 1e-9) << "clone_trend " << trend;
+  }
+  // The drift state's rate is a state variable: its rows would need a rate column, so no trend is applied.
+  auto d = make_td_model(with_process(TdMode::Sir, TdProcess::Drift));
+  State s = initialised_state(*d, 1e-3);
+  s.td_rate = 0.5e-3;
+  CloneState c;
+  c.t_imu_ns = s.t_imu_ns - 800000000;
+  c.td_ref = s.td;
+  EXPECT_NEAR(s.td_offset_at(c), 0.0, 1e-12);
+}

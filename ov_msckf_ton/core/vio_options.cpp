@@ -121,6 +121,7 @@ std::vector<Field> fields(VioOptions &o) {
       enum_field<SirVelocity>(T, "sir_velocity", td.sir_velocity, parser(kSirVelocity), namer(kSirVelocity)),
       enum_field<FirstVelocity>(T, "first_velocity", td.first_velocity, parser(kFirstVelocity), namer(kFirstVelocity)),
       field(T, "velocity_debias", td.velocity_debias),
+      field(T, "clone_trend", td.clone_trend),
       field(T, "search", td.search),
       field(T, "search_range_s", td.search_range_s),
       field(N, "fvon_max_labels", ton.fvon_max_labels),

@@ -62,6 +62,9 @@ struct TimeOffsetOptions {
   /// feature-level simulations have; KLT's correlated errors make the bias ~0.03 of that, so 0, off, for images).
   /// Measured in docs/ton.md ("Errors in variables"); not in the paper.
   double velocity_debias = 0.0;
+  /// TPN: an older clone's image-plane rows use the t_d of its own image, t̂_d − rate·age with TPN's rate, instead of
+  /// one t_d for the whole window (State::td_offset_at). Tried in docs/ton.md ("Where the remaining lag comes from").
+  bool clone_trend = false;
   /// Before the filter starts, in the modes that estimate t_d: search init_s ± search_range_s with the images' rotation
   /// rate against the gyro (init/td_search.h) and start from what it finds. Started 100+ ms off, the filter diverges
   /// (docs/robustness.md); within a few ms it converges in about a second.

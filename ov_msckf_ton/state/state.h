@@ -117,6 +117,14 @@ public:
   bool estimates_td() const { return td_index >= 0; }
   double td_sigma() const { return estimates_td() ? std::sqrt(std::max(0.0, P(td_index, td_index))) : 0.0; }
   double td_variance() const { return estimates_td() ? P(td_index, td_index) : 0.0; }
+  /// t_d at clone c's image minus the t̂_d the clone was placed with (td_ref): an image-plane observation is shifted
+  /// by V times this. Where a model drives t_d at td_rate without a state for the rate (TPN with
+  /// time_offset.clone_trend), an older image was taken when t_d was td_rate·age smaller; otherwise the whole window
+  /// shares one t_d (the drift state's rate is not applied here: its rows would need a rate column).
+  double td_offset_at(const CloneState &c) const {
+    const double trend = td_rate_index < 0 ? td_rate : 0.0;
+    return td - trend * 1e-9 * static_cast<double>(t_imu_ns - c.t_imu_ns) - c.td_ref;
+  }
 
   /// Appends a variable of `size` error dimensions with prior covariance `prior` (uncorrelated with the rest);
   /// returns its index. Clones keep their indices (they are appended by state_helper::clone the same way).

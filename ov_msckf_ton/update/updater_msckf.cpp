@@ -125,7 +125,7 @@ TriangulationResult UpdaterMSCKF::triangulate_feature(const State &state, const 
     int src = 0;
     const bool has_v = velocities.velocity(feature, i, v, src);
     if (td_obs == TdObservation::ImagePlane && has_v)
-      z -= v * (state.td - c->td_ref);
+      z -= v * state.td_offset_at(*c);
     if (view.readout_s != 0.0 && has_v)
       z -= v * (view.readout_s * row_factor(view, o));
     xy_.push_back(z);
@@ -212,7 +212,7 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
     // V·ρ·t_r later (rolling shutter).
     Eigen::Vector2d shift = Eigen::Vector2d::Zero();
     if (td_obs == TdObservation::ImagePlane && o.vel_source != kVelocityNone)
-      shift += o.vel_xy * (state.td - c.td_ref);
+      shift += o.vel_xy * state.td_offset_at(c);
     const double rho = row_factor(view, obs);
     if (view.readout_s != 0.0 && o.vel_source != kVelocityNone)
       shift += o.vel_xy * (view.readout_s * rho);
@@ -418,7 +418,7 @@ void UpdaterMSCKF::append_records(const State &state, const ov_core::Feature &fe
       if (p_f.allFinite() && project_in_clone(c.R, c.p, R_BC_, p_BC_, p_f, zhat, &p_C)) {
         Eigen::Vector2d z = o.xy;
         if (td_obs == TdObservation::ImagePlane && src != kVelocityNone)
-          z -= vel * (state.td - c.td_ref);
+          z -= vel * state.td_offset_at(c);
         rec.depth_m = p_C.z();
         const Eigen::Vector2d r_px = distortion_jacobian(o.xy) * (z - zhat);
         rec.res_u_px = r_px.x();

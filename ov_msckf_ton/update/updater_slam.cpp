@@ -136,7 +136,7 @@ bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &s
   out.td_column = td_obs == TdObservation::ImagePlane && state.estimates_td() && has_vel;
   Eigen::Vector2d shift = Eigen::Vector2d::Zero();
   if (out.td_column)
-    shift += vel * (state.td - c.td_ref);
+    shift += vel * state.td_offset_at(c);
   const double rho = UpdaterMSCKF::row_factor(view, o);
   if (view.readout_s != 0.0 && has_vel)
     shift += vel * (view.readout_s * rho);
