@@ -122,6 +122,17 @@ std::vector<ov_core::StateSample> blend_gt(const std::vector<ov_core::StateSampl
     d_rot.push_back(ov_core::so3_log(R_base.back().transpose() * f.q_WB.toRotationMatrix())); // body frame
     d_pos.push_back(f.p - b.p_W);
   }
+  if (t.size() < 4)
+    throw ov_core::UsageError(
+        "ground-truth blend: the fine ground truth has fewer than 4 poses inside the other's span");
+  // The difference is low-passed as a rotation vector: right for the small, slowly varying rotation between two
+  // ground truths of one flight in (nearly) one world; a large one means different world frames.
+  double worst = 0.0;
+  for (const auto &d : d_rot)
+    worst = std::max(worst, d.norm());
+  if (worst > 20.0 * M_PI / 180.0)
+    throw ov_core::UsageError("ground-truth blend: the two ground truths' attitudes differ by up to " +
+                              std::to_string(worst * 180.0 / M_PI) + " deg (different world frames?)");
   const std::vector<Eigen::Vector3d> lp_rot = low_pass(t, d_rot, blend_hz), lp_pos = low_pass(t, d_pos, blend_hz);
   std::vector<ov_core::StateSample> out(t.size());
   for (size_t i = 0; i < t.size(); ++i) {

@@ -18,7 +18,8 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::Key << "duration_s" << YAML::Value << opt.duration_s;
   e << YAML::Key << "knot_dt_s" << YAML::Value << opt.knot_dt_s;
   e << YAML::Key << "align_gt_to" << YAML::Value << (opt.align_gt_to.empty() ? "none" : opt.align_gt_to);
-  e << YAML::Key << "align_blend_hz" << YAML::Value << opt.align_blend_hz;
+  if (!opt.align_gt_to.empty())
+    e << YAML::Key << "align_blend_hz" << YAML::Value << opt.align_blend_hz;
   e << YAML::Key << "t_begin_ns" << YAML::Value << traj.t_begin_ns();
   e << YAML::Key << "t_end_ns" << YAML::Value << traj.t_end_ns();
   e << YAML::EndMap;

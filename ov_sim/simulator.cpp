@@ -113,19 +113,31 @@ std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt) {
   if (gt.empty())
     throw ov_core::DataError(opt.gt_file, "no poses");
   std::string source = "fit:" + opt.gt_file;
+  // --start-s counts from the file's first pose, also when the alignment moves the poses in time.
+  int64_t t0 = gt.front().t_ns + ov_core::s_to_ns(opt.start_s);
   if (!opt.align_gt_to.empty()) {
+    if (!(opt.align_blend_hz >= 0.0 && std::isfinite(opt.align_blend_hz)))
+      throw ov_core::UsageError("the ground-truth blend's crossover (--align-blend-hz) must be >= 0 (0: no blend)");
     ov_core::LoadOptions lo;
     lo.check_images_exist = false;
     const ov_core::Dataset real = ov_core::load_dataset(opt.align_gt_to, lo);
+    if (real.imu.empty())
+      throw ov_core::UsageError(opt.align_gt_to + " has no IMU log (mav0/imu0/data.csv) to align " + opt.gt_file +
+                                " to");
+    if (opt.align_blend_hz > 0.0 && real.groundtruth.empty())
+      throw ov_core::UsageError(opt.align_gt_to + " has no ground truth to blend " + opt.gt_file +
+                                " with (--align-blend-hz 0: the aligned file alone)");
     const GtAlignment a = align_gt_to_imu(real.imu, gt, real.groundtruth, opt.knot_dt_s);
     gt = apply_gt_alignment(gt, a);
-    source += "; " + describe_gt_alignment(a) + " of " + opt.align_gt_to;
-    if (opt.align_blend_hz > 0.0 && !real.groundtruth.empty()) {
+    t0 -= ov_core::s_to_ns(a.shift_s);
+    source += "; " + describe_gt_alignment(a) + " (" + opt.align_gt_to + ")";
+    if (opt.align_blend_hz > 0.0) {
       gt = blend_gt(real.groundtruth, gt, opt.align_blend_hz, 0.1);
-      source += "; below " + std::to_string(opt.align_blend_hz).substr(0, 4) + " Hz the motion of its ground truth";
+      char b[96];
+      std::snprintf(b, sizeof(b), "; below %g Hz the motion of its ground truth", opt.align_blend_hz);
+      source += b;
     }
   }
-  const int64_t t0 = gt.front().t_ns + ov_core::s_to_ns(opt.start_s);
   return std::make_unique<SplineTrajectory>(gt, t0, t0 + ov_core::s_to_ns(opt.duration_s), opt.knot_dt_s, source);
 }
 

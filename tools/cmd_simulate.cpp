@@ -182,6 +182,8 @@ int cmd_simulate(const Args &args) {
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
+  if (vm.count("match-imu") && !o.align_gt_to.empty())
+    throw ov_core::UsageError("--match-imu measures --gt as it is: leave out --align-gt");
   if (vm.count("match-imu")) {
     if (gt.empty() || o.imu_from.empty())
       throw ov_core::UsageError("--match-imu needs --gt and --imu-from (a real log and its ground truth)");
@@ -211,6 +213,8 @@ int cmd_simulate(const Args &args) {
     throw ov_core::UsageError("--features-only and --no-images are exclusive");
   if (!o.align_gt_to.empty() && gt.empty())
     throw ov_core::UsageError("--align-gt needs --gt (the reference to align)");
+  if (!vm["align-blend-hz"].defaulted() && o.align_gt_to.empty())
+    throw ov_core::UsageError("--align-blend-hz applies with --align-gt");
   if (!o.imu_from.empty() && gt.empty())
     throw ov_core::UsageError("--imu-from needs --gt with the ground truth of the same sequence");
   if (o.agility != 0.0 && !gt.empty())

@@ -58,7 +58,7 @@ public:
     // the interval actually propagated.
     const double rate = dt_s > 0 ? (td_end - s.td) / dt_s : 0.0;
     s.td += rate * dt_s;
-    if (clone_trend_)
+    if (clone_trend_ && dt_s > 0)
       s.td_rate = rate; // older clones' rows: State::td_offset_at
     const double q = adapter_ ? adapter_->q() : q_;
     propagate_td_covariance(s, q, 0.0, dt_s);

@@ -38,7 +38,7 @@ NICE="nice -n 10"
 mkdir -p "$OUT/work"
 : > "$OUT/runs.txt"
 # The pose file starts at another instant than the 20 Hz ground truth: the same span is START + (first pose of the
-# 20 Hz file - first pose of the pose file) after the pose file's start.
+# 20 Hz file - first pose of the pose file) after the pose file's start (`--start-s` counts from a file's first pose).
 LEAD=$(python3 - "$GT" "$TXT" << 'PY'
 import sys
 def first(path, scale):
@@ -50,32 +50,31 @@ print("%.6f" % (first(sys.argv[1], 1e-9) - first(sys.argv[2], 1.0)))
 PY
 )
 
-score() { # KIND SPAN SEED FOLDER -> appends "KIND SPAN SEED APE_m ARE_deg" to runs.txt
-  if ! $NICE "$BIN" run -d "$4" -c config/sim/estimator_config.yaml --init groundtruth -o "$4.csv" -q > /dev/null 2>&1; then
-    echo "$1 $2 $3 fail fail" >> "$OUT/runs.txt"
-    return
+score() { # KIND SPAN SEED FOLDER -> appends "KIND SPAN SEED APE_m ARE_deg" to runs.txt ("fail fail" if no result)
+  local res=""
+  if $NICE "$BIN" run -d "$4" -c config/sim/estimator_config.yaml --init groundtruth -o "$4.csv" -q > "$4.log" 2>&1 &&
+    $NICE "$BIN" eval --est "$4.csv" --gt "$4/mav0/state_groundtruth_estimate0/data.csv" --align posyaw \
+      --json "$4.json" > /dev/null 2>> "$4.log"; then
+    res=$(python3 -c "import json,sys; j=json.load(open(sys.argv[1])); print(j['ape_rmse_m'], j['are_rmse_deg'])" "$4.json")
   fi
-  $NICE "$BIN" eval --est "$4.csv" --gt "$4/mav0/state_groundtruth_estimate0/data.csv" --align posyaw \
-    --json "$4.json" > /dev/null
-  echo "$1 $2 $3 $(python3 -c "import json,sys; j=json.load(open(sys.argv[1])); print(j['ape_rmse_m'], j['are_rmse_deg'])" "$4.json")" \
-    >> "$OUT/runs.txt"
+  echo "$1 $2 $3 ${res:-fail fail}" >> "$OUT/runs.txt"
 }
 
 semi_from() { # SYN_FOLDER SEMI_FOLDER SIMULATE_ARGS... : the real IMU under the syn folder's images
   local syn=$1 d=$2
   shift 2
-  if [ ! -d "$d/mav0" ]; then
-    $NICE "$BIN" simulate "$@" --imu-from "$CUT" --no-images --out "$d.imu" -q > /dev/null
-    cp -al "$syn" "$d"
-    for f in imu0/data.csv imu0/sensor.yaml state_groundtruth_estimate0/data.csv; do
-      rm "$d/mav0/$f"
-      cp "$d.imu/mav0/$f" "$d/mav0/$f"
-    done
-    rm "$d/sim.yaml"
-    cp "$d.imu/sim.yaml" "$d/sim.yaml"
-    cmp -s "$syn/mav0/cam0/data.csv" "$d.imu/mav0/cam0/data.csv" || { echo "image stamps differ: $d" >&2; exit 1; }
-    rm -rf "$d.imu"
-  fi
+  [ -d "$d/mav0" ] && return
+  # Built beside and moved into place whole: an interrupted run leaves no half-made folder to be reused.
+  rm -rf "$d.imu" "$d.tmp"
+  $NICE "$BIN" simulate "$@" --imu-from "$CUT" --no-images --out "$d.imu" -q > /dev/null
+  cmp -s "$syn/mav0/cam0/data.csv" "$d.imu/mav0/cam0/data.csv" || { echo "image stamps differ: $d" >&2; exit 1; }
+  cp -al "$syn" "$d.tmp"
+  for f in mav0/imu0/data.csv mav0/imu0/sensor.yaml mav0/state_groundtruth_estimate0/data.csv sim.yaml; do
+    rm "$d.tmp/$f"
+    cp "$d.imu/$f" "$d.tmp/$f"
+  done
+  rm -rf "$d.imu"
+  mv "$d.tmp" "$d"
 }
 
 for START in $SPANS; do
@@ -89,13 +88,17 @@ for START in $SPANS; do
           --seed "$s")
       fi
       syn="$OUT/work/syn_${kind}_${START}_$s"
-      [ -d "$syn/mav0" ] || $NICE "$BIN" simulate "${args[@]}" --out "$syn" -q > /dev/null
+      if [ ! -d "$syn/mav0" ]; then
+        rm -rf "$syn.tmp"
+        $NICE "$BIN" simulate "${args[@]}" --out "$syn.tmp" -q > /dev/null
+        mv "$syn.tmp" "$syn"
+      fi
       semi_from "$syn" "$OUT/work/semi_${kind}_${START}_$s" "${args[@]}"
       score "syn_$kind" "$START" "$s" "$syn"
       score "semi_$kind" "$START" "$s" "$OUT/work/semi_${kind}_${START}_$s"
     done
   done
-  echo "span $START: $(grep -c " $START " "$OUT/runs.txt") runs" >&2
+  echo "span $START: $(awk -v s="$START" '$2 == s' "$OUT/runs.txt" | wc -l) runs" >&2
 done
 
 python3 - "$OUT" << 'PY' | tee "$OUT/summary.md"
