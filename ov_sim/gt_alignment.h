@@ -4,8 +4,8 @@
 // A semi-real folder (`ovton simulate --imu-from`) renders its images along a spline of a ground truth while its
 // IMU log is the real one. EuRoC's state_groundtruth_estimate0 is a 20 Hz estimate: a spline through it (knots
 // 0.1 s) misses the 1.5-20 Hz motion the real IMU recorded, so the images and the IMU disagree by exactly that
-// motion (docs/simulate.md, "Semi-real folders"). The 200 Hz pose files (euroc_groundtruth/<SEQ>.txt) carry it, but
-// in their own body frame and clock: this module measures those against the real log (time shift, axes rotation
+// motion (docs/simulate.md, "Semi-real folders"). A 200 Hz pose file (euroc_groundtruth/V1_01_easy.txt) carries it, but
+// in its own body frame and clock: this module measures those against the real log (time shift, axes rotation
 // and world tilt by match_imu's fits; the IMU's origin in the reference's body by a least-squares fit against an
 // IMU-frame ground truth) and applies them, so that a spline with fine knots through the result follows the motion
 // the IMU saw.
