@@ -201,8 +201,8 @@ TEST(SimGtAlignment, EurocsPoseFileMovedOntoTheRealV101ImuAgreesWithIt) {
   EXPECT_LT(std::abs(r.gt_shift_s), 0.0005);
   EXPECT_LT(r.gt_rotation.norm() * 180 / M_PI, 0.02);
   // Through the simulator (--gt TXT --align-gt CUT): --start-s still counts from the pose file's first pose, and the
-  // blended trajectory is the 20 Hz estimate's to within the fast motion it misses (< 5 mm, 0.5 deg; not the pose file's 4 cm
-  // lever arm or its 5 deg world yaw).
+  // blended trajectory is the 20 Hz estimate's to within the fast motion it misses (< 5 mm, 0.5 deg; not the pose
+  // file's 4 cm lever arm or its 5 deg world yaw).
   SimOptions o;
   o.gt_file = txt;
   o.align_gt_to = cut;
