@@ -18,6 +18,7 @@
 #   SEEDS  N: scenes 1..N on every span (default 10)
 #   SPANS  span starts [s after the 20 Hz ground truth's first pose], 4.62 s each; default 11.9 (the real moving
 #          cut's span, images 1403715285.26-289.71 s); SPANS=ten: 15 27 39 ... 123 (imu_realism.sh's spans)
+#   BLEND  --align-blend-hz of the fine reference (default 1.5); KINDS="coarse fine" (default) or one of them
 # Needs ../shared/data (euroc_v1_01_moving and euroc_groundtruth/V1_01_easy.txt). ~25 s per scene on 2 cores.
 set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
@@ -34,6 +35,8 @@ TXT=$DATA/euroc_groundtruth/V1_01_easy.txt
 BIN=${OVTON_BIN:-build/ovton}
 [ -x "$BIN" ] || scripts/build.sh
 DUR=4.62
+BLEND=${BLEND:-1.5}
+KINDS=${KINDS:-coarse fine}
 NICE="nice -n 10"
 mkdir -p "$OUT/work"
 : > "$OUT/runs.txt"
@@ -80,12 +83,12 @@ semi_from() { # SYN_FOLDER SEMI_FOLDER SIMULATE_ARGS... : the real IMU under the
 for START in $SPANS; do
   FSTART=$(python3 -c "print('%.6f' % ($START + $LEAD))")
   for s in $(seq 1 "$SEEDS"); do
-    for kind in coarse fine; do
+    for kind in $KINDS; do
       if [ $kind = coarse ]; then
         args=(--realism euroc --gt "$GT" --start-s "$START" --duration-s "$DUR" --seed "$s")
       else
-        args=(--realism euroc --gt "$TXT" --knot-dt-s 0.03 --align-gt "$CUT" --start-s "$FSTART" --duration-s "$DUR"
-          --seed "$s")
+        args=(--realism euroc --gt "$TXT" --knot-dt-s 0.03 --align-gt "$CUT" --align-blend-hz "$BLEND"
+          --start-s "$FSTART" --duration-s "$DUR" --seed "$s")
       fi
       syn="$OUT/work/syn_${kind}_${START}_$s"
       if [ ! -d "$syn/mav0" ]; then
