@@ -335,6 +335,7 @@ TEST(TdModels, CloneTrendGivesAnOlderCloneTheOffsetOfItsOwnImage) {
   for (const bool trend : {false, true}) {
     VioOptions o = with_process(TdMode::Tpn, TdProcess::Tpn);
     o.td.clone_trend = trend;
+    o.td.clone_trend_tau_s = 0.0; // the last rate itself
     o.td.adaptive_noise = false;
     auto m = make_td_model(o);
     State s = initialised_state(*m, 1e-3);
@@ -349,6 +350,16 @@ TEST(TdModels, CloneTrendGivesAnOlderCloneTheOffsetOfItsOwnImage) {
     EXPECT_NEAR(s.td_offset_at(new_clone), 0.0, 1e-12);
     EXPECT_NEAR(s.td_offset_at(old_clone), s.td - (trend ? 0.4e-3 : 0.0) - 0.0095, 1e-9) << "clone_trend " << trend;
   }
+  // Smoothed (clone_trend_tau_s): after one 0.05-s interval at 0.5 ms/s a 10-s average has 0.05 / 10.05 of it.
+  VioOptions o = with_process(TdMode::Tpn, TdProcess::Tpn);
+  o.td.clone_trend = true;
+  o.td.clone_trend_tau_s = 10.0;
+  o.td.adaptive_noise = false;
+  auto m = make_td_model(o);
+  State st = initialised_state(*m, 1e-3);
+  st.td = 0.010;
+  m->propagate(st, 0.010 + 0.5e-3 * 0.05, 0.05);
+  EXPECT_NEAR(st.td_rate, 0.5e-3 * 0.05 / 10.05, 1e-12);
   // The drift state's rate is a state variable: its rows would need a rate column, so no trend is applied.
   auto d = make_td_model(with_process(TdMode::Sir, TdProcess::Drift));
   State s = initialised_state(*d, 1e-3);

@@ -122,6 +122,7 @@ std::vector<Field> fields(VioOptions &o) {
       enum_field<FirstVelocity>(T, "first_velocity", td.first_velocity, parser(kFirstVelocity), namer(kFirstVelocity)),
       field(T, "velocity_debias", td.velocity_debias),
       field(T, "clone_trend", td.clone_trend),
+      field(T, "clone_trend_tau_s", td.clone_trend_tau_s),
       field(T, "search", td.search),
       field(T, "search_range_s", td.search_range_s),
       field(N, "fvon_max_labels", ton.fvon_max_labels),
@@ -254,6 +255,8 @@ void validate_vio_options(const VioOptions &o) {
   require(td.jacobian_rate_window_s >= 0 && td.jacobian_rate_window_s <= 1.0,
           "time_offset.jacobian_rate_window_s must lie in [0, 1] s");
   require(td.velocity_debias >= 0 && td.velocity_debias <= 10, "time_offset.velocity_debias must lie in [0, 10]");
+  require(td.clone_trend_tau_s >= 0 && td.clone_trend_tau_s <= 600,
+          "time_offset.clone_trend_tau_s must lie in [0, 600] s");
   require(td.velocity_debias == 0 || (o.update.track_correlation == 0 && o.slam.track_correlation == 0),
           "time_offset.velocity_debias assumes independent pixel errors: it needs update.track_correlation and "
           "slam.track_correlation 0");

@@ -63,9 +63,11 @@ struct TimeOffsetOptions {
   /// Measured in docs/ton.md ("Errors in variables"); not in the paper.
   double velocity_debias = 0.0;
   /// TPN: an older clone's image-plane rows use the t_d of its own image, t̂_d − rate·age with TPN's rate, instead of
-  /// one t_d for the whole window (State::td_offset_at). Other processes ignore it, as they do random_walk_tpn. Tried
-  /// in docs/ton.md ("Where the remaining lag comes from").
+  /// one t_d for the whole window (State::td_offset_at). On in config/sim with clone_trend_tau_s 10. Other processes
+  /// ignore it, as they do random_walk_tpn. Tried in docs/ton.md ("Where the remaining lag comes from").
   bool clone_trend = false;
+  /// clone_trend's rate: TPN's, averaged over this time constant (0: the last one, which feeds back on itself).
+  double clone_trend_tau_s = 10.0;
   /// Before the filter starts, in the modes that estimate t_d: search init_s ± search_range_s with the images' rotation
   /// rate against the gyro (init/td_search.h) and start from what it finds. Started 100+ ms off, the filter diverges
   /// (docs/robustness.md); within a few ms it converges in about a second.

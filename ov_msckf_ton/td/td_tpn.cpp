@@ -28,7 +28,7 @@ class TpnTdModel : public TdModel {
 public:
   TpnTdModel(const TimeOffsetOptions &o, const TonOptions &ton)
       : driver_(driver_options(o, ton)), q_(o.random_walk_tpn), start_sigma_s_(ton.tpn_start_sigma_s),
-        label_images_(ton.tpn_label_images), clone_trend_(o.clone_trend) {
+        label_images_(ton.tpn_label_images), clone_trend_(o.clone_trend), trend_tau_s_(o.clone_trend_tau_s) {
     if (o.adaptive_noise)
       adapter_.emplace(o.random_walk_tpn, o.adaptive_block_s);
     stats_.process_sigma = q_;
@@ -58,8 +58,12 @@ public:
     // the interval actually propagated.
     const double rate = dt_s > 0 ? (td_end - s.td) / dt_s : 0.0;
     s.td += rate * dt_s;
-    if (clone_trend_ && dt_s > 0)
-      s.td_rate = rate; // older clones' rows: State::td_offset_at
+    if (clone_trend_ && dt_s > 0) {
+      // Older clones' rows (State::td_offset_at) at a rate averaged over trend_tau_s: the rows move t̂_d, t̂_d's
+      // history is TPN's labels, and the labels set the rate, so an unsmoothed rate feeds back on itself.
+      trend_ = trend_tau_s_ > 0 ? trend_ + dt_s / (trend_tau_s_ + dt_s) * (rate - trend_) : rate;
+      s.td_rate = trend_;
+    }
     const double q = adapter_ ? adapter_->q() : q_;
     propagate_td_covariance(s, q, 0.0, dt_s);
     if (adapter_ && dt_s > 0)
@@ -123,6 +127,7 @@ private:
   // Block labels (label_images_ > 1): the running block and the last label, times in seconds from the first image.
   int label_images_ = 1, block_n_ = 0;
   bool clone_trend_ = false;
+  double trend_tau_s_ = 0.0, trend_ = 0.0;
   double block_td_ = 0.0, block_t_ = 0.0;
   double last_label_ = 0.0, last_label_t_ = 0.0, label_spacing_s_ = 0.0;
   bool has_label_ = false;
