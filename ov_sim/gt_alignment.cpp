@@ -37,7 +37,8 @@ void fit_lever(const std::vector<ov_core::StateSample> &ref, const std::vector<o
                GtAlignment &a) {
   Eigen::Matrix<double, 9, 9> N = Eigen::Matrix<double, 9, 9>::Zero();
   Eigen::Matrix<double, 9, 1> rhs = Eigen::Matrix<double, 9, 1>::Zero();
-  std::vector<std::pair<Eigen::Matrix<double, 3, 9>, Eigen::Vector3d>> rows;
+  double yy = 0.0;
+  size_t n = 0;
   for (const auto &g : gt) {
     const auto it = std::lower_bound(ref.begin(), ref.end(), g.t_ns,
                                      [](const ov_core::StateSample &s, int64_t t) { return s.t_ns < t; });
@@ -54,22 +55,21 @@ void fit_lever(const std::vector<ov_core::StateSample> &ref, const std::vector<o
     const Eigen::Vector3d y = g.p - p;
     N += H.transpose() * H;
     rhs += H.transpose() * y;
-    rows.emplace_back(H, y);
+    yy += y.squaredNorm();
+    ++n;
   }
   // λ and c are told apart only when the body turns; demand every direction of λ be seen.
-  if (rows.size() < 100)
+  if (n < 100)
     return;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> es(N / static_cast<double>(rows.size()));
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> es(N / static_cast<double>(n));
   if (!(es.eigenvalues()(0) > 1e-4))
     return;
   const Eigen::Matrix<double, 9, 1> x = N.ldlt().solve(rhs);
-  double ss = 0.0;
-  for (const auto &[H, y] : rows)
-    ss += (y - H * x).squaredNorm();
   a.lever_I = x.head<3>();
   a.lever_fitted = true;
-  a.lever_samples = rows.size();
-  a.lever_fit_rms_m = std::sqrt(ss / static_cast<double>(rows.size()));
+  a.lever_samples = n;
+  // Residual sum of squares at the least-squares solution, from the normal equations.
+  a.lever_fit_rms_m = std::sqrt(std::max(0.0, yy - x.dot(rhs)) / static_cast<double>(n));
 }
 
 /// Zero-phase Gaussian low pass of x over the (sorted) stamps t: -3 dB at cutoff_hz. Near the ends the kernel is

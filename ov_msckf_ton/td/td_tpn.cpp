@@ -87,8 +87,7 @@ public:
     // transient (measured: on a constant +10 ms offset, t_d overshot to 14 ms and the trajectory diverged).
     if (s.td_sigma() > start_sigma_s_) {
       // Converging again: the block labels start over, and t_d is not driven at the last labels' rate meanwhile.
-      block_n_ = 0;
-      block_td_ = block_t_ = 0.0;
+      start_block();
       if (label_images_ > 1 && has_label_) {
         has_label_ = false;
         label_spacing_s_ = 0.0;
@@ -112,13 +111,17 @@ public:
     last_label_ = label;
     last_label_t_ = t_label;
     has_label_ = true;
-    block_n_ = 0;
-    block_td_ = block_t_ = 0.0;
+    start_block();
     driver_.step(label);
     ++stats_.learning_steps;
   }
 
 private:
+  void start_block() {
+    block_n_ = 0;
+    block_td_ = block_t_ = 0.0;
+  }
+
   TpnDriver driver_;
   double q_, start_sigma_s_;
   std::optional<TdNoiseAdapter> adapter_;
