@@ -110,6 +110,12 @@ def commit(cfg):
         return "?"
 
 
+def duration_text(cfg):
+    if str(cfg["duration_s"]) == "end":
+        return "each flight to 1 s before its ground truth ends"
+    return f"{cfg['duration_s']} s"
+
+
 def make_tables(runs, out_dir, cfg):
     os.makedirs(out_dir, exist_ok=True)
     recs = load_records(runs)
@@ -120,7 +126,7 @@ def make_tables(runs, out_dir, cfg):
     stamps = [os.path.getmtime(p) for p in glob.glob(os.path.join(runs, "*", "*.json"))]
     span_h = (max(stamps) - min(stamps)) / 3600 if stamps else 0
     src = (f"Made by `snakemake -s workflow/Snakefile` (commit {commit(cfg)}): rendered EuRoC-format folders, "
-           f"{cfg['duration_s']} s from {cfg['start_s']} s into each ground truth, simulate args "
+           f"{duration_text(cfg)} from {cfg['start_s']} s into each ground truth, simulate args "
            f"`{cfg['simulate_args'] or '(defaults)'}`, estimator config `{cfg['estimator_config']}`. "
            f"{len(recs)} runs, {wall / 3600:.2f} h of run wall time; records written over {span_h:.2f} h.\n\n")
 
