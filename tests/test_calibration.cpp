@@ -12,6 +12,7 @@
 #include "ov_msckf_ton/state/state_helper.h"
 #include "ov_msckf_ton/update/feature_jacobians.h"
 #include "ov_msckf_ton/update/updater_msckf.h"
+#include "ov_msckf_ton/update/updater_slam.h"
 #include "ov_sim/euroc_calib.h"
 #include "ov_sim/simulator.h"
 #include "sim_fixture.h"
@@ -48,7 +49,9 @@ struct CalibScene {
       state.imu.R = ov_core::so3_exp(Eigen::Vector3d(0.03 * k, -0.02 * k, 0.04 * k)) * look;
       state.imu.p = Eigen::Vector3d(-3.0, 0.15 * k, 0.05 * k);
       state.t_imu_ns = kT0 + 50000000LL * k;
-      state_helper::clone(state, state.t_imu_ns, false, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+      // A turning, moving body: the rolling shutter's predicted velocities (and their Jacobians) are not zero.
+      state_helper::clone(state, state.t_imu_ns, false, Eigen::Vector3d(0.4, -0.9, 0.6),
+                          Eigen::Vector3d(0.3, 0.8, -0.2));
       CloneState &cl = state.clones.rbegin()->second;
       cl.has_fej = false; // Jacobians at the current estimate, so finite differences of the residual match them
       cl.td_ref = 0.001 * k;
@@ -77,31 +80,88 @@ State plus(const State &s, const Eigen::VectorXd &d) {
 
 } // namespace
 
-TEST(CalibrationJacobians, FeatureMeasurementMatchesFiniteDifferences) {
-  CalibScene sc;
-  UpdaterMSCKF updater(sc.calib);
-  VelocityProvider tracked;
-  // The first observation has no velocity: give every one a velocity so that the t_d and readout columns exist.
-  NextForFirstVelocityProvider vel(tracked);
-  FeatureLinearization lin;
-  ASSERT_TRUE(updater.linearize(sc.state, sc.feature, sc.p_f, TdObservation::ImagePlane, vel, lin));
-  ASSERT_EQ(lin.cols.size(), 6u * 5 + 1 + 6 + 8 + 1);
-  const auto residual = [&](const State &s) {
-    FeatureLinearization l;
-    EXPECT_TRUE(updater.linearize(s, sc.feature, sc.p_f, TdObservation::ImagePlane, vel, l));
-    return Eigen::VectorXd(l.r);
-  };
-  // r = z − h: the Jacobian of h is −∂r/∂δx.
-  const Eigen::MatrixXd J = -ovtest::numeric_jacobian(residual, sc.state, sc.state.dim(), plus, 1e-7);
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(lin.r.size(), sc.state.dim());
-  for (size_t j = 0; j < lin.cols.size(); ++j)
-    H.col(lin.cols[j]) += lin.H_x.col(static_cast<Eigen::Index>(j));
-  const double scale = H.cwiseAbs().maxCoeff();
-  for (int c = 0; c < sc.state.dim(); ++c) {
-    const double tol = 1e-5 * scale;
+/// Compares a measurement's analytic Jacobian (compact columns `cols`) with the finite differences of its residual
+/// over the whole state; r = z − h, so the Jacobian of h is −∂r/∂δx.
+template <typename Residual>
+void expect_matches_finite_differences(const State &state, const Eigen::MatrixXd &H_compact,
+                                       const std::vector<int> &cols, const Residual &residual) {
+  const Eigen::MatrixXd J = -ovtest::numeric_jacobian(residual, state, state.dim(), plus, 1e-7);
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(H_compact.rows(), state.dim());
+  for (size_t j = 0; j < cols.size(); ++j)
+    H.col(cols[j]) += H_compact.col(static_cast<Eigen::Index>(j));
+  const double tol = 1e-5 * H.cwiseAbs().maxCoeff();
+  for (int c = 0; c < state.dim(); ++c)
     EXPECT_LT((H.col(c) - J.col(c)).cwiseAbs().maxCoeff(), tol)
         << "column " << c << "\nanalytic " << H.col(c).transpose() << "\nnumeric  " << J.col(c).transpose();
+}
+
+TEST(CalibrationJacobians, FeatureMeasurementMatchesFiniteDifferences) {
+  // The readout's row shift with the velocity the state predicts (default) and with the tracked one.
+  for (const bool state_velocity : {true, false}) {
+    SCOPED_TRACE(state_velocity ? "state velocity" : "tracked velocity");
+    CalibScene sc;
+    UpdaterMSCKFOptions opt;
+    opt.readout_state_velocity = state_velocity;
+    UpdaterMSCKF updater(sc.calib, opt);
+    VelocityProvider tracked;
+    // The first observation has no velocity: give every one a velocity so that the t_d and readout columns exist.
+    NextForFirstVelocityProvider vel(tracked);
+    FeatureLinearization lin;
+    ASSERT_TRUE(updater.linearize(sc.state, sc.feature, sc.p_f, TdObservation::ImagePlane, vel, lin));
+    ASSERT_EQ(lin.cols.size(), 6u * 5 + 1 + 6 + 8 + 1);
+    expect_matches_finite_differences(sc.state, lin.H_x, lin.cols, [&](const State &s) {
+      FeatureLinearization l;
+      EXPECT_TRUE(updater.linearize(s, sc.feature, sc.p_f, TdObservation::ImagePlane, vel, l));
+      return Eigen::VectorXd(l.r);
+    });
+    // H_f too (the feature's nullspace projection removes exactly its column space).
+    const auto of_point = [&](const Eigen::Vector3d &p) {
+      FeatureLinearization l;
+      EXPECT_TRUE(updater.linearize(sc.state, sc.feature, p, TdObservation::ImagePlane, vel, l));
+      return Eigen::VectorXd(l.r);
+    };
+    const Eigen::MatrixXd Hf_fd = -ovtest::numeric_jacobian(of_point, sc.p_f, 1e-7);
+    EXPECT_LT((lin.H_f - Hf_fd).cwiseAbs().maxCoeff(), 1e-5 * lin.H_f.cwiseAbs().maxCoeff()) << "analytic\n"
+                                                                                             << lin.H_f << "\nnumeric\n"
+                                                                                             << Hf_fd;
   }
+}
+
+TEST(CalibrationJacobians, LandmarkMeasurementWithReadoutMatchesFiniteDifferences) {
+  // A landmark updated by the newest observation, every calibration block and the readout's predicted velocity on.
+  CalibScene sc;
+  UpdaterMSCKF msckf(sc.calib);
+  UpdaterSLAM slam(sc.calib, UpdaterSlamOptions(), msckf);
+  LandmarkState l;
+  l.id = sc.feature.id;
+  l.p_W = l.p_fej = sc.p_f + Eigen::Vector3d(0.01, -0.02, 0.015);
+  l.index = sc.state.add_variable(Eigen::Matrix3d::Identity() * 1e-4);
+  sc.state.landmarks[l.id] = l;
+  const VelocityProvider tracked;
+  const size_t k = sc.feature.obs.size() - 1;
+  const auto lin_at = [&](const State &s, LandmarkLinearization &out) {
+    return slam.linearize(s, s.landmarks.at(l.id), s.clones.rbegin()->second, sc.feature, k,
+                          TdObservation::StateRelevant, tracked, out);
+  };
+  LandmarkLinearization lin;
+  ASSERT_TRUE(lin_at(sc.state, lin));
+  ASSERT_EQ(lin.calib_cols.size(), 6u + 8 + 1);
+  Eigen::MatrixXd H(2, 6 + 3 + lin.calib_cols.size());
+  H << lin.H_clone, lin.H_f, lin.H_calib;
+  std::vector<int> cols;
+  for (int j = 0; j < 6; ++j)
+    cols.push_back(sc.state.clones.rbegin()->second.index + j);
+  for (int j = 0; j < 3; ++j)
+    cols.push_back(l.index + j);
+  cols.insert(cols.end(), lin.calib_cols.begin(), lin.calib_cols.end());
+  expect_matches_finite_differences(sc.state, H, cols, [&](const State &s) {
+    State t = s;
+    LandmarkState &tl = t.landmarks.at(l.id);
+    tl.p_fej = tl.p_W; // Jacobians at the current estimate
+    LandmarkLinearization out;
+    EXPECT_TRUE(lin_at(t, out));
+    return Eigen::VectorXd(out.r);
+  });
 }
 
 TEST(CalibrationJacobians, ImuStepWithScaleAndMisalignmentMatchesFiniteDifferences) {

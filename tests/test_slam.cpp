@@ -211,6 +211,33 @@ TEST(SlamJacobians, PredictedImageVelocityIsTheProjectionsTimeDerivative) {
   EXPECT_FALSE(predicted_image_velocity(R_WB, p_WB, R_BC, p_BC, p_WB - 3.0 * (R_WB * R_BC).col(2), m, vel));
 }
 
+TEST(SlamJacobians, PredictedImageVelocityJacobiansMatchFiniteDifferences) {
+  // V's Jacobians w.r.t. the clone's [δθ δp], the point and the extrinsics [δθ_BC δp_BC], each in the state's ⊞.
+  const Eigen::Matrix3d R_WB = ov_core::so3_exp(Eigen::Vector3d(0.2, -0.4, 1.1));
+  const Eigen::Vector3d p_WB(0.3, -0.2, 1.0), p_W(2.5, 0.8, 1.4);
+  const Eigen::Matrix3d R_BC = ov_core::so3_exp(Eigen::Vector3d(-1.2, 0.1, -1.5));
+  const Eigen::Vector3d p_BC(0.05, -0.02, 0.01);
+  BodyMotion m;
+  m.w_B = Eigen::Vector3d(0.7, -1.3, 0.4);
+  m.v_W = Eigen::Vector3d(-0.6, 0.9, 0.3);
+  const auto vel_at = [&](const Eigen::Matrix<double, 15, 1> &d) {
+    Eigen::Vector2d v;
+    EXPECT_TRUE(predicted_image_velocity(ov_core::so3_exp(d.segment<3>(0)) * R_WB, p_WB + d.segment<3>(3),
+                                         ov_core::so3_exp(d.segment<3>(9)) * R_BC, p_BC + d.segment<3>(12),
+                                         p_W + d.segment<3>(6), m, v));
+    return v;
+  };
+  Eigen::Vector2d v;
+  CloneMeasurementJacobians J;
+  ASSERT_TRUE(predicted_image_velocity(R_WB, p_WB, R_BC, p_BC, p_W, m, v, &J));
+  Eigen::Matrix<double, 2, 15> H;
+  H << J.H_theta, J.H_p, J.H_f, J.H_ext_theta, J.H_ext_p;
+  const Eigen::MatrixXd H_fd = ovtest::numeric_jacobian(vel_at, Eigen::Matrix<double, 15, 1>::Zero().eval(), 1e-6);
+  EXPECT_LT((H - H_fd).cwiseAbs().maxCoeff(), 1e-6 * H.cwiseAbs().maxCoeff()) << "analytic\n"
+                                                                              << H << "\nnumeric\n"
+                                                                              << H_fd;
+}
+
 TEST(SlamInit, DelayedInitialisationIsConsistentOverMonteCarloTrials) {
   // The same window, noisy observations: the initialised landmark's error against the truth, normalised by its
   // covariance, averages 3 (its dimension) when the initialisation's covariance is right.

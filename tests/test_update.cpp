@@ -441,12 +441,12 @@ TEST(UpdateMsckf, ResidualLogHasHeaderAndOneRowPerObservation) {
   ov_core::FeatureDatabase db;
   observe(sc, db, 0.0, 7);
   UpdaterMSCKF up(sc.calib);
-  up.set_angular_rate_lookup([](int64_t, Eigen::Vector3d &w) {
-    w = Eigen::Vector3d(0.1, -0.2, 0.3);
-    return true;
-  });
   VelocityProvider vp;
   State s = make_state(sc, 0.0, 0.005, 0.01, 0.02);
+  for (auto &[t, c] : s.clones) { // the motion the clones were placed with: the log's body rate
+    c.has_motion = true;
+    c.motion.w_B = Eigen::Vector3d(0.1, -0.2, 0.3);
+  }
   std::vector<ResidualRecord> log;
   up.update(s, all_features(db), TdObservation::ImagePlane, vp, &log);
   const size_t expected_rows = sc.points.size() * sc.stamps.size();

@@ -40,6 +40,7 @@ UpdaterMSCKFOptions updater_options(const VioOptions &o) {
   u.max_features = o.update.max_features;
   u.track_correlation = o.update.track_correlation;
   u.td_velocity_debias = o.td.velocity_debias;
+  u.readout_state_velocity = o.calibration.readout_state_velocity;
   return u;
 }
 
@@ -124,13 +125,6 @@ VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, c
     if (!td_oracle_)
       throw ov_core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
     return td_oracle_(t_cam_ns);
-  });
-  updater_.set_angular_rate_lookup([this](int64_t t_cam_ns, Eigen::Vector3d &w) {
-    auto it = clone_rates_.find(t_cam_ns);
-    if (it == clone_rates_.end())
-      return false;
-    w = it->second;
-    return true;
   });
 }
 
@@ -383,7 +377,6 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
   if (s.calib.imu_intrinsics_index >= 0 && have_reading)
     w_B = s.calib.D_w * w_B; // the gyro's scale and misalignment, as the propagation applies them
   state_helper::clone(s, t_cam_ns, uses_state_relevant(opt_.td.mode), w_B, s.imu.v);
-  clone_rates_[t_cam_ns] = w_B;
   s.clones.at(t_cam_ns).has_fej = opt_.update.measurement_fej;
   times_.propagation += ms_since(t0);
 
@@ -500,7 +493,6 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
   }
   if (window_full) {
     state_helper::marginalize_clone(s, oldest);
-    clone_rates_.erase(oldest);
     db_.remove_observations_older_than(s.clones.begin()->first);
   }
 }
@@ -543,9 +535,11 @@ void VioManager::slam_update(int64_t t_cam_ns, const std::vector<const ov_core::
   std::vector<size_t> lost;
   // The body's motion at this image: the rate its clone was placed with and the state's velocity (this image's clone
   // is the newest, and the state is at its time).
-  const auto rate = clone_rates_.find(t_cam_ns);
+  const auto clone = s.clones.find(t_cam_ns);
   const std::optional<BodyMotion> motion =
-      rate != clone_rates_.end() ? std::optional<BodyMotion>(BodyMotion{rate->second, s.imu.v}) : std::nullopt;
+      clone != s.clones.end() && clone->second.has_motion
+          ? std::optional<BodyMotion>(BodyMotion{clone->second.motion.w_B, s.imu.v})
+          : std::nullopt;
   td_tracked_update([&] { slam_.update(s, db_, t_cam_ns, td_obs, velocities, st, lost, motion ? &*motion : nullptr); });
   if (!init.empty())
     td_tracked_update([&] { slam_.initialize(s, init, t_cam_ns, td_obs, velocities, st); });

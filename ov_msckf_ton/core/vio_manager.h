@@ -164,8 +164,7 @@ private:
   CentralVelocityProvider central_velocities_; ///< option sir_velocity: central
   std::unique_ptr<FvonVelocityProvider> fvon_; ///< modes fvon, ton
   std::unique_ptr<TdModel> td_model_;
-  int64_t last_image_ns_ = -1;                     ///< camera stamp of the previous processed image
-  std::map<int64_t, Eigen::Vector3d> clone_rates_; ///< body rate at each clone, for the residual log
+  int64_t last_image_ns_ = -1; ///< camera stamp of the previous processed image
   StageTimes times_;
   VioCounters counters_;
   FilterHealth health_;

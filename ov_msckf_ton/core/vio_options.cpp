@@ -163,6 +163,7 @@ std::vector<Field> fields(VioOptions &o) {
       field(C, "readout", cal.readout),
       field(C, "readout_s", cal.readout_s),
       field(C, "sigma_readout_s", cal.sigma_readout_s),
+      field(C, "readout_state_velocity", cal.readout_state_velocity),
       field(C, "imu_intrinsics", cal.imu_intrinsics),
       field(C, "sigma_imu_intrinsics", cal.sigma_imu_intrinsics),
       field(Z, "enabled", o.zupt.enabled),

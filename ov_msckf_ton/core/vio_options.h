@@ -149,6 +149,9 @@ struct CalibrationOptions {
   bool readout = false;   ///< rolling-shutter readout time
   double readout_s = 0.0; ///< known (or initial) readout [s]: row v is seen at t + t_d + (v/H − ½)·t_r
   double sigma_readout_s = 0.01;
+  /// The readout's row shift V·ρ·t_r with the image velocity the state predicts (true) or the track's measured one
+  /// (false, as before session 29): UpdaterMSCKFOptions::readout_state_velocity.
+  bool readout_state_velocity = true;
   bool imu_intrinsics = false; ///< gyro and accelerometer scale and misalignment (lower-triangular D_w, D_a)
   double sigma_imu_intrinsics = 0.01;
 };

@@ -48,6 +48,13 @@ struct ImuState {
   }
 };
 
+/// The body's motion at an image: the bias-corrected rate and the world-frame velocity the filter had there. Not
+/// state variables: constants of the linearisation (t_d's state-relevant Jacobian, predicted image velocities).
+struct BodyMotion {
+  Eigen::Vector3d w_B = Eigen::Vector3d::Zero(); ///< body rate, bias-corrected [rad/s]
+  Eigen::Vector3d v_W = Eigen::Vector3d::Zero(); ///< velocity in the world frame [m/s]
+};
+
 /// A cloned IMU pose [δθ δp] at the IMU-clock time of one image; keyed in the window by the image's camera stamp.
 struct CloneState {
   static constexpr int kSize = 6;
@@ -61,6 +68,10 @@ struct CloneState {
   bool has_fej = false;
   Eigen::Matrix3d R_fej = Eigen::Matrix3d::Identity();
   Eigen::Vector3d p_fej = Eigen::Vector3d::Zero();
+  /// The motion it was cloned with (state_helper::clone): rows that need the image's motion (the rolling shutter's
+  /// row times, the residual log's rate) read it here.
+  bool has_motion = false;
+  BodyMotion motion;
   const Eigen::Matrix3d &R_lin() const { return has_fej ? R_fej : R; }
   const Eigen::Vector3d &p_lin() const { return has_fej ? p_fej : p; }
 };

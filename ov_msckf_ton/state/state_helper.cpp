@@ -63,6 +63,8 @@ void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w
   c.has_fej = true;
   c.R_fej = c.R;
   c.p_fej = c.p;
+  c.has_motion = true;
+  c.motion = BodyMotion{w_B, v_W};
   c.index = n;
   s.clones[t_cam_ns] = c;
 }

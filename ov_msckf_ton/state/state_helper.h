@@ -18,6 +18,7 @@ void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, co
 /// In state-relevant mode the clone depends on t_d: the true image time is t̂_imu + δt_d, so
 ///   δθ_c = δθ + R̂ ω_B δt_d,   δp_c = δp + v_W δt_d   (ω_B bias-corrected body rate, v_W world velocity)
 /// td_coupled = false gives the plain clone (δθ_c = δθ, δp_c = δp) used when t_d acts on the image plane instead.
+/// The clone keeps (ω_B, v_W) as its motion in either case.
 void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w_B, const Eigen::Vector3d &v_W);
 
 /// Removes a clone and its rows/columns from the covariance.

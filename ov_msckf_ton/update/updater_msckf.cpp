@@ -168,7 +168,24 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
   // observation has a velocity (a track that started before the window, or FVON's prediction for its first one).
   // The readout's row shift V·ρ·t_r follows the same rule.
   const bool any_td = all_vel && td_obs == TdObservation::ImagePlane && state.estimates_td();
-  const bool readout_col = all_vel && view.est_readout;
+  // FEJ: the residual uses the current clones, the Jacobians the clones' first estimates, so that every update
+  // linearises a clone at the same point and the unobservable directions stay unobservable. The feature was
+  // triangulated relative to the current clones; for the Jacobians it is carried rigidly with the anchor (newest)
+  // clone onto that clone's first estimate (as OpenVINS does), so that the lever arms p_f − p_clone stay
+  // consistent with the first-estimate poses.
+  if (m == 0)
+    return false;
+  const CloneState &anchor = *out.obs[m - 1].clone;
+  const Eigen::Vector3d p_f_lin = anchor.R_lin() * (anchor.R.transpose() * (p_f - anchor.p)) + anchor.p_lin();
+  // The rolling shutter's velocity per row; the readout column, like t_d's, on all rows of a feature or on none.
+  const bool readout = view.readout_s != 0.0 || view.est_readout;
+  bool all_readout = readout;
+  for (FeatureLinearization::Obs &o : out.obs) {
+    o.has_readout_vel = readout && readout_velocity(view, *o.clone, p_f, p_f_lin, o.vel_xy,
+                                                    o.vel_source != kVelocityNone, o.vel_readout, nullptr);
+    all_readout = all_readout && o.has_readout_vel;
+  }
+  const bool readout_col = all_readout && view.est_readout;
   for (int k = 0; k < m; ++k)
     out.obs[k].td_column = any_td;
   // Columns: six per clone, then t_d, the extrinsics, the intrinsics and the readout where they are estimated.
@@ -190,14 +207,7 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
   out.H_f.resize(2 * m, 3);
   out.r.resize(2 * m);
 
-  // FEJ: the residual uses the current clones, the Jacobians the clones' first estimates, so that every update
-  // linearises a clone at the same point and the unobservable directions stay unobservable. The feature was
-  // triangulated relative to the current clones; for the Jacobians it is carried rigidly with the anchor (newest)
-  // clone onto that clone's first estimate (as OpenVINS does), so that the lever arms p_f − p_clone stay
-  // consistent with the first-estimate poses.
-  const CloneState &anchor = *out.obs[m - 1].clone;
-  const Eigen::Vector3d p_f_lin = anchor.R_lin() * (anchor.R.transpose() * (p_f - anchor.p)) + anchor.p_lin();
-  CloneMeasurementJacobians J;
+  CloneMeasurementJacobians J, Jv;
   Eigen::Vector2d zhat, z_lin;
   Eigen::Vector3d p_C;
   for (int k = 0; k < m; ++k) {
@@ -214,8 +224,11 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
     if (td_obs == TdObservation::ImagePlane && o.vel_source != kVelocityNone)
       shift += o.vel_xy * state.td_offset_at(c);
     const double rho = row_factor(view, obs);
-    if (view.readout_s != 0.0 && o.vel_source != kVelocityNone)
-      shift += o.vel_xy * (view.readout_s * rho);
+    const bool readout_shift = view.readout_s != 0.0 && o.has_readout_vel;
+    if (readout_shift) {
+      shift += o.vel_readout * (view.readout_s * rho);
+      readout_velocity(view, c, p_f, p_f_lin, o.vel_xy, true, o.vel_readout, &Jv);
+    }
     Eigen::Matrix2d Jd;
     if (view.est_intr) {
       // With the intrinsics in the state the measurement is the raw pixel: r = uv − π_d(k; ẑ + shift), exact in k.
@@ -241,10 +254,36 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
       out.H_x.block<2, 3>(2 * k, c_ext) = Jd * J.H_ext_theta;
       out.H_x.block<2, 3>(2 * k, c_ext + 3) = Jd * J.H_ext_p;
     }
+    if (readout_shift) {
+      // The shift's own dependence on the state, through the velocity the state predicts (zero when tracked).
+      const double tr = view.readout_s * rho;
+      out.H_x.block<2, 3>(2 * k, 6 * k) += tr * Jd * Jv.H_theta;
+      out.H_x.block<2, 3>(2 * k, 6 * k + 3) += tr * Jd * Jv.H_p;
+      out.H_f.block<2, 3>(2 * k, 0) += tr * Jd * Jv.H_f;
+      if (view.est_ext) {
+        out.H_x.block<2, 3>(2 * k, c_ext) += tr * Jd * Jv.H_ext_theta;
+        out.H_x.block<2, 3>(2 * k, c_ext + 3) += tr * Jd * Jv.H_ext_p;
+      }
+    }
     if (readout_col)
-      out.H_x.block<2, 1>(2 * k, c_ro) = Jd * o.vel_xy * rho;
+      out.H_x.block<2, 1>(2 * k, c_ro) = Jd * o.vel_readout * rho;
   }
   return true;
+}
+
+bool UpdaterMSCKF::readout_velocity(const CameraView &view, const CloneState &c, const Eigen::Vector3d &p_W,
+                                    const Eigen::Vector3d &p_lin_f, const Eigen::Vector2d &tracked, bool has_tracked,
+                                    Eigen::Vector2d &vel, CloneMeasurementJacobians *J) const {
+  if (!opt_.readout_state_velocity) {
+    if (J)
+      *J = CloneMeasurementJacobians::zero();
+    vel = tracked;
+    return has_tracked;
+  }
+  if (!c.has_motion || !predicted_image_velocity(c.R, c.p, view.R_BC, view.p_BC, p_W, c.motion, vel))
+    return false;
+  Eigen::Vector2d at_lin;
+  return !J || predicted_image_velocity(c.R_lin(), c.p_lin(), view.R_BC, view.p_BC, p_lin_f, c.motion, at_lin, J);
 }
 
 double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ov_core::Feature &feature,
@@ -429,11 +468,10 @@ void UpdaterMSCKF::append_records(const State &state, const ov_core::Feature &fe
     rec.vel_u_px_s = vel_px.x();
     rec.vel_v_px_s = vel_px.y();
     rec.vel_source = src;
-    Eigen::Vector3d w;
-    if (rate_lookup_ && rate_lookup_(o.t_cam_ns, w)) {
-      rec.w_x = w.x();
-      rec.w_y = w.y();
-      rec.w_z = w.z();
+    if (c.has_motion) {
+      rec.w_x = c.motion.w_B.x();
+      rec.w_y = c.motion.w_B.y();
+      rec.w_z = c.motion.w_B.z();
       rec.w_valid = 1;
     }
     log.push_back(rec);

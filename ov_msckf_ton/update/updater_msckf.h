@@ -6,6 +6,7 @@
 #include "ov_core/cam/camera_model.h"
 #include "ov_core/track/feature_database.h"
 #include "ov_msckf_ton/state/state.h"
+#include "ov_msckf_ton/update/feature_jacobians.h"
 #include "ov_msckf_ton/update/residual_log.h"
 #include "ov_msckf_ton/update/td_observation.h"
 #include "ov_msckf_ton/update/triangulation.h"
@@ -13,7 +14,6 @@
 #include <Eigen/Core>
 #include <Eigen/QR>
 #include <array>
-#include <functional>
 #include <optional>
 #include <vector>
 
@@ -47,6 +47,11 @@ struct UpdaterMSCKFOptions {
   /// for images. Only with track_correlation 0. Not covered: landmark updates that use tracked velocities
   /// (slam.state_velocity off), the readout column's velocity.
   double td_velocity_debias = 0.0;
+  /// Rolling shutter: a row's shift V·ρ·t_r takes the image velocity the state predicts (the triangulated point, the
+  /// clone's pose and the motion it was cloned with; predicted_image_velocity) instead of the track's measured one,
+  /// whose pixel noise is the row's own and which a track's first observation lacks. Every row then carries the
+  /// readout column, with V's dependence on the pose, the point and the extrinsics in its Jacobians.
+  bool readout_state_velocity = true;
 };
 
 struct UpdateStats {
@@ -82,6 +87,8 @@ struct FeatureLinearization {
     bool td_column = false;
     double depth = 0.0;
     Eigen::Matrix2d Jd = Eigen::Matrix2d::Identity(); ///< d(distorted pixel)/d(normalised point) at the observation
+    Eigen::Vector2d vel_readout = Eigen::Vector2d::Zero(); ///< the velocity of the rolling-shutter shift
+    bool has_readout_vel = false;
   };
   std::vector<int> cols;
   Eigen::MatrixXd H_x;                          ///< 2m × cols.size()
@@ -93,9 +100,6 @@ struct FeatureLinearization {
 /// Not thread-safe: const methods share scratch buffers. Use one updater per filter.
 class UpdaterMSCKF {
 public:
-  /// Body angular rate at a clone's image, for the residual log only. Returns false when unknown.
-  using AngularRateLookup = std::function<bool(int64_t t_cam_ns, Eigen::Vector3d &w_B)>;
-
   explicit UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKFOptions &options = {});
 
   /// One MSCKF update with the given features (typically lost ones and those observed in the clone that leaves the
@@ -159,7 +163,6 @@ public:
   /// d(distorted pixel)/d(normalised point) at xy: residual rows are scaled by it (noise is isotropic in pixels).
   Eigen::Matrix2d distortion_jacobian(const Eigen::Vector2d &xy) const;
   const UpdaterMSCKFOptions &options() const { return opt_; }
-  void set_angular_rate_lookup(AngularRateLookup f) { rate_lookup_ = std::move(f); }
 
   /// The camera calibration an update uses: the state's estimate where it is estimated (calibration.* options),
   /// the configured calibration elsewhere.
@@ -177,6 +180,12 @@ public:
   Eigen::Vector2d observation_xy(const CameraView &v, const ov_core::FeatureObservation &o) const;
   /// ρ = v/H − ½: the observation's row time relative to the image's middle row, in readouts.
   static double row_factor(const CameraView &v, const ov_core::FeatureObservation &o);
+  /// The image velocity of the rolling-shutter shift at clone c for a point at p_W (readout_state_velocity), or the
+  /// track's measured one (`tracked`, `has_tracked`). J (state velocity only): its Jacobians, at (R_lin, p_lin,
+  /// p_lin_f). False when there is none (no motion, behind the camera, no measured velocity).
+  bool readout_velocity(const CameraView &view, const CloneState &c, const Eigen::Vector3d &p_W,
+                        const Eigen::Vector3d &p_lin_f, const Eigen::Vector2d &tracked, bool has_tracked,
+                        Eigen::Vector2d &vel, CloneMeasurementJacobians *J) const;
 
 private:
   /// Observations of `feature` that have a clone, as (obs index, clone).
@@ -193,7 +202,6 @@ private:
   Eigen::Vector3d p_BC_;
   ov_core::CameraModel camera_;
   std::vector<double> chi2_table_; ///< index = dof
-  AngularRateLookup rate_lookup_;
   uint64_t update_count_ = 0;
 
   // Scratch reused across features and updates.

@@ -10,19 +10,6 @@
 
 namespace ov_msckf_ton {
 
-bool predicted_image_velocity(const Eigen::Matrix3d &R_WB, const Eigen::Vector3d &p_WB, const Eigen::Matrix3d &R_BC,
-                              const Eigen::Vector3d &p_BC, const Eigen::Vector3d &p_W, const BodyMotion &m,
-                              Eigen::Vector2d &vel_xy) {
-  const Eigen::Vector3d p_B = R_WB.transpose() * (p_W - p_WB);
-  const Eigen::Vector3d p_C = R_BC.transpose() * (p_B - p_BC);
-  if (!(p_C.z() > 1e-9))
-    return false;
-  const Eigen::Vector3d dp_C = R_BC.transpose() * (-m.w_B.cross(p_B) - R_WB.transpose() * m.v_W);
-  const double iz = 1.0 / p_C.z();
-  vel_xy = Eigen::Vector2d(dp_C.x() - p_C.x() * iz * dp_C.z(), dp_C.y() - p_C.y() * iz * dp_C.z()) * iz;
-  return true;
-}
-
 UpdaterSLAM::UpdaterSLAM(const ov_core::CameraCalib &calib, const UpdaterSlamOptions &opt, const UpdaterMSCKF &msckf)
     : opt_(opt), msckf_(msckf) {
   (void)calib; // the calibration comes from the updater's view of the state (fixed or estimated)
@@ -137,9 +124,15 @@ bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &s
   Eigen::Vector2d shift = Eigen::Vector2d::Zero();
   if (out.td_column)
     shift += vel * state.td_offset_at(c);
+  // The rolling shutter's shift, with the velocity UpdaterMSCKF::readout_velocity chooses (the state's prediction at
+  // this clone's own motion, by default).
   const double rho = UpdaterMSCKF::row_factor(view, o);
-  if (view.readout_s != 0.0 && has_vel)
-    shift += vel * (view.readout_s * rho);
+  Eigen::Vector2d vel_ro;
+  CloneMeasurementJacobians Jv = CloneMeasurementJacobians::zero();
+  const bool has_ro = (view.readout_s != 0.0 || view.est_readout) &&
+                      msckf_.readout_velocity(view, c, l.p_W, l.p_fej, vel, has_vel, vel_ro, &Jv);
+  if (view.readout_s != 0.0 && has_ro)
+    shift += vel_ro * (view.readout_s * rho);
   // Pixel rows, as the MSCKF (UpdaterMSCKF::linearize): scaled by the distortion Jacobian at the observation, or
   // the raw pixel when the intrinsics are estimated.
   Eigen::Matrix2d Jd;
@@ -155,15 +148,25 @@ bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &s
   out.H_clone.rightCols<3>() = Jd * J.H_p;
   out.H_f = Jd * J.H_f;
   out.H_td = out.td_column ? Eigen::Vector2d(Jd * vel) : Eigen::Vector2d::Zero();
+  const double tr = has_ro ? view.readout_s * rho : 0.0; // the shift's dependence on the state, through V
+  if (tr != 0.0) {
+    out.H_clone.leftCols<3>() += tr * Jd * Jv.H_theta;
+    out.H_clone.rightCols<3>() += tr * Jd * Jv.H_p;
+    out.H_f += tr * Jd * Jv.H_f;
+  }
   // Calibration columns, as UpdaterMSCKF::linearize.
   const CalibState &cal = state.calib;
   out.calib_cols.clear();
-  const int n = (view.est_ext ? 6 : 0) + (view.est_intr ? 8 : 0) + (view.est_readout && has_vel ? 1 : 0);
+  const int n = (view.est_ext ? 6 : 0) + (view.est_intr ? 8 : 0) + (view.est_readout && has_ro ? 1 : 0);
   out.H_calib.setZero(2, n);
   int k = 0;
   if (view.est_ext) {
     out.H_calib.middleCols<3>(k) = Jd * J.H_ext_theta;
     out.H_calib.middleCols<3>(k + 3) = Jd * J.H_ext_p;
+    if (tr != 0.0) {
+      out.H_calib.middleCols<3>(k) += tr * Jd * Jv.H_ext_theta;
+      out.H_calib.middleCols<3>(k + 3) += tr * Jd * Jv.H_ext_p;
+    }
     for (int j = 0; j < 6; ++j)
       out.calib_cols.push_back(cal.extrinsics_index + j);
     k += 6;
@@ -174,8 +177,8 @@ bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &s
       out.calib_cols.push_back(cal.intrinsics_index + j);
     k += 8;
   }
-  if (view.est_readout && has_vel) {
-    out.H_calib.col(k) = Jd * vel * rho;
+  if (view.est_readout && has_ro) {
+    out.H_calib.col(k) = Jd * vel_ro * rho;
     out.calib_cols.push_back(cal.readout_index);
   }
   return true;

@@ -29,18 +29,6 @@ struct UpdaterSlamOptions {
   bool state_velocity = true;
 };
 
-/// The body's motion at the newest clone's time: the rate the clone was placed with and the IMU state's velocity.
-struct BodyMotion {
-  Eigen::Vector3d w_B = Eigen::Vector3d::Zero(); ///< body rate, bias-corrected [rad/s]
-  Eigen::Vector3d v_W = Eigen::Vector3d::Zero(); ///< velocity in the world frame [m/s]
-};
-
-/// The normalised image velocity [1/s] of a point at p_W seen from a camera on the body at (R_WB, p_WB) that moves
-/// with `m` (p_C = R_BCᵀ (R_WBᵀ (p_W − p_WB) − p_BC); ṗ_B = −ω × p_B − R_WBᵀ v). False behind the camera.
-bool predicted_image_velocity(const Eigen::Matrix3d &R_WB, const Eigen::Vector3d &p_WB, const Eigen::Matrix3d &R_BC,
-                              const Eigen::Vector3d &p_BC, const Eigen::Vector3d &p_W, const BodyMotion &m,
-                              Eigen::Vector2d &vel_xy);
-
 struct SlamStats {
   int initialised = 0, init_rejected = 0; ///< delayed initialisations done / refused (triangulation or chi2)
   int updated = 0, gated = 0;             ///< landmark observations used / refused by the chi2 gate this frame
