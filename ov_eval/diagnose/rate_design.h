@@ -20,7 +20,8 @@ constexpr int kRateRowsPerImage = 9;
 ///  - ω_vis − ω_gyro at the filter's image time t_cam + t̂_d. A time-offset error δt = t_d − t̂_d shows as α·δt, α the
 ///    angular acceleration; the gyro bias b is removed per 5-s bin.
 ///  - ψ_vis: a rolling shutter exposes row ρ at (ρ + ½)·t_r after row 0, so the rate changes down the image by
-///    ψ = α·t_r. Nothing in a filter's state can produce it.
+///    ψ = α·t_r, α here the gyro through the images' slope (GyroSlope in the .cpp: a difference of the raw gyro carries
+///    its vibration into the regressor, which scales t_r down). Nothing in a filter's state can produce it.
 ///  - ω_vis − ω̄_gyro, the gyro through the images' estimator: a relative focal error ε scales the images' rotational
 ///    flow but not the gyro's; its column is the response of ω_vis to ε through the whole fit.
 /// Measured image velocities (not predicted ones) keep the filter's state out of it. Needs opt.camera and opt.imu.
