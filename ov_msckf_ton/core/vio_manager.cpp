@@ -70,6 +70,8 @@ FvonProviderOptions fvon_options(const TonOptions &o, bool stencils) {
   f.its.train.max_epochs = o.its_epochs;
   f.its.train.plateau_epochs = f.f2f.train.plateau_epochs = o.plateau_epochs;
   f.its.train.plateau_rel = f.f2f.train.plateau_rel = o.plateau_rel;
+  f.its.train.warmup_calls = f.f2f.train.warmup_calls = o.fvon_warmup_trainings;
+  f.its.train.maintenance_epochs = f.f2f.train.maintenance_epochs = o.fvon_maintenance_epochs;
   f.its.residual = o.its_residual;
   f.f2f.train.max_epochs = o.f2f_epochs;
   f.f2f.inverse_depth_input = o.f2f_inverse_depth;

@@ -139,6 +139,8 @@ std::vector<Field> fields(VioOptions &o) {
       field(N, "f2f_inverse_depth", ton.f2f_inverse_depth),
       field(N, "plateau_epochs", ton.plateau_epochs),
       field(N, "plateau_rel", ton.plateau_rel),
+      field(N, "fvon_warmup_trainings", ton.fvon_warmup_trainings),
+      field(N, "fvon_maintenance_epochs", ton.fvon_maintenance_epochs),
       field(U, "measurement_fej", up.measurement_fej),
       field(U, "max_clones", up.max_clones),
       field(U, "min_track_length", up.min_track_length),
@@ -268,6 +270,8 @@ void validate_vio_options(const VioOptions &o) {
   require(n.tpn_label_images >= 1 && n.tpn_label_images <= 200, "ton.tpn_label_images must lie in [1, 200]");
   require(n.fvon_gate_px_s >= 0, "ton.fvon_gate_px_s must be >= 0");
   require(n.plateau_epochs >= 0 && n.plateau_rel >= 0, "ton.plateau_epochs and ton.plateau_rel must be >= 0");
+  require(n.fvon_warmup_trainings >= 0 && n.fvon_maintenance_epochs >= 0,
+          "ton.fvon_warmup_trainings and ton.fvon_maintenance_epochs must be >= 0");
   const auto &u = o.update;
   require(u.max_clones >= 3, "update.max_clones must be >= 3");
   require(u.min_track_length >= 2, "update.min_track_length must be >= 2");

@@ -103,6 +103,11 @@ struct TonOptions {
   /// than plateau_rel of itself. 0 = the paper's rule only (epoch limit or loss threshold).
   int plateau_epochs = 20;
   double plateau_rel = 0.01;
+  /// FVON's per-call epoch cap after its first `fvon_warmup_trainings` trainings (ton/trainer.h, TrainOptions::
+  /// for_call; TPN keeps its cap: it trains once per label, not per frame). 0 = its_epochs / f2f_epochs throughout
+  /// (the paper). Measured in docs/ton.md ("Cost").
+  int fvon_warmup_trainings = 100;
+  int fvon_maintenance_epochs = 200;
 };
 
 struct UpdateOptions {

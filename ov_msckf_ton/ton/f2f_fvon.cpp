@@ -53,7 +53,7 @@ TrainReport F2fFvon::train() {
   data_.clear();
   for (size_t k = 0; k < positions_.size(); ++k)
     data_.push(pos_norm_.normalize(positions_[k]), vel_norm_.normalize(velocities_[k]));
-  last_report_ = train_network(net_, adam_, data_, options_.train);
+  last_report_ = train_network(net_, adam_, data_, options_.train.for_call(calls_++));
   trained_ = true;
   return last_report_;
 }

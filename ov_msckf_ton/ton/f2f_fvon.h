@@ -64,6 +64,7 @@ private:
   F2fMlp::Data data_;
   TrainReport last_report_;
   bool trained_ = false;
+  int calls_ = 0; // training calls so far (TrainOptions::for_call)
 };
 
 } // namespace ton

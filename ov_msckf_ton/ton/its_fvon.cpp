@@ -53,7 +53,7 @@ TrainReport ItsFvon::train() {
                                        : Eigen::Vector2d(norm_.normalize(raw_[k - 1])));
     }
   }
-  last_report_ = train_network(net_, adam_, data_, options_.train);
+  last_report_ = train_network(net_, adam_, data_, options_.train.for_call(calls_++));
   trained_ = true;
   return last_report_;
 }

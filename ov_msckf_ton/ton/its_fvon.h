@@ -70,6 +70,7 @@ private:
   ItsLstm::Data data_;
   TrainReport last_report_;
   bool trained_ = false;
+  int calls_ = 0; // training calls so far (TrainOptions::for_call)
 };
 
 } // namespace ton

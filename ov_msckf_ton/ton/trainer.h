@@ -3,6 +3,7 @@
 // stopped at the paper's epoch limit or loss threshold (Table I).
 #include "ov_msckf_ton/ton/adam.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -21,6 +22,19 @@ struct TrainOptions {
   /// remaining epochs of the paper's budget buy nothing measurable (docs/ton.md). 0 disables it.
   int plateau_epochs = 0;
   double plateau_rel = 1e-3;
+  /// Warm-up, then maintenance (beyond Table I, for the per-frame cost): after `warmup_calls` training calls the cap
+  /// per call is `maintenance_epochs` instead of max_epochs. A network learns its mapping over its first calls; later
+  /// each call only follows a window that differs by a few labels, which a few hundred warm-started steps do
+  /// (docs/ton.md, "Cost"). 0 disables it.
+  int warmup_calls = 0;
+  int maintenance_epochs = 0;
+  /// The options of the `call`-th training call (0-based).
+  TrainOptions for_call(int call) const {
+    TrainOptions o = *this;
+    if (warmup_calls > 0 && call >= warmup_calls)
+      o.max_epochs = std::min(max_epochs, maintenance_epochs);
+    return o;
+  }
 };
 
 struct TrainReport {

@@ -59,7 +59,7 @@ D3="$OUT/real_moving_plus20"
 # Real images: EuRoC's 1 px (the euroc_mav defaults) and ground-truth initialisation (the cut starts moving); the
 # velocity comparison needs both networks on the same track, so both use first_velocity next, only the networks differ.
 printf 'init:\n  mode: groundtruth\n' >"$OUT/real_default.yaml"
-printf 'init:\n  mode: groundtruth\nton:\n  its_residual: false\n  tpn_residual: false\n  f2f_inverse_depth: false\n  plateau_epochs: 0\n' \
+printf 'init:\n  mode: groundtruth\nton:\n  its_residual: false\n  tpn_residual: false\n  f2f_inverse_depth: false\n  plateau_epochs: 0\n  fvon_warmup_trainings: 0\n' \
   >"$OUT/real_paper.yaml"
 for cfg in sim paper; do
   [[ $PARTS == *3* ]] || break
