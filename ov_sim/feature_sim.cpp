@@ -15,9 +15,12 @@ FeatureSimulator::FeatureSimulator(const ov_core::CameraModel &cam, const Scene 
       continue;
     const double area = surfs[s].size_u * surfs[s].size_v;
     const int n = static_cast<int>(area * opt.landmarks_per_m2 + 0.5);
-    for (int i = 0; i < n; ++i)
-      landmarks_.push_back(scene.surface_point(static_cast<int>(s), rng_.uniform(0.0, surfs[s].size_u),
-                                               rng_.uniform(0.0, surfs[s].size_v)));
+    for (int i = 0; i < n; ++i) {
+      // One draw per statement (argument order is unspecified): v first, the order gcc used for every folder so far.
+      const double v = rng_.uniform(0.0, surfs[s].size_v);
+      const double u = rng_.uniform(0.0, surfs[s].size_u);
+      landmarks_.push_back(scene.surface_point(static_cast<int>(s), u, v));
+    }
   }
   live_.assign(landmarks_.size(), -1);
 }
@@ -116,7 +119,9 @@ std::vector<FeatureObservation> FeatureSimulator::step(const FramePose &pose, in
     FeatureObservation o;
     o.t_cam_ns = t_cam_ns;
     o.feature_id = static_cast<uint64_t>(live_[lm]);
-    o.uv = uv + opt_.pixel_noise * Eigen::Vector2d(rng_.normal(), rng_.normal());
+    const double nv = rng_.normal(); // one draw per statement, v first (gcc's order, as above)
+    const double nu = rng_.normal();
+    o.uv = uv + opt_.pixel_noise * Eigen::Vector2d(nu, nv);
     out.push_back(o);
   }
   std::sort(out.begin(), out.end(),

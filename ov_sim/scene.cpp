@@ -137,8 +137,11 @@ void Scene::place_lamps() {
   const int n = std::clamp(static_cast<int>(std::lround(size.x() * size.y() / 10.0)), 2, 12);
   for (int i = 0; i < n; ++i) {
     Lamp l;
-    l.position = Eigen::Vector3d(rng.uniform(room_.lo.x() + 0.5, room_.hi.x() - 0.5),
-                                 rng.uniform(room_.lo.y() + 0.5, room_.hi.y() - 0.5), room_.hi.z() - 0.01);
+    // One draw per statement: the order of a call's arguments is unspecified, so two draws as arguments gave other
+    // scenes under clang than under gcc. y is drawn first: gcc's order, in which every rendered folder so far was made.
+    const double y = rng.uniform(room_.lo.y() + 0.5, room_.hi.y() - 0.5);
+    const double x = rng.uniform(room_.lo.x() + 0.5, room_.hi.x() - 0.5);
+    l.position = Eigen::Vector3d(x, y, room_.hi.z() - 0.01);
     lamps_.push_back(l);
   }
   // The lamps' gain makes the mean illumination over floor and walls 1 (sampled on a coarse grid).

@@ -43,7 +43,9 @@ cv::Mat make_blotch_texture(int w, int h, const TextureOptions &opt, Rng &rng) {
     layer.setTo(0);
     for (int i = 0; i < count; ++i) {
       const double cx = rng.uniform(-s, w + s), cy = rng.uniform(-s, h + s);
-      const short val = static_cast<short>((rng.uniform() < 0.5 ? -1 : 1) * amp * rng.uniform(0.6, 1.0));
+      // Sign and size drawn in separate statements (the operands of * are unsequenced): sign first, gcc's order.
+      const double sign = rng.uniform() < 0.5 ? -1.0 : 1.0;
+      const short val = static_cast<short>(sign * amp * rng.uniform(0.6, 1.0));
       if (rng.uniform() < 0.75) {
         const double sx = s * rng.uniform(0.6, 1.6), sy = s * rng.uniform(0.6, 1.6);
         cv::rectangle(layer, cv::Point(static_cast<int>(cx - sx / 2), static_cast<int>(cy - sy / 2)),
