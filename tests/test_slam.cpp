@@ -186,16 +186,22 @@ TEST(SlamJacobians, LandmarkMeasurementMatchesFiniteDifferences) {
                                                                               << H_fd;
 }
 
+/// A body turning and moving, a camera on it and a point in front: the predicted image velocity's test case.
+struct MovingCamera {
+  Eigen::Matrix3d R_WB = ov_core::so3_exp(Eigen::Vector3d(0.2, -0.4, 1.1));
+  Eigen::Vector3d p_WB{0.3, -0.2, 1.0}, p_W{2.5, 0.8, 1.4};
+  Eigen::Matrix3d R_BC = ov_core::so3_exp(Eigen::Vector3d(-1.2, 0.1, -1.5));
+  Eigen::Vector3d p_BC{0.05, -0.02, 0.01};
+  BodyMotion m{Eigen::Vector3d(0.7, -1.3, 0.4), Eigen::Vector3d(-0.6, 0.9, 0.3)};
+};
+
 TEST(SlamJacobians, PredictedImageVelocityIsTheProjectionsTimeDerivative) {
   // The body turning at ω (Ṙ_WB = R_WB [ω]×) and moving at v: the landmark's normalised image point over time,
   // differentiated numerically, against predicted_image_velocity.
-  const Eigen::Matrix3d R_WB = ov_core::so3_exp(Eigen::Vector3d(0.2, -0.4, 1.1));
-  const Eigen::Vector3d p_WB(0.3, -0.2, 1.0), p_W(2.5, 0.8, 1.4);
-  const Eigen::Matrix3d R_BC = ov_core::so3_exp(Eigen::Vector3d(-1.2, 0.1, -1.5));
-  const Eigen::Vector3d p_BC(0.05, -0.02, 0.01);
-  BodyMotion m;
-  m.w_B = Eigen::Vector3d(0.7, -1.3, 0.4);
-  m.v_W = Eigen::Vector3d(-0.6, 0.9, 0.3);
+  const MovingCamera mc;
+  const Eigen::Matrix3d &R_WB = mc.R_WB, &R_BC = mc.R_BC;
+  const Eigen::Vector3d &p_WB = mc.p_WB, &p_W = mc.p_W, &p_BC = mc.p_BC;
+  const BodyMotion &m = mc.m;
   auto z_at = [&](const Eigen::Matrix<double, 1, 1> &t) {
     Eigen::Vector2d z;
     const bool ok = project_in_clone(R_WB * ov_core::so3_exp(m.w_B * t(0)), p_WB + m.v_W * t(0), R_BC, p_BC, p_W, z);
@@ -213,13 +219,10 @@ TEST(SlamJacobians, PredictedImageVelocityIsTheProjectionsTimeDerivative) {
 
 TEST(SlamJacobians, PredictedImageVelocityJacobiansMatchFiniteDifferences) {
   // V's Jacobians w.r.t. the clone's [δθ δp], the point and the extrinsics [δθ_BC δp_BC], each in the state's ⊞.
-  const Eigen::Matrix3d R_WB = ov_core::so3_exp(Eigen::Vector3d(0.2, -0.4, 1.1));
-  const Eigen::Vector3d p_WB(0.3, -0.2, 1.0), p_W(2.5, 0.8, 1.4);
-  const Eigen::Matrix3d R_BC = ov_core::so3_exp(Eigen::Vector3d(-1.2, 0.1, -1.5));
-  const Eigen::Vector3d p_BC(0.05, -0.02, 0.01);
-  BodyMotion m;
-  m.w_B = Eigen::Vector3d(0.7, -1.3, 0.4);
-  m.v_W = Eigen::Vector3d(-0.6, 0.9, 0.3);
+  const MovingCamera mc;
+  const Eigen::Matrix3d &R_WB = mc.R_WB, &R_BC = mc.R_BC;
+  const Eigen::Vector3d &p_WB = mc.p_WB, &p_W = mc.p_W, &p_BC = mc.p_BC;
+  const BodyMotion &m = mc.m;
   const auto vel_at = [&](const Eigen::Matrix<double, 15, 1> &d) {
     Eigen::Vector2d v;
     EXPECT_TRUE(predicted_image_velocity(ov_core::so3_exp(d.segment<3>(0)) * R_WB, p_WB + d.segment<3>(3),
