@@ -91,7 +91,7 @@ void FilterHealth::check_rates(const State &s) const {
   const UpdateTally w = window();
   if (w.examined() < opt_.min_features)
     return;
-  char msg[512];
+  char msg[700];
   if (w.acceptance() < opt_.min_acceptance) {
     std::snprintf(msg, sizeof msg,
                   "the estimate has diverged: over the last %.1f s only %ld of %ld features entered the update (%ld "
@@ -100,9 +100,14 @@ void FilterHealth::check_rates(const State &s) const {
     throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));
   }
   if (w.gate_rate() > opt_.max_gate_rate) {
+    // What the user can do about it: name the usual causes. On whole rendered flights with a drifting offset `sr`
+    // and `sir` stop here (docs/ton.md, "Table III on whole flights") while the modes that let t_d move finish.
     std::snprintf(msg, sizeof msg,
                   "the estimate is inconsistent with the images: over the last %.1f s the chi-square gate rejected "
-                  "%ld of %ld triangulated features, where a 95 %% gate rejects 5 %% by chance",
+                  "%ld of %ld triangulated features, where a 95 %% gate rejects 5 %% by chance - the model lacks "
+                  "something the images show: e.g. a time offset that drifts (modes drift and sr+random_walk let t_d "
+                  "move), a rolling shutter, a calibration error or understated noise (`ovton diagnose` on a "
+                  "--residual-log of this run ranks what could explain it)",
                   opt_.window_s, w.gated, w.used + w.gated);
     throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));
   }
