@@ -135,6 +135,47 @@ TEST(RobustRegression, ChiSquareSurvivalAndGaussianEquivalentSigma) {
   EXPECT_GT(far, wald_to_sigma(100.0, 9));
 }
 
+TEST(RobustRegression, FewClustersTestAgainstFNotChiSquare) {
+  // The F reference: known quantiles (t² with 19 dof at p = 0.05 is 2.093²) and the equivalent clusters of a
+  // Newey-West covariance (20 clusters, 3 lags: weights 0.75, 0.5, 0.25 → 20 / 2.75 clusters).
+  EXPECT_NEAR(f_sf(2.093024 * 2.093024, 1, 19), 0.05, 1e-5);
+  EXPECT_NEAR(f_sf(3.521893, 2, 19), 0.05, 1e-5);
+  Design d;
+  d.n_clusters = 20;
+  EXPECT_DOUBLE_EQ(d.wald_df(), 19.0);
+  d.hac_lags = 3;
+  EXPECT_NEAR(d.wald_df(), 20.0 / 2.75 - 1, 1e-12);
+  d.n_clusters = 5000;
+  EXPECT_EQ(d.wald_df(), 0.0) << "many clusters: χ²";
+  // Under the null, 8 clusters whose column and errors each share a random effect: the Wald σ of the column past 3σ
+  // (two-sided p 0.0027) should be about that rare against F(1, 7); against χ² the covariance's own noise makes it far
+  // more common (as a clean 20-s log's accelerometer bias, about 7 clusters' worth, read as an 8.3σ scale error).
+  std::mt19937 rng(11);
+  std::normal_distribution<double> N;
+  const int reps = 4000;
+  int past_f = 0, past_chi2 = 0;
+  for (int rep = 0; rep < reps; ++rep) {
+    Design dr = random_design(8, 25, 1, rng);
+    std::vector<double> u(8), v(8); // per cluster: the column's shared part, the errors' shared part
+    for (size_t g = 0; g < 8; ++g)
+      u[g] = N(rng), v[g] = N(rng);
+    for (Eigen::Index i = 0; i < dr.r.size(); ++i) {
+      const size_t g = static_cast<size_t>(dr.cluster[i]);
+      dr.D(i, 0) = 0.5 * dr.D(i, 0) + u[g];
+      dr.r(i) = 0.5 * N(rng) + v[g];
+    }
+    dr.scale = robust_scale(dr.r);
+    const Fit f = fit_cols(dr, {0}, 3.0);
+    const double W = f.beta(0) * f.beta(0) / f.cov(0, 0);
+    past_f += wald_to_sigma(W, 1, dr.wald_df()) > 3.0;
+    past_chi2 += wald_to_sigma(W, 1) > 3.0;
+  }
+  const double rate_f = double(past_f) / reps, rate_chi2 = double(past_chi2) / reps;
+  // Measured: 1.0 % against F (the sandwich of 8 clusters is still a little optimistic), 5.1 % against χ².
+  EXPECT_LT(rate_f, 0.015) << "F(1, 7) reference: " << rate_f << " of null fits past 3σ (0.0027 nominal)";
+  EXPECT_GT(rate_chi2, 0.03) << "χ² reference: " << rate_chi2 << " (the test could not fail)";
+}
+
 TEST(RobustRegression, StepwiseSelectsThePlantedColumnsOnly) {
   std::mt19937 rng(3);
   Design d = random_design(500, 4, 4, rng);

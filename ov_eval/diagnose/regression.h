@@ -24,6 +24,11 @@ struct Design {
   /// series such as the filter's bias): Newey-West with Bartlett weights over the cluster scores.
   int hac_lags = 0;
   double scale = 1; ///< robust σ of r (fixed, so that the losses of different candidates compare)
+  /// Denominator degrees of freedom of its Wald tests. A cluster-robust covariance is an average over G clusters'
+  /// scores, so it is itself uncertain: with G independent clusters the Wald statistic / k follows F(k, G − 1), not
+  /// χ²(k) / k. With Newey-West weights w_l over L lags the covariance has the variance of G / (1 + 2·Σ w_l²)
+  /// independent clusters' (the lag-window estimator's equivalent degrees of freedom). 0: many clusters, χ².
+  double wald_df() const;
   double t_mid = 0; ///< centre of the drift term
   bool have_velocity = false, have_rate = false;
   /// Where each row lies, for the test of structure no candidate explains (unexplained.h); empty: not tested.
@@ -49,8 +54,11 @@ Fit fit_cols(const Design &d, const std::vector<int> &cols, double k, const std:
 
 /// Survival function of chi-square with k degrees of freedom (closed forms for integer k).
 double chi2_sf(double x, int k);
-/// Wald statistic with k dof as the two-sided Gaussian σ of the same p-value.
-double wald_to_sigma(double W, int k);
+/// Survival function of the F distribution with (k, df) degrees of freedom.
+double f_sf(double x, int k, double df);
+/// Wald statistic with k dof as the two-sided Gaussian σ of the same p-value: against χ²(k), or with df > 0 against
+/// k·F(k, df) (a covariance estimated from df + 1 independent clusters; Design::wald_df).
+double wald_to_sigma(double W, int k, double df = 0);
 /// Upper median (the element at n/2 of the sorted values); 0 for none.
 double median(std::vector<double> v);
 

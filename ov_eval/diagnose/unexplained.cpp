@@ -93,7 +93,7 @@ std::vector<UnexplainedStructure> find_unexplained(const Design &d, const std::v
     UnexplainedStructure u;
     u.where = g.where;
     u.explained = f0.loss > 0 ? (f0.loss - f.loss) / f0.loss : 0.0;
-    u.sigma = wald_to_sigma(f.beta.dot(f.cov.ldlt().solve(f.beta)), static_cast<int>(used.size()));
+    u.sigma = wald_to_sigma(f.beta.dot(f.cov.ldlt().solve(f.beta)), static_cast<int>(used.size()), left.wald_df());
     u.flagged = u.sigma >= opt.min_sigma && u.explained >= opt.min_explained;
     Eigen::Index big = 0;
     f.beta.cwiseAbs().maxCoeff(&big);
