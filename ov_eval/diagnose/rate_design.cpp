@@ -90,6 +90,9 @@ struct FrameFit {
   Vec9 sol, focal; ///< fitted (ω, ψ, v) and its response to a unit relative focal error
   Eigen::Matrix<double, 9, 9> C;
   VectorXd w;
+  /// Without ψ: ω's response to a ψ in the data (camera frame). ω is then the rate at the features' mean row, and a
+  /// readout t_r moves it by psi_resp·α·t_r, which varies with the features' rows from image to image.
+  Eigen::Matrix3d psi_resp = Eigen::Matrix3d::Zero();
 };
 using FitMap = std::map<int64_t, FrameFit>;
 
@@ -121,8 +124,8 @@ public:
     return H;
   }
 
-  /// with_psi false: ψ fixed at 0, so ω is the rate at the features' mean row (what the time candidates compare with
-  /// the gyro; fitting ψ as well costs ω precision where the features do not span the rows evenly).
+  /// with_psi false: ψ fixed at 0, so ω is the rate at the features' mean row (what the ω rows compare with the gyro,
+  /// with psi_resp for a readout; fitting ψ as well costs ω precision where the features do not span the rows evenly).
   FrameFit fit_frame(const std::vector<FlowObs> &obs, bool with_psi) const {
     const Eigen::Index no = static_cast<Eigen::Index>(obs.size());
     const int p = with_psi ? 9 : 6;
@@ -160,6 +163,12 @@ public:
     const MatrixXd Hw = f.w.asDiagonal() * H;
     N.compute(H.transpose() * Hw);
     const MatrixXd C = s2 * N.solve(MatrixXd::Identity(p, p));
+    if (!with_psi) {
+      MatrixXd Hpsi(2 * no, 3);
+      for (Eigen::Index q = 0; q < no; ++q)
+        Hpsi.middleRows<2>(2 * q) = obs[q].rho * rot_flow(obs[q].x.x(), obs[q].x.y());
+      f.psi_resp = N.solve(Hw.transpose() * Hpsi).topRows<3>();
+    }
     f.C.setZero();
     for (int a = 0; a < p; ++a)
       f.C.col(with_psi || a < 3 ? a : a + 3) = expand(C.col(a));
@@ -255,7 +264,8 @@ Eigen::Vector3d gyro_at(const std::vector<ov_core::ImuData> &imu, double t_ns) {
 /// per-image fit with the same weights. The focal is compared with it: the slope of a quadratic through ±100 ms
 /// distorts fast rotation, and the raw gyro made V1_03's oracle run read a 3 % gyro "scale error" and a 0.9 % focal
 /// error; the gyro's rotation angle through the slope alone (no perspective) still left 0.46 % (docs/diagnose.md).
-/// The time candidates keep the raw gyro: smoothed, it left a −0.5 ms offset on clean runs.
+/// Every ω row compares with it since session 30 (the time candidates had kept the raw gyro at the image's instant,
+/// α a ±50 ms difference of it: docs/diagnose.md, "One set of ω rows").
 class GyroThroughImages {
 public:
   explicit GyroThroughImages(const std::vector<ov_core::ImuData> &imu) : imu_(imu) {}
@@ -300,16 +310,16 @@ private:
   std::map<std::pair<double, double>, Eigen::Matrix3d> cache_;
 };
 
-/// The angular acceleration the images' ψ is compared with: the gyro through the images' slope. A feature's velocity
-/// is the slope Σ_q w_q·x_q of its track's positions, and under a rolling shutter the position at image q is exposed
-/// ρ·t_r later at row ρ, so the images' rate changes down the image by ψ = t_r·Σ_q w_q·ω(t_q): the same slope taken of
-/// the camera's rate. The regressor is that slope of the gyro's rate, ω(t_q) its mean over one image interval around
-/// t_q (the images, one per interval, cannot follow faster motion), averaged over the image's features, each with its
-/// own window. The gyro's difference over ±50 ms that this replaced carries the gyro's vibration, which the images do
-/// not see (the IMU model measured on the real V1_01 log: 10-100 Hz bands; on the agile flight 0.63 rad/s² RMS of it
-/// on the body y axis against 0.81 of signal); an error in the regressor scales the estimate by var(α) / (var(α) +
-/// var(error)): with the true poses a 20 ms readout read 16.1 ms (body axes 0.95, 0.62, 0.77 of it; noise-free tracks
-/// 17.0 ms), now 19.2 ms (noise-free 20.1 ms).
+/// The angular acceleration the images' ψ and ω rows are compared with: the gyro through the images' slope. A feature's
+/// velocity is the slope Σ_q w_q·x_q of its track's positions, and under a rolling shutter the position at image q is
+/// exposed ρ·t_r later at row ρ, so the images' rate changes down the image by ψ = t_r·Σ_q w_q·ω(t_q): the same slope
+/// taken of the camera's rate. The regressor is that slope of the gyro's rate, ω(t_q) its mean over one image interval
+/// around t_q (the images, one per interval, cannot follow faster motion), averaged over the image's features, each
+/// with its own window. The gyro's difference over ±50 ms that this replaced carries the gyro's vibration, which the
+/// images do not see (the IMU model measured on the real V1_01 log: 10-100 Hz bands; on the agile flight 0.63 rad/s²
+/// RMS of it on the body y axis against 0.81 of signal); an error in the regressor scales the estimate by var(α) /
+/// (var(α) + var(error)): with the true poses a 20 ms readout read 16.1 ms (body axes 0.95, 0.62, 0.77 of it;
+/// noise-free tracks 17.0 ms), now 19.2 ms (noise-free 20.1 ms).
 class GyroSlope {
 public:
   explicit GyroSlope(const std::vector<ov_core::ImuData> &imu) : imu_(imu), angle_(imu.size()) {
@@ -358,12 +368,12 @@ double image_interval_ns(const FrameMap &frames) {
 
 /// One image's rates, in the body frame.
 struct FrameRate {
-  double t;                     ///< s from t_first
-  Eigen::Vector3d e, alpha, se; ///< ω_vis − ω_gyro (body frame), α, SE of ω_vis
-  Eigen::Vector3d psi, psi_se;  ///< ψ_vis (body frame) and its SE
-  Eigen::Vector3d alpha_psi;    ///< α through the images' slope (GyroSlope), what ψ_vis is compared with
-  Eigen::Vector3d focal_e;      ///< response of ω_vis to a unit relative focal error
-  Eigen::Vector3d gyro_s, e_s;  ///< ω̄_gyro, the gyro through the images' estimator, and ω_vis − ω̄_gyro
+  double t;                    ///< s from t_first
+  Eigen::Vector3d alpha, se;   ///< α, the gyro through the images' slope (GyroSlope); SE of ω_vis
+  Eigen::Vector3d alpha_row;   ///< what a unit readout time moves ω_vis by (FrameFit::psi_resp·α, body frame)
+  Eigen::Vector3d psi, psi_se; ///< ψ_vis (body frame) and its SE
+  Eigen::Vector3d focal_e;     ///< response of ω_vis to a unit relative focal error
+  Eigen::Vector3d gyro_s, e_s; ///< ω̄_gyro, the gyro through the images' estimator, and ω_vis − ω̄_gyro
 };
 
 /// The gyro's linear error columns beyond the isotropic scale, on ω_vis − ω̄_gyro (body frame), in the order
@@ -404,18 +414,19 @@ void fill_rate_rows(const std::vector<FrameRate> &fr, const DiagnoseReport &rep,
     return std::min(nb - 1, static_cast<int>(nb * t / std::max(1e-9, rep.duration_s)));
   };
   const double t_mid = 0.5 * rep.duration_s;
-  std::vector<Eigen::Vector3d> sw(nb, Eigen::Vector3d::Zero()), se(nb, Eigen::Vector3d::Zero()),
-      sa(nb, Eigen::Vector3d::Zero()), sat(nb, Eigen::Vector3d::Zero()), sf(nb, Eigen::Vector3d::Zero()),
-      ses(nb, Eigen::Vector3d::Zero()), sgs(nb, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Vector3d> sw(nb, Eigen::Vector3d::Zero()), sa(nb, Eigen::Vector3d::Zero()),
+      sat(nb, Eigen::Vector3d::Zero()), sf(nb, Eigen::Vector3d::Zero()), ses(nb, Eigen::Vector3d::Zero()),
+      sgs(nb, Eigen::Vector3d::Zero()), sar(nb, Eigen::Vector3d::Zero());
   // Weighted sums of the linear gyro columns and of α per offset bin, per bias bin (their part the bias takes).
   std::vector<Eigen::Matrix<double, 3, kLinCols>> slin(nb, Eigen::Matrix<double, 3, kLinCols>::Zero());
   std::vector<Eigen::Matrix<double, 3, kTdBins>> salpha_bin(nb, Eigen::Matrix<double, 3, kTdBins>::Zero());
   for (const auto &f : fr) {
     const Eigen::Vector3d w = f.se.cwiseInverse().cwiseAbs2();
     const int b = bin(f.t);
-    sw[b] += w, se[b] += w.cwiseProduct(f.e), sa[b] += w.cwiseProduct(f.alpha);
+    sw[b] += w, sa[b] += w.cwiseProduct(f.alpha);
     sat[b] += w.cwiseProduct(f.alpha) * (f.t - t_mid);
     sf[b] += w.cwiseProduct(f.focal_e);
+    sar[b] += w.cwiseProduct(f.alpha_row);
     ses[b] += w.cwiseProduct(f.e_s);
     sgs[b] += w.cwiseProduct(f.gyro_s);
     slin[b] += w.asDiagonal() * gyro_linear_cols(f.gyro_s);
@@ -432,29 +443,27 @@ void fill_rate_rows(const std::vector<FrameRate> &fr, const DiagnoseReport &rep,
   Eigen::Index i = 0;
   for (const auto &f : fr) {
     const int b = bin(f.t);
-    for (int a = 0; a < 3; ++a, ++i) { // ω rows
+    // ω rows, ω_vis − ω̄_gyro: the time, focal and gyro columns on the same rows, so that the stepwise selection
+    // weighs them against each other (an offset error otherwise read as a camera-body rotation on rows of its own).
+    for (int a = 0; a < 3; ++a, ++i) {
       const double sq = 1.0 / f.se(a);
-      dr.r(i) = sq * (f.e(a) - se[b](a) / sw[b](a));
+      dr.r(i) = sq * (f.e_s(a) - ses[b](a) / sw[b](a));
       dr.D(i, kV) = sq * (f.alpha(a) - sa[b](a) / sw[b](a));
       dr.D(i, kVt) = sq * (f.alpha(a) * (f.t - t_mid) - sat[b](a) / sw[b](a));
       for (int tb = 1; tb < kTdBins - 1; ++tb)
         dr.D(i, kTdBin0 + tb - 1) =
             sq * ((td_bin(f.t, rep.duration_s) == tb ? f.alpha(a) : 0.0) - salpha_bin[b](a, tb) / sw[b](a));
-    }
-    for (int a = 0; a < 3; ++a, ++i) { // ψ rows
-      const double sq = 1.0 / f.psi_se(a);
-      dr.r(i) = sq * f.psi(a);
-      dr.D(i, kVrow) = sq * f.alpha_psi(a);
-    }
-    // ω rows against the gyro through the images' estimator, for the scale candidates.
-    for (int a = 0; a < 3; ++a, ++i) {
-      const double sq = 1.0 / f.se(a);
-      dr.r(i) = sq * (f.e_s(a) - ses[b](a) / sw[b](a));
+      dr.D(i, kVrow) = sq * (f.alpha_row(a) - sar[b](a) / sw[b](a));
       dr.D(i, kFocal) = sq * (f.focal_e(a) - sf[b](a) / sw[b](a));
       dr.D(i, kGyroScale) = -sq * (f.gyro_s(a) - sgs[b](a) / sw[b](a));
       const Eigen::Matrix<double, 3, kLinCols> L = gyro_linear_cols(f.gyro_s) - slin[b] / sw[b](a);
       for (int c = 0; c < kLinCols; ++c)
         dr.D(i, kGyroAxY + c) = sq * L(a, c);
+    }
+    for (int a = 0; a < 3; ++a, ++i) { // ψ rows
+      const double sq = 1.0 / f.psi_se(a);
+      dr.r(i) = sq * f.psi(a);
+      dr.D(i, kVrow) = sq * f.alpha(a);
     }
     for (Eigen::Index q = i - kRateRowsPerImage; q < i; ++q) {
       dr.cluster[q] = static_cast<int>(f.t / kRateClusterS);
@@ -486,7 +495,6 @@ bool build_rate_design(const UsedData &data, const DiagnoseOptions &opt, const D
   const std::vector<ov_core::ImuData> imu_cal =
       opt.calibration.empty() ? std::vector<ov_core::ImuData>{} : imu_through_calibration(opt.imu, opt.calibration);
   const std::vector<ov_core::ImuData> &imu = opt.calibration.empty() ? opt.imu : imu_cal;
-  const double h_ns = 50e6; // the time candidates' α: a difference over ±50 ms (its gyro noise shrinks with the span)
   // ω̄_gyro's fit uses the fitter's depth corrections as add_focal_response left them (those of the perturbed data).
   GyroThroughImages gyro_bar(imu);
   const GyroSlope gyro_slope(imu);
@@ -498,23 +506,20 @@ bool build_rate_design(const UsedData &data, const DiagnoseOptions &opt, const D
     const auto body_se = [&](const Eigen::Matrix3d &C) {
       return (R_BC * C * R_BC.transpose()).diagonal().cwiseMax(1e-20).cwiseSqrt().eval();
     };
-    const double t_imu = double(t_cam) + 1e9 * flow.frame_td.at(t_cam);
     FrameRate f;
     f.t = 1e-9 * double(t_cam - data.t_first);
-    f.e = R_BC * ff.sol.head<3>() - gyro_at(imu, t_imu);
     f.gyro_s = R_BC * gyro_bar.omega(flow.frames.at(t_cam), ff, fitter, R_BC);
     f.focal_e = R_BC * ff.focal.head<3>();
     // What the filter's focal estimate already takes of the focal column.
     f.e_s = R_BC * ff.sol.head<3>() - f.gyro_s - (cal ? focal_estimate(*cal, rep.fu, rep.fv) : 0.0) * f.focal_e;
-    // The time candidates keep the ±50 ms difference, which carries the gyro's vibration too: with α through the
-    // slope, a 30 ms offset on the plain flight read 27 instead of 2.8 ms, but the clean plain flights' per-bin offsets
-    // then spread 12-24 ms (share under the bar); that needs its own look (docs/diagnose.md).
-    f.alpha = (gyro_at(imu, t_imu + h_ns) - gyro_at(imu, t_imu - h_ns)) / (2e-9 * h_ns);
-    f.alpha_psi = gyro_slope.alpha(flow.frames.at(t_cam), interval_ns);
+    f.alpha = gyro_slope.alpha(flow.frames.at(t_cam), interval_ns);
+    f.alpha_row = R_BC * ff.psi_resp * R_BC.transpose() * f.alpha;
+    if (cal) // what the filter's readout time already takes
+      f.e_s -= cal->readout_s * f.alpha_row;
     f.se = body_se(ff.C.topLeftCorner<3, 3>());
     const auto fp = fits_psi.find(t_cam);
     if (fp != fits_psi.end()) { // ψ beyond the filter's readout time: ψ_vis − α·t̂_r
-      f.psi = R_BC * fp->second.sol.segment<3>(3) - (cal ? cal->readout_s : 0.0) * f.alpha_psi;
+      f.psi = R_BC * fp->second.sol.segment<3>(3) - (cal ? cal->readout_s : 0.0) * f.alpha;
       f.psi_se = body_se(fp->second.C.block<3, 3>(3, 3));
     } else { // no ψ row: zero weight
       f.psi.setZero();
