@@ -147,6 +147,8 @@ TEST(RobustRegression, FewClustersTestAgainstFNotChiSquare) {
   EXPECT_NEAR(d.wald_df(), 20.0 / 2.75 - 1, 1e-12);
   d.n_clusters = 5000;
   EXPECT_EQ(d.wald_df(), 0.0) << "many clusters: χ²";
+  d.n_clusters = 4; // 4 seconds of a smooth series: under two independent clusters, the most cautious reference
+  EXPECT_EQ(d.wald_df(), 1.0);
   // Under the null, 8 clusters whose column and errors each share a random effect: the Wald σ of the column past 3σ
   // (two-sided p 0.0027) should be about that rare against F(1, 7); against χ² the covariance's own noise makes it far
   // more common (as a clean 20-s log's accelerometer bias, about 7 clusters' worth, read as an 8.3σ scale error).

@@ -111,7 +111,9 @@ double Design::wald_df() const {
   for (int l = 1; l <= hac_lags; ++l)
     sw2 += std::pow(1.0 - l / (hac_lags + 1.0), 2);
   const double g = n_clusters / (1 + 2 * sw2);
-  return g >= 2 && g <= 1000 ? g - 1 : 0.0; // beyond a thousand clusters F(k, G − 1) is χ²(k) / k
+  // Beyond a thousand clusters F(k, G − 1) is χ²(k) / k; below two the covariance rests on one cluster's worth of
+  // data, and F(k, 1) keeps anything from passing on it.
+  return g > 1000 ? 0.0 : std::max(1.0, g - 1);
 }
 
 /// Wald statistic with k dof as the two-sided Gaussian σ of the same p-value, so that "5σ" means the same thing for

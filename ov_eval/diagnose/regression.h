@@ -27,7 +27,8 @@ struct Design {
   /// Denominator degrees of freedom of its Wald tests. A cluster-robust covariance is an average over G clusters'
   /// scores, so it is itself uncertain: with G independent clusters the Wald statistic / k follows F(k, G − 1), not
   /// χ²(k) / k. With Newey-West weights w_l over L lags the covariance has the variance of G / (1 + 2·Σ w_l²)
-  /// independent clusters' (the lag-window estimator's equivalent degrees of freedom). 0: many clusters, χ².
+  /// independent clusters' (the lag-window estimator's equivalent degrees of freedom). 0: many clusters, χ²; at
+  /// least 1 otherwise.
   double wald_df() const;
   double t_mid = 0; ///< centre of the drift term
   bool have_velocity = false, have_rate = false;
