@@ -178,6 +178,41 @@ TEST(RobustRegression, FewClustersTestAgainstFNotChiSquare) {
   EXPECT_GT(rate_chi2, 0.03) << "χ² reference: " << rate_chi2 << " (the test could not fail)";
 }
 
+TEST(RobustRegression, ShortColumnsTakeThePooledVarianceRatio) {
+  // A column that reaches 4 of 40 clusters (a time bin's offset) on the same regressor as one that reaches all (the
+  // whole log's offset), errors correlated within clusters. Its cluster-robust variance rests on 4 clusters' scores:
+  // under the null its Wald σ passes 3σ (0.27 % nominal) far too often, even against F(1, 39). With the variance ratio
+  // of the whole column pooled (Design::pooled_cols) it passes five times less often.
+  std::mt19937 rng(5);
+  std::normal_distribution<double> N;
+  const int reps = 3000, G = 40, per = 25;
+  int past_own = 0, past_pooled = 0;
+  for (int rep = 0; rep < reps; ++rep) {
+    Design d = random_design(G, per, 2, rng);
+    std::vector<double> u(G), v(G);
+    for (int g = 0; g < G; ++g)
+      u[static_cast<size_t>(g)] = N(rng), v[static_cast<size_t>(g)] = N(rng);
+    for (Eigen::Index i = 0; i < d.r.size(); ++i) {
+      const size_t g = static_cast<size_t>(d.cluster[i]);
+      d.D(i, 0) = 0.5 * d.D(i, 0) + u[g];
+      d.D(i, 1) = d.cluster[i] < 4 ? d.D(i, 0) : 0.0;
+      d.r(i) = 0.5 * N(rng) + v[g];
+    }
+    d.scale = robust_scale(d.r);
+    const Fit own = fit_cols(d, {0, 1}, 3.0);
+    d.pooled_cols = {0, 1};
+    d.pooled_short = {1};
+    const Fit pooled = fit_cols(d, {0, 1}, 3.0);
+    EXPECT_DOUBLE_EQ(own.beta(1), pooled.beta(1)); // the estimate is the same, only its covariance differs
+    past_own += wald_to_sigma(own.beta(1) * own.beta(1) / own.cov(1, 1), 1, d.wald_df()) > 3.0;
+    past_pooled += wald_to_sigma(pooled.beta(1) * pooled.beta(1) / pooled.cov(1, 1), 1, d.wald_df()) > 3.0;
+  }
+  const double rate_own = double(past_own) / reps, rate_pooled = double(past_pooled) / reps;
+  // Measured: 8.0 % with its own variance, 1.5 % pooled (the pooled ratio is itself estimated from 40 clusters).
+  EXPECT_GT(rate_own, 0.05) << "own cluster-robust variance: " << rate_own << " (the test could not fail)";
+  EXPECT_LT(rate_pooled, 0.025) << "pooled variance ratio: " << rate_pooled << " of null fits past 3σ";
+}
+
 TEST(RobustRegression, StepwiseSelectsThePlantedColumnsOnly) {
   std::mt19937 rng(3);
   Design d = random_design(500, 4, 4, rng);

@@ -472,6 +472,11 @@ void fill_rate_rows(const std::vector<FrameRate> &fr, const DiagnoseReport &rep,
   }
   dr.n_clusters = static_cast<int>(fr.back().t / kRateClusterS) + 1;
   dr.hac_lags = kRateHacLags;
+  // The time bins reach an eighth of the log each (~7 independent clusters on 30 s): their variance takes the ratio
+  // of the whole log's offset column (regression.h, Design::pooled_cols; docs/diagnose.md "Pooled variance").
+  dr.pooled_cols = {kV, kVt};
+  for (int tb = 0; tb < kTdBins - 2; ++tb)
+    dr.pooled_cols.push_back(kTdBin0 + tb), dr.pooled_short.push_back(kTdBin0 + tb);
   std::vector<double> absr(n);
   for (Eigen::Index q = 0; q < n; ++q)
     absr[q] = std::abs(dr.r(q));

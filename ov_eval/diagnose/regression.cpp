@@ -64,6 +64,11 @@ Fit fit_huber(const MatrixXd &X, const VectorXd &r, const Design &d, double k, c
       meat += (1.0 - l / (d.hac_lags + 1.0)) * (C + C.transpose());
     }
     f.cov = g * Ainv * meat * Ainv;
+    MatrixXd meat_rows = MatrixXd::Zero(p, p);
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (w(i) > 0)
+        meat_rows.noalias() += std::pow(w(i) * f.e(i), 2) * X.row(i).transpose() * X.row(i);
+    f.cov_rows = Ainv * meat_rows * Ainv;
   }
   return f;
 }
@@ -72,7 +77,27 @@ Fit fit_cols(const Design &d, const std::vector<int> &cols, double k, const std:
   MatrixXd X(d.r.size(), cols.size());
   for (size_t j = 0; j < cols.size(); ++j)
     X.col(j) = d.D.col(cols[j]);
-  return fit_huber(X, d.r, d, k, mask);
+  Fit f = fit_huber(X, d.r, d, k, mask);
+  // Pooled variance ratio (Design::pooled_cols): with short columns in the fit and the reference among its columns,
+  // every column's covariance becomes the per-row one scaled per column — the pooled columns by the reference's
+  // ratio, the others by their own — so the matrix stays positive semi-definite.
+  const auto at = [&](int col) {
+    return static_cast<Eigen::Index>(std::find(cols.begin(), cols.end(), col) - cols.begin());
+  };
+  const Eigen::Index p = static_cast<Eigen::Index>(cols.size());
+  const bool has_short = std::any_of(d.pooled_short.begin(), d.pooled_short.end(), [&](int c) { return at(c) < p; });
+  if (!has_short || d.pooled_cols.empty() || at(d.pooled_cols.front()) >= p)
+    return f;
+  const Eigen::Index ref = at(d.pooled_cols.front());
+  const auto ratio = [&](Eigen::Index j) { return f.cov_rows(j, j) > 0 ? f.cov(j, j) / f.cov_rows(j, j) : 1.0; };
+  const double kappa = ratio(ref);
+  VectorXd g(p);
+  for (Eigen::Index j = 0; j < p; ++j) {
+    const bool pooled = std::find(d.pooled_cols.begin(), d.pooled_cols.end(), cols[j]) != d.pooled_cols.end();
+    g(j) = std::sqrt(std::max(0.0, pooled ? kappa : ratio(j)));
+  }
+  f.cov = g.asDiagonal() * f.cov_rows * g.asDiagonal();
+  return f;
 }
 
 double chi2_sf(double x, int k) {

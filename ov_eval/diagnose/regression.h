@@ -30,6 +30,11 @@ struct Design {
   /// independent clusters' (the lag-window estimator's equivalent degrees of freedom). 0: many clusters, χ²; at
   /// least 1 otherwise.
   double wald_df() const;
+  /// Columns on one regressor whose variance ratio (cluster-robust over per-row) is pooled: a column that reaches a
+  /// few clusters only (pooled_short, e.g. a time bin's offset: an eighth of the log) gets its per-row covariance
+  /// scaled by the ratio its first column (the whole log) shows, since its own cluster-robust variance rests on too
+  /// few clusters' scores (fit_cols). Empty: none.
+  std::vector<int> pooled_cols, pooled_short;
   double t_mid = 0; ///< centre of the drift term
   bool have_velocity = false, have_rate = false;
   /// Where each row lies, for the test of structure no candidate explains (unexplained.h); empty: not tested.
@@ -39,9 +44,10 @@ struct Design {
 
 struct Fit {
   Eigen::VectorXd beta;
-  Eigen::MatrixXd cov; ///< cluster-robust (sandwich) covariance of beta
-  double loss = 0;     ///< Huber loss of the rows the fit used
-  Eigen::VectorXd e;   ///< final residual r − X·beta
+  Eigen::MatrixXd cov;      ///< cluster-robust (sandwich) covariance of beta
+  Eigen::MatrixXd cov_rows; ///< the sandwich with every row its own cluster (heteroscedasticity only)
+  double loss = 0;          ///< Huber loss of the rows the fit used
+  Eigen::VectorXd e;        ///< final residual r − X·beta
 };
 
 double huber_rho(double e, double c);
