@@ -37,7 +37,7 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
      "ignore the calibration log: compare through the dataset's calibration only")
     ("out", po::value(&out_dir), "output folder (default: <log without extension>_diagnose beside the log)")
     ("min-sigma", po::value(&opt.min_sigma)->default_value(opt.min_sigma, "5"),
-     "significance a candidate needs [Gaussian sigma]")
+     "significance a candidate needs [Gaussian sigma of its Wald test, against F with the data's independent clusters]")
     ("min-explained", po::value(&opt.min_explained)->default_value(opt.min_explained, "0.02"),
      "share of the residual loss a candidate must remove (0..1)")
     ("logged-velocity", po::bool_switch(&opt.use_logged_velocity),
