@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <vector>
@@ -224,7 +225,9 @@ private:
 /// well, a noise-free 1 % focal error read 0.80 % (without, 1.04 %; docs/diagnose.md). Leaves the fitter with the
 /// perturbed data's depth corrections.
 void add_focal_response(const FrameMap &frames, const ov_core::CameraModel &cam, FlowFitter &fitter, FitMap &fits,
-                        const FitMap &fits_psi) {
+                        const FitMap &fits_psi,
+                        const std::function<Eigen::Vector3d(int64_t, const FrameFit &)> &omega_bar,
+                        const std::map<int64_t, Eigen::Vector3d> &omega_bar0) {
   const double kappa = 0.01, h = 1e-5;
   FrameMap perturbed = frames;
   for (auto &[t_cam, obs] : perturbed) {
@@ -242,8 +245,13 @@ void add_focal_response(const FrameMap &frames, const ov_core::CameraModel &cam,
   }
   FitMap fits_p, fits_psi_p;
   fitter.solve(perturbed, fits_p, fits_psi_p);
-  for (auto &[t_cam, f] : fits)
-    f.focal = fits_p.count(t_cam) ? ((fits_p.at(t_cam).sol - f.sol) / kappa).eval() : Vec9::Zero();
+  for (auto &[t_cam, f] : fits) {
+    const auto p = fits_p.find(t_cam);
+    f.focal = p != fits_p.end() ? ((p->second.sol - f.sol) / kappa).eval() : Vec9::Zero();
+    // ω̄_gyro moves too: it takes the fit's velocity and depths (GyroThroughImages).
+    if (p != fits_p.end())
+      f.focal.head<3>() -= (omega_bar(t_cam, p->second) - omega_bar0.at(t_cam)) / kappa;
+  }
 }
 
 /// Gyro reading at t (linear interpolation; clamped at the ends).
@@ -259,9 +267,12 @@ Eigen::Vector3d gyro_at(const std::vector<ov_core::ImuData> &imu, double t_ns) {
   return a.wm + u * (b.wm - a.wm);
 }
 
-/// ω̄_gyro: the gyro put through the images' whole estimator — every feature of an image rotated by the gyro's
-/// rotation to each image of its slope window (pure rotation, perspective included), the same slope, the same
-/// per-image fit with the same weights. The focal is compared with it: the slope of a quadratic through ±100 ms
+/// ω̄_gyro: the gyro put through the images' whole estimator — every feature of an image, at its corrected depth,
+/// moved by the gyro's rotation and the image's fitted velocity to each image of its slope window (perspective
+/// included), the same slope, the same per-image fit with the same weights. The translation is there because the
+/// slope's distortion of combined rotation and translation is not that of rotation alone: without it, true poses
+/// and noise-free tracks read a 0.16-0.20 % gyro scale on the agile flights (now 0.00 %; docs/diagnose.md,
+/// "Translation in ω̄"). The focal is compared with it: the slope of a quadratic through ±100 ms
 /// distorts fast rotation, and the raw gyro made V1_03's oracle run read a 3 % gyro "scale error" and a 0.9 % focal
 /// error; the gyro's rotation angle through the slope alone (no perspective) still left 0.46 % (docs/diagnose.md).
 /// Every ω row compares with it since session 30 (the time candidates had kept the raw gyro at the image's instant,
@@ -277,12 +288,17 @@ public:
     const Eigen::Index no = static_cast<Eigen::Index>(obs.size());
     const MatrixXd H = fitter.frame_design(obs, false);
     VectorXd y(2 * no);
+    const Eigen::Vector3d v = ff.sol.tail<3>(); // the camera's velocity over depth units, as the images show it
     for (Eigen::Index q = 0; q < no; ++q) {
       const FlowObs &o = obs[q];
       Eigen::Vector2d xdot = Eigen::Vector2d::Zero();
+      const double iz = o.inv_z + fitter.eps(o.track);
       for (int k = 0; k < o.n_win; ++k) {
         const Eigen::Matrix3d R_CjCq = R_BC.transpose() * R_BjBq(o.t_imu, o.win_t_imu[k]) * R_BC;
-        const Eigen::Vector3d b = R_CjCq.transpose() * o.x.homogeneous();
+        // The point at its corrected depth, seen from where the fitted velocity takes the camera by image k.
+        const Eigen::Vector3d P =
+            iz > 0 ? (o.x.homogeneous() / iz - 1e-9 * (o.win_t_imu[k] - o.t_imu) * v).eval() : o.x.homogeneous();
+        const Eigen::Vector3d b = R_CjCq.transpose() * P;
         xdot += o.win_w[k] * b.head<2>() / b.z();
       }
       y.segment<2>(2 * q) = xdot;
@@ -490,18 +506,27 @@ bool build_rate_design(const UsedData &data, const DiagnoseOptions &opt, const D
   const FlowData flow = collect_flow(data.tracks, rep);
   const Eigen::Matrix3d R_BC_nominal = opt.camera.T_BC.block<3, 3>(0, 0);
   const ov_core::CameraModel cam(opt.camera);
-  FlowFitter fitter(flow.n_tracks);
-  FitMap fits, fits_psi;
-  fitter.solve(flow.frames, fits, fits_psi);
-  add_focal_response(flow.frames, cam, fitter, fits, fits_psi);
-
   // The filter's calibration at each image, when the log has one (filter_calibration.h): the IMU through its
   // intrinsics, its camera-body rotation, its readout time and focal.
   const std::vector<ov_core::ImuData> imu_cal =
       opt.calibration.empty() ? std::vector<ov_core::ImuData>{} : imu_through_calibration(opt.imu, opt.calibration);
   const std::vector<ov_core::ImuData> &imu = opt.calibration.empty() ? opt.imu : imu_cal;
-  // ω̄_gyro's fit uses the fitter's depth corrections as add_focal_response left them (those of the perturbed data).
+  const auto R_BC_at = [&](int64_t t_cam) {
+    const CalibrationLogRow *cal = calibration_at(opt.calibration, t_cam);
+    return cal ? mat3(cal->R_BC) : R_BC_nominal;
+  };
+  FlowFitter fitter(flow.n_tracks);
+  FitMap fits, fits_psi;
+  fitter.solve(flow.frames, fits, fits_psi);
+  // ω̄_gyro (camera frame) with the fits and depth corrections of the data, then its response to a focal error.
   GyroThroughImages gyro_bar(imu);
+  const auto omega_bar = [&](int64_t t_cam, const FrameFit &ff) {
+    return gyro_bar.omega(flow.frames.at(t_cam), ff, fitter, R_BC_at(t_cam));
+  };
+  std::map<int64_t, Eigen::Vector3d> omega_bar0;
+  for (const auto &[t_cam, ff] : fits)
+    omega_bar0[t_cam] = omega_bar(t_cam, ff);
+  add_focal_response(flow.frames, cam, fitter, fits, fits_psi, omega_bar, omega_bar0);
   const GyroSlope gyro_slope(imu);
   const double interval_ns = image_interval_ns(flow.frames);
   std::vector<FrameRate> fr;
@@ -513,7 +538,7 @@ bool build_rate_design(const UsedData &data, const DiagnoseOptions &opt, const D
     };
     FrameRate f;
     f.t = 1e-9 * double(t_cam - data.t_first);
-    f.gyro_s = R_BC * gyro_bar.omega(flow.frames.at(t_cam), ff, fitter, R_BC);
+    f.gyro_s = R_BC * omega_bar0.at(t_cam);
     f.focal_e = R_BC * ff.focal.head<3>();
     // What the filter's focal estimate already takes of the focal column.
     f.e_s = R_BC * ff.sol.head<3>() - f.gyro_s - (cal ? focal_estimate(*cal, rep.fu, rep.fv) : 0.0) * f.focal_e;
