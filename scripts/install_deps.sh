@@ -5,8 +5,9 @@
 set -euo pipefail
 # librosbag-storage-dev + libsensor-msgs-dev: ROS 1 bags read and written without ROS (Debian's rosbag storage library);
 # libroscpp-core-dev (roscpp_serialization, rostime, cpp_common) and libconsole-bridge-dev are linked directly, so named.
+# libboost-dev: Boost.Math's headers (χ² and F distributions: the χ² gate, diagnose's Wald tests).
 # libdeflate-dev: the fast decoder of 8-bit gray PNGs (ov_core/io/png_gray.cpp; optional in CMake, cv::imread without).
-PKGS=(build-essential cmake ccache libeigen3-dev libopencv-dev libyaml-cpp-dev libboost-program-options-dev
+PKGS=(build-essential cmake ccache libeigen3-dev libopencv-dev libyaml-cpp-dev libboost-dev libboost-program-options-dev
       libgtest-dev python3 librosbag-storage-dev libsensor-msgs-dev libroscpp-core-dev libconsole-bridge-dev
       libdeflate-dev)
 for a in "$@"; do

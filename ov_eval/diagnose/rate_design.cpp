@@ -38,7 +38,6 @@ using FrameMap = std::map<int64_t, std::vector<FlowObs>>; ///< by camera time
 struct FlowData {
   FrameMap frames;
   size_t n_tracks = 0;
-  std::map<int64_t, double> frame_td; ///< the filter's t̂_d at each image
 };
 
 /// The observations of known depth with a neighbour on each side, per image, each with its image velocity: the local
@@ -71,7 +70,6 @@ FlowData collect_flow(const TrackMap &tracks, const DiagnoseReport &rep) {
       }
       o.t_imu = double(r->t_cam_ns) + 1e9 * r->td_s;
       fd.frames[r->t_cam_ns].push_back(o);
-      fd.frame_td[r->t_cam_ns] = r->td_s;
     }
     ++fd.n_tracks;
   }

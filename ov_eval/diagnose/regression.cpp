@@ -17,6 +17,13 @@ double huber_rho(double e, double c) {
   return a <= c ? 0.5 * e * e : c * a - 0.5 * c * c;
 }
 
+namespace {
+/// Newey-West's weight of scores l clusters apart with `lags` lags.
+double bartlett_weight(int l, int lags) {
+  return 1.0 - l / (lags + 1.0);
+}
+} // namespace
+
 // The scale is fixed (not re-estimated per fit) so that losses of different candidates compare. Scores are summed per
 // cluster: residuals of one track share the triangulated point (rate rows of one second share tracks) and are not
 // independent, so per-row standard errors would be too small.
@@ -61,17 +68,23 @@ Fit fit_huber(const MatrixXd &X, const VectorXd &r, const Design &d, double k, c
     // Clusters in time order whose scores still correlate a few clusters apart: Newey-West, Bartlett weights.
     for (int l = 1; l <= d.hac_lags && l < d.n_clusters; ++l) {
       const MatrixXd C = S.bottomRows(d.n_clusters - l).transpose() * S.topRows(d.n_clusters - l);
-      meat += (1.0 - l / (d.hac_lags + 1.0)) * (C + C.transpose());
+      meat += bartlett_weight(l, d.hac_lags) * (C + C.transpose());
     }
     f.cov = g * Ainv * meat * Ainv;
-    MatrixXd meat_rows = MatrixXd::Zero(p, p);
-    for (Eigen::Index i = 0; i < n; ++i)
-      if (w(i) > 0)
-        meat_rows.noalias() += std::pow(w(i) * f.e(i), 2) * X.row(i).transpose() * X.row(i);
-    f.cov_rows = Ainv * meat_rows * Ainv;
   }
+  f.w = w;
   return f;
 }
+
+namespace {
+/// The sandwich of a fit with every row its own cluster (heteroscedasticity only), at the fit's final weights.
+MatrixXd per_row_covariance(const MatrixXd &X, const Fit &f) {
+  const Eigen::Index p = X.cols();
+  const MatrixXd Ainv = (X.transpose() * f.w.asDiagonal() * X).ldlt().solve(MatrixXd::Identity(p, p));
+  const VectorXd u2 = f.w.cwiseProduct(f.e).cwiseAbs2();
+  return Ainv * (X.transpose() * u2.asDiagonal() * X) * Ainv;
+}
+} // namespace
 
 Fit fit_cols(const Design &d, const std::vector<int> &cols, double k, const std::vector<char> *mask) {
   MatrixXd X(d.r.size(), cols.size());
@@ -89,14 +102,15 @@ Fit fit_cols(const Design &d, const std::vector<int> &cols, double k, const std:
   if (!has_short || d.pooled_cols.empty() || at(d.pooled_cols.front()) >= p)
     return f;
   const Eigen::Index ref = at(d.pooled_cols.front());
-  const auto ratio = [&](Eigen::Index j) { return f.cov_rows(j, j) > 0 ? f.cov(j, j) / f.cov_rows(j, j) : 1.0; };
+  const MatrixXd cov_rows = per_row_covariance(X, f);
+  const auto ratio = [&](Eigen::Index j) { return cov_rows(j, j) > 0 ? f.cov(j, j) / cov_rows(j, j) : 1.0; };
   const double kappa = ratio(ref);
   VectorXd g(p);
   for (Eigen::Index j = 0; j < p; ++j) {
     const bool pooled = std::find(d.pooled_cols.begin(), d.pooled_cols.end(), cols[j]) != d.pooled_cols.end();
     g(j) = std::sqrt(std::max(0.0, pooled ? kappa : ratio(j)));
   }
-  f.cov = g.asDiagonal() * f.cov_rows * g.asDiagonal();
+  f.cov = g.asDiagonal() * cov_rows * g.asDiagonal();
   return f;
 }
 
@@ -134,7 +148,7 @@ double f_sf(double x, int k, double df) {
 double Design::wald_df() const {
   double sw2 = 0;
   for (int l = 1; l <= hac_lags; ++l)
-    sw2 += std::pow(1.0 - l / (hac_lags + 1.0), 2);
+    sw2 += std::pow(bartlett_weight(l, hac_lags), 2);
   const double g = n_clusters / (1 + 2 * sw2);
   // Beyond a thousand clusters F(k, G − 1) is χ²(k) / k; below two the covariance rests on one cluster's worth of
   // data, and F(k, 1) keeps anything from passing on it.

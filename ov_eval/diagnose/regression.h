@@ -44,10 +44,10 @@ struct Design {
 
 struct Fit {
   Eigen::VectorXd beta;
-  Eigen::MatrixXd cov;      ///< cluster-robust (sandwich) covariance of beta
-  Eigen::MatrixXd cov_rows; ///< the sandwich with every row its own cluster (heteroscedasticity only)
-  double loss = 0;          ///< Huber loss of the rows the fit used
-  Eigen::VectorXd e;        ///< final residual r − X·beta
+  Eigen::MatrixXd cov; ///< cluster-robust (sandwich) covariance of beta
+  Eigen::VectorXd w;   ///< the rows' final weights (Huber, 0 where masked out)
+  double loss = 0;     ///< Huber loss of the rows the fit used
+  Eigen::VectorXd e;   ///< final residual r − X·beta
 };
 
 double huber_rho(double e, double c);
