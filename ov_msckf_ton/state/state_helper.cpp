@@ -12,14 +12,14 @@ namespace state_helper {
 void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q) {
   const int n = s.dim();
   constexpr int I = ImuState::kSize;
-  const Eigen::Matrix<double, 15, 15> Pii = s.P.topLeftCorner<I, I>();
-  s.P.topLeftCorner<I, I>() = Phi * Pii * Phi.transpose() + Q;
+  const Eigen::Matrix<double, 15, 15> Pii = Phi * s.P.topLeftCorner<I, I>() * Phi.transpose() + Q;
+  // Only the IMU block is recomputed; the rest of P keeps its exact symmetry (its cross terms are mirrored).
+  s.P.topLeftCorner<I, I>() = 0.5 * (Pii + Pii.transpose());
   if (n > I) {
     const Eigen::MatrixXd Pix = Phi * s.P.topRightCorner(I, n - I);
     s.P.topRightCorner(I, n - I) = Pix;
     s.P.bottomLeftCorner(n - I, I) = Pix.transpose();
   }
-  s.P = 0.5 * (s.P + s.P.transpose());
 }
 
 void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q,
@@ -30,8 +30,7 @@ void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, co
       rows.leftCols(I) * Phi.transpose() + rows.middleCols(cal_index, 12) * Gamma.transpose() + Q;
   s.P.topRows(I) = rows;
   s.P.leftCols(I) = rows.transpose();
-  s.P.topLeftCorner<I, I>() = Pii;
-  s.P = 0.5 * (s.P + s.P.transpose());
+  s.P.topLeftCorner<I, I>() = 0.5 * (Pii + Pii.transpose());
 }
 
 void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w_B, const Eigen::Vector3d &v_W) {
@@ -109,6 +108,16 @@ double apply_update(State &s, const Eigen::MatrixXd &PHt, const Eigen::MatrixXd 
   return r.dot(Sinv_r);
 }
 
+bool is_upper_triangular(const Eigen::MatrixXd &H) {
+  if (H.rows() != H.cols())
+    return false;
+  for (Eigen::Index j = 0; j < H.cols(); ++j)
+    for (Eigen::Index i = j + 1; i < H.rows(); ++i)
+      if (H(i, j) != 0.0)
+        return false;
+  return true;
+}
+
 } // namespace
 
 double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, double sigma2) {
@@ -129,11 +138,21 @@ double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd 
       throw ov_core::UsageError("ekf_update: column " + std::to_string(cols[j]) + " outside the state");
     Pc.col(j) = s.P.col(cols[j]);
   }
-  const Eigen::MatrixXd PHt = Pc * Hc.transpose(); // n × m
+  // After the MSCKF's QR compression Hc is square and upper triangular: its products then cost half.
+  const bool upper = is_upper_triangular(Hc);
+  Eigen::MatrixXd PHt(n, Hc.rows()); // n × m
+  if (upper)
+    PHt.noalias() = Pc * Hc.transpose().triangularView<Eigen::Lower>();
+  else
+    PHt.noalias() = Pc * Hc.transpose();
   Eigen::MatrixXd PHt_c(nc, Hc.rows());
   for (int j = 0; j < nc; ++j)
     PHt_c.row(j) = PHt.row(cols[j]);
-  Eigen::MatrixXd S = Hc * PHt_c;
+  Eigen::MatrixXd S(Hc.rows(), Hc.rows());
+  if (upper)
+    S.noalias() = Hc.triangularView<Eigen::Upper>() * PHt_c;
+  else
+    S.noalias() = Hc * PHt_c;
   S.diagonal().array() += sigma2;
   return apply_update(s, PHt, S, r);
 }
