@@ -230,7 +230,9 @@ void TrackKLT::track_previous(int64_t t_cam_ns) {
       }
       flags = cv::OPTFLOW_USE_INITIAL_FLOW;
     }
-  cv::calcOpticalFlowPyrLK(pyr_prev_, pyr_curr_, pts_, pts_next_, status_, err_, win, opt_.pyr_levels, crit, flags);
+  // No error output: OpenCV then skips the extra pass over each window that only computes it (the status is the same).
+  cv::calcOpticalFlowPyrLK(pyr_prev_, pyr_curr_, pts_, pts_next_, status_, cv::noArray(), win, opt_.pyr_levels, crit,
+                           flags);
   keep_.assign(n, 1);
   // Tracks are dropped, not only detections avoided, within border_px of the edge: there the LK window hangs
   // outside the image and the solution drifts (measured: a point walked from v = 12 to v = 0.7 px over eight frames,
@@ -248,8 +250,8 @@ void TrackKLT::track_previous(int64_t t_cam_ns) {
   if (opt_.forward_backward) {
     // Track back from where the points landed, starting at their origin; a good track returns to it.
     pts_back_ = pts_;
-    cv::calcOpticalFlowPyrLK(pyr_curr_, pyr_prev_, pts_next_, pts_back_, status_back_, err_, win, opt_.pyr_levels, crit,
-                             cv::OPTFLOW_USE_INITIAL_FLOW);
+    cv::calcOpticalFlowPyrLK(pyr_curr_, pyr_prev_, pts_next_, pts_back_, status_back_, cv::noArray(), win,
+                             opt_.pyr_levels, crit, cv::OPTFLOW_USE_INITIAL_FLOW);
     const double max2 = opt_.fb_max_px * opt_.fb_max_px;
     for (size_t i = 0; i < n; ++i) {
       if (!keep_[i])

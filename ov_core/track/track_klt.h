@@ -140,7 +140,6 @@ private:
   std::vector<cv::Point2f> pts_next_, pts_back_, xy0f_, xy1f_;
   std::vector<Eigen::Vector2d> xy_next_;
   std::vector<unsigned char> status_, status_back_, keep_;
-  std::vector<float> err_;
   std::vector<cv::KeyPoint> keypoints_, cell_kp_;
   std::vector<int> cell_count_;
   cv::Mat mask_;
