@@ -81,12 +81,19 @@ OUT=$(realpath "$OUT")
 JOBS=${JOBS:-2}
 
 # ---- build OpenVINS's library (if missing) and the harness, outside the repository
+# OpenVINS's CMake finds Debian's ament_cmake, whose templates need the system Python's ament_package (a pyenv or
+# venv python3 first on PATH lacks it). The harness takes the library's own CXX flags: with Eigen in its interface,
+# a harness built for another instruction set than the library crashes (e.g. a -march=native library).
+PY_ARGS=()
+[ -x /usr/bin/python3 ] && PY_ARGS=(-DPython3_EXECUTABLE=/usr/bin/python3)
 if [ ! -f "$OV_ROOT/build/libov_msckf_lib.so" ]; then
   echo "building OpenVINS ov_msckf_lib in $OV_ROOT/build (tens of minutes)" >&2
-  cmake -S "$OV_ROOT/ov_msckf" -B "$OV_ROOT/build" -DENABLE_ROS=OFF -DCMAKE_BUILD_TYPE=Release >/dev/null
+  cmake -S "$OV_ROOT/ov_msckf" -B "$OV_ROOT/build" -DENABLE_ROS=OFF -DCMAKE_BUILD_TYPE=Release "${PY_ARGS[@]}" >/dev/null
   nice -n 10 make -C "$OV_ROOT/build" -j"$JOBS" ov_msckf_lib >/dev/null
 fi
-cmake -S "$HARNESS" -B "$BUILD/harness" -DOV_ROOT="$OV_ROOT" -DCMAKE_BUILD_TYPE=Release >/dev/null
+OV_CXX_FLAGS=$(sed -n 's/^CMAKE_CXX_FLAGS:STRING=//p' "$OV_ROOT/build/CMakeCache.txt" 2>/dev/null || true)
+cmake -S "$HARNESS" -B "$BUILD/harness" -DOV_ROOT="$OV_ROOT" -DCMAKE_BUILD_TYPE=Release "${PY_ARGS[@]}" \
+  -DCMAKE_CXX_FLAGS="$OV_CXX_FLAGS" >/dev/null
 nice -n 10 make -C "$BUILD/harness" -j"$JOBS" >/dev/null
 HB=$BUILD/harness/ov_euroc_harness
 if [ "$EXCHANGE" = 1 ]; then
