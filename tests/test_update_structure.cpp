@@ -65,46 +65,53 @@ TEST(UpdateStructure, ProjectedInnovationEqualsTheDenseProduct) {
 }
 
 TEST(UpdateStructure, ColumnEkfUpdateEqualsTheDenseUpdate) {
-  std::mt19937 rng(11);
-  std::normal_distribution<double> g(0, 1);
-  State dense(true);
-  // IMU 15 + t_d 1, then three clones (18) and two landmarks (6): 40 columns.
-  dense.P = random_spd(40, rng) * 1e-2;
-  for (int k = 0; k < 3; ++k) {
-    CloneState c;
-    c.t_cam_ns = k;
-    c.index = 16 + 6 * k;
-    dense.clones[k] = c;
+  // A general Jacobian, and the square upper-triangular one the MSCKF's QR compression leaves (ekf_update then forms
+  // its products with the triangle only): both against the update over the whole state and the textbook form.
+  for (const bool triangular : {false, true}) {
+    SCOPED_TRACE(triangular ? "upper-triangular Jacobian" : "general Jacobian");
+    std::mt19937 rng(11);
+    std::normal_distribution<double> g(0, 1);
+    State dense(true);
+    // IMU 15 + t_d 1, then three clones (18) and two landmarks (6): 40 columns.
+    dense.P = random_spd(40, rng) * 1e-2;
+    for (int k = 0; k < 3; ++k) {
+      CloneState c;
+      c.t_cam_ns = k;
+      c.index = 16 + 6 * k;
+      dense.clones[k] = c;
+    }
+    for (int k = 0; k < 2; ++k) {
+      LandmarkState l;
+      l.id = static_cast<size_t>(k);
+      l.index = 34 + 3 * k;
+      dense.landmarks[l.id] = l;
+    }
+    State sparse = dense;
+    const std::vector<int> cols = {15, 16, 17, 18, 19, 20, 21, 28, 29, 30, 31, 32, 33, 37, 38, 39};
+    const int nc = static_cast<int>(cols.size()), m = triangular ? nc : 9;
+    Eigen::MatrixXd Hc = Eigen::MatrixXd::NullaryExpr(m, nc, [&]() { return g(rng); });
+    if (triangular)
+      Hc = Hc.triangularView<Eigen::Upper>().toDenseMatrix();
+    const Eigen::VectorXd r = Eigen::VectorXd::NullaryExpr(m, [&]() { return 0.01 * g(rng); });
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, 40);
+    for (int j = 0; j < nc; ++j)
+      H.col(cols[j]) = Hc.col(j);
+    const Eigen::MatrixXd P0 = dense.P;
+    const double chi2_dense = state_helper::ekf_update(dense, H, r, 0.01);
+    const double chi2_sparse = state_helper::ekf_update(sparse, cols, Hc, r, 0.01);
+    EXPECT_NEAR(chi2_sparse, chi2_dense, 1e-10 * chi2_dense);
+    EXPECT_LT((sparse.P - dense.P).norm(), 1e-12 * P0.norm());
+    EXPECT_EQ((sparse.P - sparse.P.transpose()).norm(), 0.0); // mirrored, exactly symmetric
+    // Against the textbook form P − K S Kᵀ.
+    Eigen::MatrixXd S = H * P0 * H.transpose();
+    S.diagonal().array() += 0.01;
+    const Eigen::MatrixXd K = P0 * H.transpose() * S.inverse();
+    EXPECT_LT((sparse.P - (P0 - K * S * K.transpose())).norm(), 1e-10 * P0.norm());
+    EXPECT_NEAR(sparse.td, (K * r)(15), 1e-12);
+    EXPECT_LT((sparse.landmarks[1].p_W - (K * r).segment<3>(37)).norm(), 1e-12);
+    EXPECT_THROW(state_helper::ekf_update(sparse, {0, 99}, Eigen::MatrixXd::Zero(1, 2), Eigen::VectorXd::Zero(1), 1.0),
+                 ov_core::UsageError);
   }
-  for (int k = 0; k < 2; ++k) {
-    LandmarkState l;
-    l.id = static_cast<size_t>(k);
-    l.index = 34 + 3 * k;
-    dense.landmarks[l.id] = l;
-  }
-  State sparse = dense;
-  const std::vector<int> cols = {15, 16, 17, 18, 19, 20, 21, 28, 29, 30, 31, 32, 33, 37, 38, 39};
-  const int m = 9, nc = static_cast<int>(cols.size());
-  const Eigen::MatrixXd Hc = Eigen::MatrixXd::NullaryExpr(m, nc, [&]() { return g(rng); });
-  const Eigen::VectorXd r = Eigen::VectorXd::NullaryExpr(m, [&]() { return 0.01 * g(rng); });
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, 40);
-  for (int j = 0; j < nc; ++j)
-    H.col(cols[j]) = Hc.col(j);
-  const Eigen::MatrixXd P0 = dense.P;
-  const double chi2_dense = state_helper::ekf_update(dense, H, r, 0.01);
-  const double chi2_sparse = state_helper::ekf_update(sparse, cols, Hc, r, 0.01);
-  EXPECT_NEAR(chi2_sparse, chi2_dense, 1e-10 * chi2_dense);
-  EXPECT_LT((sparse.P - dense.P).norm(), 1e-12 * P0.norm());
-  EXPECT_EQ((sparse.P - sparse.P.transpose()).norm(), 0.0); // mirrored, exactly symmetric
-  // Against the textbook form P − K S Kᵀ.
-  Eigen::MatrixXd S = H * P0 * H.transpose();
-  S.diagonal().array() += 0.01;
-  const Eigen::MatrixXd K = P0 * H.transpose() * S.inverse();
-  EXPECT_LT((sparse.P - (P0 - K * S * K.transpose())).norm(), 1e-10 * P0.norm());
-  EXPECT_NEAR(sparse.td, (K * r)(15), 1e-12);
-  EXPECT_LT((sparse.landmarks[1].p_W - (K * r).segment<3>(37)).norm(), 1e-12);
-  EXPECT_THROW(state_helper::ekf_update(sparse, {0, 99}, Eigen::MatrixXd::Zero(1, 2), Eigen::VectorXd::Zero(1), 1.0),
-               ov_core::UsageError);
 }
 
 // Correlated track errors (update.track_correlation): the whitening turns the AR(1) covariance into the identity, and
