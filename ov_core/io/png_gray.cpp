@@ -36,6 +36,27 @@ Scratch &scratch() {
   return s;
 }
 
+/// One pixel of an Average (Paeth = false) or Paeth row: `a` the pixel to the left, `c` the one above that.
+template <bool Paeth>
+inline void unfilter_pixel(const uint8_t *in, const uint8_t *above, uint8_t *out, size_t i, int &a, int &c) {
+  const int b = above[i];
+  int pred;
+  if constexpr (Paeth) {
+    // Branch-free: the predictor's choice is data-dependent and unpredictable, and each pixel waits for the one
+    // before it, so a mispredicted branch costs the whole row's chain. Same choices as the specification's
+    // (ties to a, then b): c only when it is strictly closest.
+    const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
+    const int m = pa <= pb ? pa : pb;
+    pred = pa <= pb ? a : b;
+    pred = pc < m ? c : pred;
+  } else {
+    pred = (a + b) >> 1;
+  }
+  a = static_cast<uint8_t>(in[i] + pred);
+  out[i] = static_cast<uint8_t>(a);
+  c = b;
+}
+
 /// Undoes the PNG row filters for one byte per pixel; `prev` is the previous unfiltered row (zeros for the first).
 bool unfilter_row(int type, const uint8_t *in, const uint8_t *prev, uint8_t *out, int w) {
   switch (type) {
@@ -53,26 +74,15 @@ bool unfilter_row(int type, const uint8_t *in, const uint8_t *prev, uint8_t *out
       out[i] = static_cast<uint8_t>(in[i] + prev[i]);
     return true;
   case 3: {
-    int a = 0;
-    for (int i = 0; i < w; ++i)
-      out[i] = static_cast<uint8_t>(a = static_cast<uint8_t>(in[i] + ((a + prev[i]) >> 1)));
+    int a = 0, c = 0;
+    for (size_t i = 0; i < static_cast<size_t>(w); ++i)
+      unfilter_pixel<false>(in, prev, out, i, a, c);
     return true;
   }
   case 4: {
-    // Branch-free: the predictor's choice is data-dependent and unpredictable, and each pixel waits for the one
-    // before it, so a mispredicted branch costs the whole row's chain. Same choices as the specification's
-    // (ties to a, then b): c only when it is strictly closest.
     int a = 0, c = 0;
-    for (int i = 0; i < w; ++i) {
-      const int b = prev[i];
-      const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
-      const int m = pa <= pb ? pa : pb;
-      int pred = pa <= pb ? a : b;
-      pred = pc < m ? c : pred;
-      a = static_cast<uint8_t>(in[i] + pred);
-      out[i] = static_cast<uint8_t>(a);
-      c = b;
-    }
+    for (size_t i = 0; i < static_cast<size_t>(w); ++i)
+      unfilter_pixel<true>(in, prev, out, i, a, c);
     return true;
   }
   default:
@@ -80,33 +90,16 @@ bool unfilter_row(int type, const uint8_t *in, const uint8_t *prev, uint8_t *out
   }
 }
 
-/// One pixel of an Average (Paeth = false) or Paeth row: `a` the pixel to the left, `c` the one above that.
-template <bool Paeth>
-inline void unfilter_pixel(const uint8_t *in, const uint8_t *above, uint8_t *out, size_t i, int &a, int &c) {
-  const int b = above[i];
-  int pred;
-  if constexpr (Paeth) {
-    // As unfilter_row's case 4.
-    const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
-    const int m = pa <= pb ? pa : pb;
-    pred = pa <= pb ? a : b;
-    pred = pc < m ? c : pred;
-  } else {
-    pred = (a + b) >> 1;
-  }
-  a = static_cast<uint8_t>(in[i] + pred);
-  out[i] = static_cast<uint8_t>(a);
-  c = b;
-}
-
 /// Four consecutive Average/Paeth rows at once, each one pixel behind the row above it, which it needs up to its own
 /// column. Within a row every pixel waits for the one to its left (a chain of about seven cycles for Paeth); four
 /// independent chains keep the core busy instead of waiting. `in` and `in_stride` the filtered rows (after their
-/// filter-type byte), `above` the unfiltered row over the first, `out` four output rows of `w` (w >= 4) bytes.
+/// filter-type byte), `above` the unfiltered row over the first, `out` and `out_stride` four output rows of `w`
+/// (w >= 4) bytes.
 template <bool P0, bool P1, bool P2, bool P3>
-void unfilter_four_rows(const uint8_t *in, size_t in_stride, const uint8_t *above, uint8_t *out, size_t w) {
+void unfilter_four_rows(const uint8_t *in, size_t in_stride, const uint8_t *above, uint8_t *out, size_t out_stride,
+                        size_t w) {
   const uint8_t *i0 = in, *i1 = in + in_stride, *i2 = in + 2 * in_stride, *i3 = in + 3 * in_stride;
-  uint8_t *o0 = out, *o1 = out + w, *o2 = out + 2 * w, *o3 = out + 3 * w;
+  uint8_t *o0 = out, *o1 = out + out_stride, *o2 = out + 2 * out_stride, *o3 = out + 3 * out_stride;
   int a0 = 0, a1 = 0, a2 = 0, a3 = 0, c0 = 0, c1 = 0, c2 = 0, c3 = 0;
   unfilter_pixel<P0>(i0, above, o0, 0, a0, c0);
   unfilter_pixel<P0>(i0, above, o0, 1, a0, c0);
@@ -128,7 +121,7 @@ void unfilter_four_rows(const uint8_t *in, size_t in_stride, const uint8_t *abov
   unfilter_pixel<P3>(i3, o2, o3, w - 1, a3, c3);
 }
 
-using FourRows = void (*)(const uint8_t *, size_t, const uint8_t *, uint8_t *, size_t);
+using FourRows = void (*)(const uint8_t *, size_t, const uint8_t *, uint8_t *, size_t, size_t);
 
 /// The kernel for four rows' types (bit j set: row j is Paeth, clear: Average).
 template <size_t... K> constexpr std::array<FourRows, 16> four_row_kernels(std::index_sequence<K...>) {
@@ -215,7 +208,8 @@ bool decode_png_gray8(const uint8_t *data, size_t size, cv::Mat &out) {
       code |= (type == 4) << j;
     }
     if (four) {
-      kFourRows[static_cast<size_t>(code)](in + 1, stride, prev, out.ptr<uint8_t>(y), static_cast<size_t>(w));
+      kFourRows[static_cast<size_t>(code)](in + 1, stride, prev, out.ptr<uint8_t>(y), out.step[0],
+                                           static_cast<size_t>(w));
       y += 4;
       continue;
     }
