@@ -108,16 +108,6 @@ double apply_update(State &s, const Eigen::MatrixXd &PHt, const Eigen::MatrixXd 
   return r.dot(Sinv_r);
 }
 
-bool is_upper_triangular(const Eigen::MatrixXd &H) {
-  if (H.rows() != H.cols())
-    return false;
-  for (Eigen::Index j = 0; j < H.cols(); ++j)
-    for (Eigen::Index i = j + 1; i < H.rows(); ++i)
-      if (H(i, j) != 0.0)
-        return false;
-  return true;
-}
-
 } // namespace
 
 double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, double sigma2) {
@@ -139,7 +129,8 @@ double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd 
     Pc.col(j) = s.P.col(cols[j]);
   }
   // After the MSCKF's QR compression Hc is square and upper triangular: its products then cost half.
-  const bool upper = is_upper_triangular(Hc);
+  // (Eigen's test with precision 0: exact zeros below the diagonal.)
+  const bool upper = Hc.rows() == Hc.cols() && Hc.isUpperTriangular(0.0);
   Eigen::MatrixXd PHt(n, Hc.rows()); // n × m
   if (upper)
     PHt.noalias() = Pc * Hc.transpose().triangularView<Eigen::Lower>();
