@@ -1,7 +1,7 @@
 #include "ov_eval/plot.h"
+#include "ov_core/io/image_codecs.h"
 #include "ov_core/types/errors.h"
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -373,7 +373,7 @@ cv::Mat Plot::render() const {
 
 void Plot::save_png(const std::string &file) const {
   std::vector<uchar> bytes;
-  if (!cv::imencode(".png", render(), bytes))
+  if (!ov_core::encode_image(".png", render(), bytes))
     throw ov_core::DataError(file, "cannot encode the chart as PNG");
   std::ofstream out(file, std::ios::binary);
   if (!out)

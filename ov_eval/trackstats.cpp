@@ -1,4 +1,5 @@
 #include "ov_eval/trackstats.h"
+#include "ov_core/io/image_codecs.h"
 #include "ov_core/types/errors.h"
 #include "ov_eval/plot.h"
 
@@ -8,7 +9,6 @@
 #include <fstream>
 #include <functional>
 #include <numeric>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 #include <sstream>
@@ -209,7 +209,7 @@ TrackStatsResult track_statistics(const std::vector<std::pair<int64_t, std::stri
   return run(
       images.size(), [&](size_t i) { return images[i].first; },
       [&](size_t i) {
-        cv::Mat img = cv::imread(images[i].second, cv::IMREAD_GRAYSCALE);
+        cv::Mat img = ov_core::read_gray_image(images[i].second);
         if (img.empty())
           throw ov_core::DataError(images[i].second, "cannot read image");
         return img;
@@ -318,7 +318,8 @@ void save_trackstats_plot(const TrackStatsResult &r, const std::string &title, c
   cv::hconcat(p3.render(), p4.render(), bottom);
   cv::vconcat(top, bottom, all);
   std::vector<uchar> bytes;
-  cv::imencode(".png", all, bytes);
+  if (!ov_core::encode_image(".png", all, bytes))
+    throw ov_core::DataError(png_file, "cannot encode the chart as PNG");
   std::ofstream f(png_file, std::ios::binary);
   f.write(reinterpret_cast<const char *>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   if (!f)

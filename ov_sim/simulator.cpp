@@ -1,5 +1,6 @@
 #include "ov_sim/simulator.h"
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/image_codecs.h"
 #include "ov_core/io/trajectory_io.h"
 #include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
@@ -15,7 +16,6 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 
 namespace fs = std::filesystem;
 
@@ -349,7 +349,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     feat_out = open_out(mav0 / "cam0" / "features.csv");
     feat_out << "#timestamp_ns,feature_id,u,v\n";
   }
-  const std::vector<int> png_params = {cv::IMWRITE_PNG_COMPRESSION, 3};
+  const std::vector<int> png_params = {ov_core::png_compression_param(), 3};
   cv::Mat img;
   for (size_t k = 0; k < frames.size(); ++k) {
     const TimedImage &fr = frames[k];
@@ -374,7 +374,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
       rep.render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
       rep.render_cpu_seconds += thread_cpu_seconds() - c0;
       const fs::path file = mav0 / "cam0" / "data" / name;
-      if (!cv::imwrite(file.string(), img, png_params))
+      if (!ov_core::write_image(file.string(), img, png_params))
         throw ov_core::DataError(file.string(), "cannot write image");
     }
     if (feats) {

@@ -1,12 +1,12 @@
 #include "ov_sim/texture.h"
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/image_codecs.h"
 #include "ov_core/types/errors.h"
 #include "ov_sim/hash_noise.h"
 #include "ov_sim/random.h"
 
 #include <algorithm>
 #include <cmath>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 namespace ov_sim {
@@ -261,7 +261,7 @@ std::vector<cv::Mat> load_texture_crops(const std::string &euroc_dir, int count)
   const size_t take = std::min<size_t>(n, static_cast<size_t>(std::max(1, count)));
   for (size_t i = 0; i < take; ++i) {
     const std::string &file = d.images[i * n / take].path;
-    cv::Mat img = cv::imread(file, cv::IMREAD_GRAYSCALE);
+    cv::Mat img = ov_core::read_gray_image(file);
     if (img.empty())
       throw ov_core::DataError(file, "cannot read image");
     out.push_back(img);

@@ -4,6 +4,7 @@
 // (these or any features.csv, e.g. another system's) against the ground truth (ov_eval/track_truth.h).
 #include "ov_core/cam/camera_model.h"
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/image_store.h"
 #include "ov_core/track/track_klt.h"
 #include "ov_core/types/errors.h"
 #include "ov_eval/track_truth.h"
@@ -18,7 +19,6 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 
 namespace po = boost::program_options;
@@ -80,7 +80,7 @@ int ovton::cmd_track(const ovton::Args &args) {
     for (const auto &e : data.images) {
       if (max_images > 0 && n >= max_images)
         break;
-      const cv::Mat gray = cv::imread(e.path, cv::IMREAD_GRAYSCALE);
+      const cv::Mat gray = ov_core::load_image(e);
       if (gray.empty())
         throw ov_core::DataError(e.path, "unreadable image");
       const auto &tracked = tracker.track(e.t_cam_ns, gray);

@@ -2,8 +2,6 @@
 #include "ov_core/io/image_store.h"
 #include "ov_core/types/errors.h"
 
-#include <opencv2/imgcodecs.hpp>
-
 #include <string>
 
 namespace ov_core {

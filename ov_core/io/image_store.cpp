@@ -1,7 +1,5 @@
 #include "ov_core/io/image_store.h"
-#include "ov_core/io/png_gray.h"
-
-#include <opencv2/imgcodecs.hpp>
+#include "ov_core/io/image_codecs.h"
 
 namespace ov_core {
 
@@ -10,11 +8,7 @@ cv::Mat load_image(const ImageEntry &e) {
     return e.store->load(e);
   if (e.features)
     return cv::Mat();
-  // 8-bit gray PNGs (every EuRoC folder) through the fast decoder; any other file as OpenCV reads it.
-  cv::Mat img;
-  if (read_png_gray8(e.path, img))
-    return img;
-  return cv::imread(e.path, cv::IMREAD_GRAYSCALE);
+  return read_gray_image(e.path);
 }
 
 } // namespace ov_core
