@@ -1,4 +1,5 @@
 #include "ov_core/track/track_klt.h"
+#include "ov_core/track/lk_flow.h"
 #include "ov_core/types/errors.h"
 
 #include <opencv2/calib3d.hpp>
@@ -118,23 +119,6 @@ void TrackKLT::reset() {
   out_.clear();
 }
 
-namespace {
-
-/// A deep copy of `m` with the memory around it: the levels of cv::buildOpticalFlowPyramid are views into padded
-/// buffers, and Lucas-Kanade reads the padding near the border.
-cv::Mat clone_with_padding(const cv::Mat &m) {
-  if (m.empty())
-    return cv::Mat();
-  cv::Size whole;
-  cv::Point ofs;
-  m.locateROI(whole, ofs);
-  cv::Mat parent = m;
-  parent.adjustROI(ofs.y, whole.height - ofs.y - m.rows, ofs.x, whole.width - ofs.x - m.cols);
-  return parent.clone()(cv::Rect(ofs.x, ofs.y, m.cols, m.rows));
-}
-
-} // namespace
-
 std::unique_ptr<TrackKLT> TrackKLT::clone() const {
   auto c = std::make_unique<TrackKLT>(camera_, opt_);
   c->has_prev_ = has_prev_;
@@ -142,9 +126,8 @@ std::unique_ptr<TrackKLT> TrackKLT::clone() const {
   c->prior_ = prior_;
   c->next_id_ = next_id_;
   c->img_ = img_.clone();
-  // pyr_curr_ is rebuilt from the next image before it is read; the rest of the scratch is rewritten the same way.
-  for (const cv::Mat &m : pyr_prev_)
-    c->pyr_prev_.push_back(clone_with_padding(m));
+  // lk_curr_ is rebuilt from the next image before it is read; the rest of the scratch is rewritten the same way.
+  c->lk_prev_ = lk_prev_;
   c->ids_ = ids_;
   c->pts_ = pts_;
   c->xy_ = xy_;
@@ -183,9 +166,10 @@ const std::vector<TrackedFeature> &TrackKLT::track(int64_t t_cam_ns, const cv::M
   }
   stats_.t_equalize_ms = ms_since(t0);
 
-  // Built once per image: this frame's pyramid becomes the next frame's "previous" one.
+  // Built once per image, with its gradients: this frame's pyramid becomes the next frame's "previous" one.
   t0 = Clock::now();
-  cv::buildOpticalFlowPyramid(img_, pyr_curr_, cv::Size(opt_.win_size, opt_.win_size), opt_.pyr_levels);
+  cv::buildOpticalFlowPyramid(img_, pyr_, cv::Size(opt_.win_size, opt_.win_size), opt_.pyr_levels, false);
+  lk_curr_.build(pyr_, opt_.win_size);
   stats_.t_pyramid_ms = ms_since(t0);
 
   stats_.num_prev = static_cast<int>(ids_.size());
@@ -201,7 +185,7 @@ const std::vector<TrackedFeature> &TrackKLT::track(int64_t t_cam_ns, const cv::M
   }
   stats_.num_features = static_cast<int>(out_.size());
 
-  std::swap(pyr_prev_, pyr_curr_);
+  std::swap(lk_prev_, lk_curr_);
   has_prev_ = true;
   t_prev_ns_ = t_cam_ns;
   stats_.t_total_ms = ms_since(t_start);
@@ -211,11 +195,13 @@ const std::vector<TrackedFeature> &TrackKLT::track(int64_t t_cam_ns, const cv::M
 
 void TrackKLT::track_previous(int64_t t_cam_ns) {
   const size_t n = ids_.size();
-  const cv::Size win(opt_.win_size, opt_.win_size);
-  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, opt_.lk_max_iter, opt_.lk_eps);
+  LkParams lk;
+  lk.win = opt_.win_size;
+  lk.max_level = opt_.pyr_levels;
+  lk.max_iter = opt_.lk_max_iter;
+  lk.eps = opt_.lk_eps;
 
   auto t0 = Clock::now();
-  int flags = 0;
   if (opt_.gyro_prior && prior_)
     if (const auto R = prior_->camera_rotation(t_prev_ns_, t_cam_ns)) {
       // A point's undistorted bearing turned by the camera's rotation; one that leaves the image or turns behind
@@ -228,11 +214,9 @@ void TrackKLT::track_previous(int64_t t_cam_ns) {
             uv.allFinite() && uv.x() >= 0 && uv.y() >= 0 && uv.x() < camera_.width() && uv.y() < camera_.height();
         pts_next_[i] = inside ? cv::Point2f(static_cast<float>(uv.x()), static_cast<float>(uv.y())) : pts_[i];
       }
-      flags = cv::OPTFLOW_USE_INITIAL_FLOW;
+      lk.use_initial = true;
     }
-  // No error output: OpenCV then skips the extra pass over each window that only computes it (the status is the same).
-  cv::calcOpticalFlowPyrLK(pyr_prev_, pyr_curr_, pts_, pts_next_, status_, cv::noArray(), win, opt_.pyr_levels, crit,
-                           flags);
+  lk_flow(lk_prev_, lk_curr_, pts_, pts_next_, status_, lk);
   keep_.assign(n, 1);
   // Tracks are dropped, not only detections avoided, within border_px of the edge: there the LK window hangs
   // outside the image and the solution drifts (measured: a point walked from v = 12 to v = 0.7 px over eight frames,
@@ -250,8 +234,8 @@ void TrackKLT::track_previous(int64_t t_cam_ns) {
   if (opt_.forward_backward) {
     // Track back from where the points landed, starting at their origin; a good track returns to it.
     pts_back_ = pts_;
-    cv::calcOpticalFlowPyrLK(pyr_curr_, pyr_prev_, pts_next_, pts_back_, status_back_, cv::noArray(), win,
-                             opt_.pyr_levels, crit, cv::OPTFLOW_USE_INITIAL_FLOW);
+    lk.use_initial = true;
+    lk_flow(lk_curr_, lk_prev_, pts_next_, pts_back_, status_back_, lk);
     const double max2 = opt_.fb_max_px * opt_.fb_max_px;
     for (size_t i = 0; i < n; ++i) {
       if (!keep_[i])

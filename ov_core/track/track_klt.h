@@ -3,6 +3,7 @@
 // pyramids built once per image, RANSAC on the fundamental matrix in undistorted normalised coordinates.
 #include "ov_core/cam/camera_model.h"
 #include "ov_core/track/gyro_prior.h"
+#include "ov_core/track/lk_flow.h"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -129,7 +130,8 @@ private:
   size_t next_id_ = 0;
 
   cv::Mat img_;
-  std::vector<cv::Mat> pyr_prev_, pyr_curr_; // swapped each frame so the pyramid is built once per image
+  std::vector<cv::Mat> pyr_;    // OpenCV's 8-bit pyramid of the current image, from which lk_curr_ is made
+  LkPyramid lk_prev_, lk_curr_; // swapped each frame so the pyramid is built once per image
 
   // Per-feature state, parallel arrays in id order (older tracks first, which detection prefers to keep).
   std::vector<size_t> ids_;

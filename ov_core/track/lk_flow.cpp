@@ -1,0 +1,273 @@
+#include "ov_core/track/lk_flow.h"
+#include "ov_core/types/errors.h"
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstring>
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
+
+namespace ov_core {
+namespace {
+
+// Eight floats: GCC/clang vector extensions, compiled to one AVX register where the build has AVX2 (OVTON_AVX2) and to
+// two SSE registers otherwise. This file is built with FP contraction on (CMakeLists.txt), so a*b + c is one FMA.
+typedef float v8f __attribute__((vector_size(32)));
+typedef unsigned char v8u __attribute__((vector_size(8)));
+
+inline v8f load8(const float *p) {
+  v8f v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline void store8(float *p, v8f v) {
+  std::memcpy(p, &v, sizeof v);
+}
+inline v8f splat(float x) {
+  return v8f{x, x, x, x, x, x, x, x};
+}
+inline float hsum(v8f v) {
+  return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
+}
+
+/// Eight grey values as floats. (GCC turns __builtin_convertvector of bytes into eight scalar conversions.)
+inline v8f bytes_to_floats(const unsigned char *p) {
+#ifdef __AVX2__
+  v8f v;
+  const __m256 f = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i *>(p))));
+  std::memcpy(&v, &f, sizeof v);
+  return v;
+#else
+  v8u u;
+  std::memcpy(&u, p, sizeof u);
+  return __builtin_convertvector(u, v8f);
+#endif
+}
+
+/// Bilinear interpolation of 8 consecutive pixels starting at p (weights of the pixel, its right, lower and
+/// lower-right neighbours).
+inline v8f bilinear(const float *p, int stride, v8f w00, v8f w01, v8f w10, v8f w11) {
+  return w00 * load8(p) + w01 * load8(p + 1) + w10 * load8(p + stride) + w11 * load8(p + stride + 1);
+}
+
+// OpenCV's scale of the gradient sums (its A and b are in units of 2^-20 of raw Scharr values times grey levels x 32):
+// kept so that min_eig means what OpenCV's minEigThreshold means.
+constexpr float kFltScale = 1.f / (1 << 20);
+
+struct Weights {
+  v8f w00, w01, w10, w11;
+  explicit Weights(float a, float b)
+      : w00(splat((1.f - a) * (1.f - b))), w01(splat(a * (1.f - b))), w10(splat((1.f - a) * b)), w11(splat(a * b)) {}
+};
+
+/// The window of one point at one level of the first image: grey values and derivatives, `nv` vectors per row with
+/// the lanes beyond the window zero.
+struct Patch {
+  int win = 0, nv = 0;
+  std::vector<float> g, gx, gy;
+  void resize(int w) {
+    win = w;
+    nv = (w + 7) / 8;
+    const size_t n = static_cast<size_t>(win) * static_cast<size_t>(nv) * 8;
+    g.resize(n);
+    gx.resize(n);
+    gy.resize(n);
+  }
+};
+
+bool outside(int ix, int iy, int win, const LkPyramid::Level &l) {
+  return ix < -win || ix >= l.cols || iy < -win || iy >= l.rows;
+}
+
+void track_point(const LkPyramid &prev, const LkPyramid &next, const cv::Point2f &pt, cv::Point2f &next_pt,
+                 unsigned char &status, const LkParams &p, int max_level, int max_iter, double eps2, Patch &patch) {
+  const int win = p.win, nv = patch.nv;
+  const float half = (win - 1) * 0.5f;
+  v8f last_mask = splat(0.f);
+  for (int l = 0; l < 8; ++l)
+    last_mask[l] = (nv - 1) * 8 + l < win ? 1.f : 0.f;
+
+  for (int level = max_level; level >= 0; --level) {
+    const LkPyramid::Level &I = prev.level(level);
+    const LkPyramid::Level &J = next.level(level);
+    const float scale = static_cast<float>(1. / (1 << level));
+    cv::Point2f prev_pt = pt * scale;
+    cv::Point2f nxt = level == max_level ? (p.use_initial ? next_pt * scale : prev_pt) : next_pt * 2.f;
+    next_pt = nxt;
+
+    prev_pt -= cv::Point2f(half, half);
+    const int ix = static_cast<int>(std::floor(prev_pt.x)), iy = static_cast<int>(std::floor(prev_pt.y));
+    if (outside(ix, iy, win, I)) {
+      if (level == 0)
+        status = 0;
+      continue;
+    }
+    // The first image's window and its gradient matrix.
+    {
+      const Weights w(prev_pt.x - static_cast<float>(ix), prev_pt.y - static_cast<float>(iy));
+      v8f a11 = splat(0.f), a12 = splat(0.f), a22 = splat(0.f);
+      for (int y = 0; y < win; ++y) {
+        const float *src = I.at(I.img, ix, iy + y), *sx = I.at(I.dx, ix, iy + y), *sy = I.at(I.dy, ix, iy + y);
+        const size_t row = static_cast<size_t>(y) * static_cast<size_t>(nv) * 8;
+        for (int k = 0; k < nv; ++k) {
+          v8f g = bilinear(src + 8 * k, I.stride, w.w00, w.w01, w.w10, w.w11);
+          v8f gx = bilinear(sx + 8 * k, I.stride, w.w00, w.w01, w.w10, w.w11);
+          v8f gy = bilinear(sy + 8 * k, I.stride, w.w00, w.w01, w.w10, w.w11);
+          if (k == nv - 1) {
+            g *= last_mask;
+            gx *= last_mask;
+            gy *= last_mask;
+          }
+          store8(&patch.g[row + 8 * k], g);
+          store8(&patch.gx[row + 8 * k], gx);
+          store8(&patch.gy[row + 8 * k], gy);
+          a11 += gx * gx;
+          a12 += gx * gy;
+          a22 += gy * gy;
+        }
+      }
+      const float A11 = hsum(a11) * kFltScale, A12 = hsum(a12) * kFltScale, A22 = hsum(a22) * kFltScale;
+      float D = A11 * A22 - A12 * A12;
+      const float min_eig =
+          (A22 + A11 - std::sqrt((A11 - A22) * (A11 - A22) + 4.f * A12 * A12)) / static_cast<float>(2 * win * win);
+      if (!(min_eig >= p.min_eig) || D < FLT_EPSILON) {
+        if (level == 0)
+          status = 0;
+        continue;
+      }
+      D = 1.f / D;
+
+      // Gauss-Newton on the second image.
+      nxt -= cv::Point2f(half, half);
+      cv::Point2f prev_delta;
+      for (int j = 0; j < max_iter; ++j) {
+        const int jx = static_cast<int>(std::floor(nxt.x)), jy = static_cast<int>(std::floor(nxt.y));
+        if (outside(jx, jy, win, J)) {
+          if (level == 0)
+            status = 0;
+          break;
+        }
+        const Weights wj(nxt.x - static_cast<float>(jx), nxt.y - static_cast<float>(jy));
+        v8f b1v = splat(0.f), b2v = splat(0.f);
+        for (int y = 0; y < win; ++y) {
+          const float *src = J.at(J.img, jx, jy + y);
+          const size_t row = static_cast<size_t>(y) * static_cast<size_t>(nv) * 8;
+          for (int k = 0; k < nv; ++k) {
+            const v8f diff =
+                bilinear(src + 8 * k, J.stride, wj.w00, wj.w01, wj.w10, wj.w11) - load8(&patch.g[row + 8 * k]);
+            b1v += diff * load8(&patch.gx[row + 8 * k]);
+            b2v += diff * load8(&patch.gy[row + 8 * k]);
+          }
+        }
+        const float b1 = hsum(b1v) * (32.f * kFltScale), b2 = hsum(b2v) * (32.f * kFltScale);
+        const cv::Point2f delta((A12 * b2 - A22 * b1) * D, (A12 * b1 - A11 * b2) * D);
+        nxt += delta;
+        next_pt = nxt + cv::Point2f(half, half);
+        if (delta.ddot(delta) <= eps2)
+          break;
+        if (j > 0 && std::abs(delta.x + prev_delta.x) < 0.01f && std::abs(delta.y + prev_delta.y) < 0.01f) {
+          // Oscillating between two points: take the middle.
+          next_pt -= delta * 0.5f;
+          break;
+        }
+        prev_delta = delta;
+      }
+    }
+  }
+}
+
+} // namespace
+
+void LkPyramid::build(const std::vector<cv::Mat> &levels, int win) {
+  win_ = win;
+  levels_.resize(levels.size());
+  for (size_t li = 0; li < levels.size(); ++li) {
+    const cv::Mat &src = levels[li];
+    if (src.type() != CV_8UC1)
+      throw UsageError("LkPyramid: expected 8-bit single-channel pyramid levels (built without derivatives)");
+    cv::Size whole;
+    cv::Point ofs;
+    src.locateROI(whole, ofs);
+    if (ofs.x < win || ofs.y < win || ofs.x + src.cols + win > whole.width || ofs.y + src.rows + win > whole.height)
+      throw UsageError("LkPyramid: a pyramid level is not padded by the window (cv::buildOpticalFlowPyramid)");
+    Level &L = levels_[li];
+    // Left and top: the window may start `win` before the image. Right: a window starting on the last column reads
+    // whole vectors (up to 7 lanes more than the window) and one column more for the interpolation. Bottom: one row
+    // for the interpolation.
+    const int left = win, right = win + 16, top = win, bottom = win + 2;
+    const int stride = (src.cols + left + right + 7) / 8 * 8;
+    if (L.cols != src.cols || L.rows != src.rows || L.stride != stride || L.img.empty()) {
+      // A new layout: zeros everywhere. The derivatives' border and the lanes beyond the padded image are never
+      // written again, so the next images of the same size only overwrite the inside (no 5 MB clear per image).
+      L.cols = src.cols;
+      L.rows = src.rows;
+      L.stride = stride;
+      L.origin = top * L.stride + left;
+      const size_t size = static_cast<size_t>(L.rows + top + bottom) * static_cast<size_t>(L.stride);
+      for (auto *plane : {&L.img, &L.dx, &L.dy})
+        plane->assign(size, 0.f);
+    }
+    // Grey values over the padded level (the pyramid's own reflected border).
+    const ptrdiff_t step = static_cast<ptrdiff_t>(src.step[0]);
+    const int padded = L.cols + 2 * win;
+    for (int y = -win; y < L.rows + win; ++y) {
+      const unsigned char *s = src.data + y * step - win;
+      float *d = L.img.data() + L.origin + static_cast<ptrdiff_t>(y) * L.stride - win;
+      int x = 0;
+      for (; x + 8 <= padded; x += 8)
+        store8(d + x, bytes_to_floats(s + x));
+      for (; x < padded; ++x)
+        d[x] = s[x];
+    }
+    // Scharr derivatives inside the level (its border reflected, as the padding is); 0 outside, as OpenCV's.
+    const int st = L.stride;
+    for (int y = 0; y < L.rows; ++y) {
+      const float *r0 = L.at(L.img, 0, y - 1), *r1 = L.at(L.img, 0, y), *r2 = L.at(L.img, 0, y + 1);
+      float *dx = L.dx.data() + L.origin + static_cast<ptrdiff_t>(y) * st;
+      float *dy = L.dy.data() + L.origin + static_cast<ptrdiff_t>(y) * st;
+      const v8f three = splat(3.f), ten = splat(10.f);
+      for (int x = 0; x < L.cols; x += 8) {
+        const v8f smooth_l = three * (load8(r0 + x - 1) + load8(r2 + x - 1)) + ten * load8(r1 + x - 1);
+        const v8f smooth_r = three * (load8(r0 + x + 1) + load8(r2 + x + 1)) + ten * load8(r1 + x + 1);
+        const v8f diff_l = load8(r2 + x - 1) - load8(r0 + x - 1);
+        const v8f diff_c = load8(r2 + x) - load8(r0 + x);
+        const v8f diff_r = load8(r2 + x + 1) - load8(r0 + x + 1);
+        store8(dx + x, smooth_r - smooth_l);
+        store8(dy + x, three * (diff_l + diff_r) + ten * diff_c);
+      }
+      // The last vector may have written past the level's edge: that is border, 0.
+      std::fill(dx + L.cols, dx + L.cols + 8, 0.f);
+      std::fill(dy + L.cols, dy + L.cols + 8, 0.f);
+    }
+  }
+}
+
+void lk_flow(const LkPyramid &prev, const LkPyramid &next, const std::vector<cv::Point2f> &pts,
+             std::vector<cv::Point2f> &next_pts, std::vector<unsigned char> &status, const LkParams &p) {
+  const size_t n = pts.size();
+  if (p.use_initial && next_pts.size() != n)
+    throw UsageError("lk_flow: use_initial needs one starting point per point");
+  next_pts.resize(n);
+  status.assign(n, 1);
+  if (n == 0)
+    return;
+  if (prev.empty() || next.empty() || p.win < 3)
+    throw UsageError("lk_flow: empty pyramid or window below 3 px");
+  const int max_level = std::min(std::max(p.max_level, 0), std::min(prev.num_levels(), next.num_levels()) - 1);
+  for (int l = 0; l <= max_level; ++l)
+    if (prev.level(l).cols != next.level(l).cols || prev.level(l).rows != next.level(l).rows)
+      throw UsageError("lk_flow: the two pyramids differ in size");
+  const int max_iter = std::min(std::max(p.max_iter, 0), 100);
+  const double eps = std::min(std::max(p.eps, 0.), 10.);
+  cv::parallel_for_(cv::Range(0, static_cast<int>(n)), [&](const cv::Range &r) {
+    Patch patch;
+    patch.resize(p.win);
+    for (int i = r.start; i < r.end; ++i)
+      track_point(prev, next, pts[static_cast<size_t>(i)], next_pts[static_cast<size_t>(i)],
+                  status[static_cast<size_t>(i)], p, max_level, max_iter, eps * eps, patch);
+  });
+}
+
+} // namespace ov_core
