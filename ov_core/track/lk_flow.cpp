@@ -62,18 +62,66 @@ struct Weights {
       : w00(splat((1.f - a) * (1.f - b))), w01(splat(a * (1.f - b))), w10(splat((1.f - a) * b)), w11(splat(a * b)) {}
 };
 
+/// Scharr derivatives (OpenCV's calcSharrDeriv: [3 10 3] smoothing across, central difference along) of the 8
+/// pixels starting at row pointer r1 (r0, r2: the rows above and below, same column).
+inline void scharr8(const float *r0, const float *r1, const float *r2, v8f &dx, v8f &dy) {
+  const v8f three = splat(3.f), ten = splat(10.f);
+  const v8f smooth_l = three * (load8(r0 - 1) + load8(r2 - 1)) + ten * load8(r1 - 1);
+  const v8f smooth_r = three * (load8(r0 + 1) + load8(r2 + 1)) + ten * load8(r1 + 1);
+  dx = smooth_r - smooth_l;
+  dy = three * ((load8(r2 - 1) - load8(r0 - 1)) + (load8(r2 + 1) - load8(r0 + 1))) + ten * (load8(r2) - load8(r0));
+}
+
 /// The window of one point at one level of the first image: grey values and derivatives, `nv` vectors per row with
-/// the lanes beyond the window zero.
+/// the lanes beyond the window zero; and the scratch grid of derivatives at whole pixels they are interpolated from.
 struct Patch {
   int win = 0, nv = 0;
-  std::vector<float> g, gx, gy;
+  int ng = 0, gw = 0; ///< grid: vectors per row (the window and one column more), floats per row
+  std::vector<float> g, gx, gy, grid_x, grid_y;
   void resize(int w) {
     win = w;
     nv = (w + 7) / 8;
+    ng = (w + 1 + 7) / 8;
+    gw = ng * 8 + 8;
     const size_t n = static_cast<size_t>(win) * static_cast<size_t>(nv) * 8;
     g.resize(n);
     gx.resize(n);
     gy.resize(n);
+    // Lanes past the grid's last vector are read (as the right neighbour of masked lanes) but never written: zero.
+    grid_x.assign(static_cast<size_t>(win + 1) * static_cast<size_t>(gw), 0.f);
+    grid_y.assign(grid_x.size(), 0.f);
+  }
+
+  /// The derivatives at whole pixels (ix .. ix + 8 ng - 1, iy .. iy + win) of level I, 0 outside the level as
+  /// OpenCV's border. Computed here from the grey values rather than kept as planes for the whole pyramid: the
+  /// windows cover a fraction of the image, and two more planes of floats per image cost more memory traffic than
+  /// these few hundred vectors (measured, docs/benchmarks.md).
+  void derivative_grid(const LkPyramid::Level &I, int ix, int iy) {
+    for (int r = 0; r <= win; ++r) {
+      const int y = iy + r;
+      float *ox = &grid_x[static_cast<size_t>(r) * static_cast<size_t>(gw)];
+      float *oy = &grid_y[static_cast<size_t>(r) * static_cast<size_t>(gw)];
+      if (y < 0 || y >= I.rows) {
+        std::fill(ox, ox + 8 * ng, 0.f);
+        std::fill(oy, oy + 8 * ng, 0.f);
+        continue;
+      }
+      const float *r0 = I.at(I.img, ix, y - 1), *r1 = I.at(I.img, ix, y), *r2 = I.at(I.img, ix, y + 1);
+      for (int k = 0; k < ng; ++k) {
+        v8f dx, dy;
+        scharr8(r0 + 8 * k, r1 + 8 * k, r2 + 8 * k, dx, dy);
+        const int x0 = ix + 8 * k;
+        if (x0 < 0 || x0 + 8 > I.cols) {
+          v8f inside;
+          for (int l = 0; l < 8; ++l)
+            inside[l] = x0 + l >= 0 && x0 + l < I.cols ? 1.f : 0.f;
+          dx *= inside;
+          dy *= inside;
+        }
+        store8(ox + 8 * k, dx);
+        store8(oy + 8 * k, dy);
+      }
+    }
   }
 };
 
@@ -107,14 +155,17 @@ void track_point(const LkPyramid &prev, const LkPyramid &next, const cv::Point2f
     // The first image's window and its gradient matrix.
     {
       const Weights w(prev_pt.x - static_cast<float>(ix), prev_pt.y - static_cast<float>(iy));
+      patch.derivative_grid(I, ix, iy);
       v8f a11 = splat(0.f), a12 = splat(0.f), a22 = splat(0.f);
       for (int y = 0; y < win; ++y) {
-        const float *src = I.at(I.img, ix, iy + y), *sx = I.at(I.dx, ix, iy + y), *sy = I.at(I.dy, ix, iy + y);
+        const float *src = I.at(I.img, ix, iy + y);
+        const float *sx = &patch.grid_x[static_cast<size_t>(y) * static_cast<size_t>(patch.gw)];
+        const float *sy = &patch.grid_y[static_cast<size_t>(y) * static_cast<size_t>(patch.gw)];
         const size_t row = static_cast<size_t>(y) * static_cast<size_t>(nv) * 8;
         for (int k = 0; k < nv; ++k) {
           v8f g = bilinear(src + 8 * k, I.stride, w.w00, w.w01, w.w10, w.w11);
-          v8f gx = bilinear(sx + 8 * k, I.stride, w.w00, w.w01, w.w10, w.w11);
-          v8f gy = bilinear(sy + 8 * k, I.stride, w.w00, w.w01, w.w10, w.w11);
+          v8f gx = bilinear(sx + 8 * k, patch.gw, w.w00, w.w01, w.w10, w.w11);
+          v8f gy = bilinear(sy + 8 * k, patch.gw, w.w00, w.w01, w.w10, w.w11);
           if (k == nv - 1) {
             g *= last_mask;
             gx *= last_mask;
@@ -193,21 +244,20 @@ void LkPyramid::build(const std::vector<cv::Mat> &levels, int win) {
     if (ofs.x < win || ofs.y < win || ofs.x + src.cols + win > whole.width || ofs.y + src.rows + win > whole.height)
       throw UsageError("LkPyramid: a pyramid level is not padded by the window (cv::buildOpticalFlowPyramid)");
     Level &L = levels_[li];
-    // Left and top: the window may start `win` before the image. Right: a window starting on the last column reads
-    // whole vectors (up to 7 lanes more than the window) and one column more for the interpolation. Bottom: one row
-    // for the interpolation.
-    const int left = win, right = win + 16, top = win, bottom = win + 2;
+    // Left and top: the window may start `win` before the image, and its derivatives read one pixel more. Right: a
+    // window starting on the last column reads whole vectors (up to 7 lanes more than the window) and one column more
+    // for the interpolation. Bottom: one row for the interpolation and one for the derivatives.
+    const int left = win + 1, right = win + 16, top = win + 1, bottom = win + 2;
     const int stride = (src.cols + left + right + 7) / 8 * 8;
     if (L.cols != src.cols || L.rows != src.rows || L.stride != stride || L.img.empty()) {
-      // A new layout: zeros everywhere. The derivatives' border and the lanes beyond the padded image are never
-      // written again, so the next images of the same size only overwrite the inside (no 5 MB clear per image).
+      // A new layout: zeros everywhere. What lies beyond the padded image is never written again (it is read only
+      // into lanes and derivatives that are masked), so the next images of the same size overwrite the rest.
       L.cols = src.cols;
       L.rows = src.rows;
       L.stride = stride;
       L.origin = top * L.stride + left;
       const size_t size = static_cast<size_t>(L.rows + top + bottom) * static_cast<size_t>(L.stride);
-      for (auto *plane : {&L.img, &L.dx, &L.dy})
-        plane->assign(size, 0.f);
+      L.img.assign(size, 0.f);
     }
     // Grey values over the padded level (the pyramid's own reflected border).
     const ptrdiff_t step = static_cast<ptrdiff_t>(src.step[0]);
@@ -220,26 +270,6 @@ void LkPyramid::build(const std::vector<cv::Mat> &levels, int win) {
         store8(d + x, bytes_to_floats(s + x));
       for (; x < padded; ++x)
         d[x] = s[x];
-    }
-    // Scharr derivatives inside the level (its border reflected, as the padding is); 0 outside, as OpenCV's.
-    const int st = L.stride;
-    for (int y = 0; y < L.rows; ++y) {
-      const float *r0 = L.at(L.img, 0, y - 1), *r1 = L.at(L.img, 0, y), *r2 = L.at(L.img, 0, y + 1);
-      float *dx = L.dx.data() + L.origin + static_cast<ptrdiff_t>(y) * st;
-      float *dy = L.dy.data() + L.origin + static_cast<ptrdiff_t>(y) * st;
-      const v8f three = splat(3.f), ten = splat(10.f);
-      for (int x = 0; x < L.cols; x += 8) {
-        const v8f smooth_l = three * (load8(r0 + x - 1) + load8(r2 + x - 1)) + ten * load8(r1 + x - 1);
-        const v8f smooth_r = three * (load8(r0 + x + 1) + load8(r2 + x + 1)) + ten * load8(r1 + x + 1);
-        const v8f diff_l = load8(r2 + x - 1) - load8(r0 + x - 1);
-        const v8f diff_c = load8(r2 + x) - load8(r0 + x);
-        const v8f diff_r = load8(r2 + x + 1) - load8(r0 + x + 1);
-        store8(dx + x, smooth_r - smooth_l);
-        store8(dy + x, three * (diff_l + diff_r) + ten * diff_c);
-      }
-      // The last vector may have written past the level's edge: that is border, 0.
-      std::fill(dx + L.cols, dx + L.cols + 8, 0.f);
-      std::fill(dy + L.cols, dy + L.cols + 8, 0.f);
     }
   }
 }

@@ -4,18 +4,18 @@
 // copies of the pyramid. OpenCV walks a window row 8 pixels at a time in 16-bit fixed point and leaves the rest of
 // the row to scalar code: with the 21 px window 5 of every 21 columns, which made its LK 28-41 % of a run
 // (docs/benchmarks.md). Here each row is whole vectors of 8 floats (24 lanes for 21 px, the last three weighted 0),
-// and the gradients are computed once per image instead of once per call. It agrees with OpenCV to a few hundredths
-// of a pixel (test LkFlow.AgreesWithOpenCv): OpenCV rounds the window to 1/32 grey level and the bilinear weights to
-// 1/16384.
+// and the gradients are computed only where a window needs them. It agrees with OpenCV to 1e-4 px on real images
+// (test LkFlow.AgreesWithOpenCvOnRealFlightImages): OpenCV rounds the window to 1/32 grey level and the bilinear
+// weights to 1/16384.
 #include <opencv2/core.hpp>
 
 #include <vector>
 
 namespace ov_core {
 
-/// One image's pyramid as lk_flow reads it: per level the grey values and their Scharr derivatives (OpenCV's
-/// calcSharrDeriv: [3 10 3] smoothing, central difference, reflected at the image border, 0 outside it) as float
-/// planes with a border wide enough for any window that starts inside the level.
+/// One image's pyramid as lk_flow reads it: per level the grey values as a float plane with a border wide enough for
+/// any window that starts inside the level. (The Scharr derivatives of a window, OpenCV's calcSharrDeriv: [3 10 3]
+/// smoothing, central difference, reflected at the image border, 0 outside it, are computed per window.)
 class LkPyramid {
 public:
   /// From the levels of cv::buildOpticalFlowPyramid(img, levels, Size(win, win), max_level) built without
@@ -28,7 +28,7 @@ public:
     int cols = 0, rows = 0;
     int stride = 0; ///< floats from one row to the next
     int origin = 0; ///< index of pixel (0, 0) in the planes
-    std::vector<float> img, dx, dy;
+    std::vector<float> img;
     const float *at(const std::vector<float> &plane, int x, int y) const {
       return plane.data() + origin + static_cast<ptrdiff_t>(y) * stride + x;
     }
