@@ -2,7 +2,7 @@
 #include "ov_core/types/errors.h"
 
 #include <cctype>
-#include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -46,53 +46,68 @@ TextTableReader::TextTableReader(const std::string &file, char sep) : file_(file
     throw DataError(file, "cannot open for reading");
 }
 
-static std::string trim(const std::string &s) {
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos)
-    return {};
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
+static bool is_blank(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\n';
 }
 
 bool TextTableReader::next(std::vector<std::string> &fields) {
-  std::string raw;
+  // The line and the fields' strings are reused from row to row: an IMU log has tens of thousands of rows, and a
+  // fresh string per number (too long for the small-string buffer) was a measurable part of a short run.
+  std::string &raw = line_buf_;
   while (std::getline(in_, raw)) {
     ++line_;
     // A UTF-8 byte order mark (spreadsheet exports) is not part of the first field.
     if (line_ == 1 && raw.rfind(kUtf8Bom, 0) == 0)
       raw.erase(0, 3);
-    const std::string s = trim(raw);
-    if (s.empty())
+    size_t b = 0, e = raw.size();
+    while (b < e && is_blank(raw[b]))
+      ++b;
+    while (e > b && is_blank(raw[e - 1]))
+      --e;
+    if (b == e)
       continue;
     // '#' comments anywhere; a header line without '#' (e.g. "timestamp_ns,px,...") only before the first row.
-    if (s[0] == '#' || (!seen_data_ && std::isalpha(static_cast<unsigned char>(s[0])))) {
-      comments_.push_back(s);
+    if (raw[b] == '#' || (!seen_data_ && std::isalpha(static_cast<unsigned char>(raw[b])))) {
+      comments_.push_back(raw.substr(b, e - b));
       continue;
     }
     seen_data_ = true;
-    fields.clear();
+    size_t n = 0;
+    const auto put = [&](size_t from, size_t to) {
+      if (n == fields.size())
+        fields.emplace_back();
+      fields[n++].assign(raw, from, to - from);
+    };
     if (sep_ == ' ') {
-      size_t i = 0;
-      while (i < s.size()) {
-        while (i < s.size() && (s[i] == ' ' || s[i] == '\t'))
+      size_t i = b;
+      while (i < e) {
+        while (i < e && (raw[i] == ' ' || raw[i] == '\t'))
           ++i;
         size_t j = i;
-        while (j < s.size() && s[j] != ' ' && s[j] != '\t')
+        while (j < e && raw[j] != ' ' && raw[j] != '\t')
           ++j;
         if (j > i)
-          fields.push_back(s.substr(i, j - i));
+          put(i, j);
         i = j;
       }
     } else {
-      size_t start = 0;
+      size_t start = b;
       while (true) {
-        const size_t pos = s.find(sep_, start);
-        fields.push_back(trim(s.substr(start, pos == std::string::npos ? std::string::npos : pos - start)));
-        if (pos == std::string::npos)
+        const size_t pos = raw.find(sep_, start);
+        const size_t end = pos == std::string::npos || pos > e ? e : pos;
+        // Each field without the blanks around it.
+        size_t fb = start, fe = end;
+        while (fb < fe && is_blank(raw[fb]))
+          ++fb;
+        while (fe > fb && is_blank(raw[fe - 1]))
+          --fe;
+        put(fb, fe);
+        if (end == e)
           break;
-        start = pos + 1;
+        start = end + 1;
       }
     }
+    fields.resize(n);
     return true;
   }
   if (in_.bad())
@@ -107,21 +122,38 @@ void TextTableReader::fail(const std::string &msg) const {
 int64_t TextTableReader::to_int64(const std::string &field, const char *what) const {
   if (field.empty())
     fail(std::string("empty ") + what);
-  errno = 0;
-  char *end = nullptr;
-  const long long v = std::strtoll(field.c_str(), &end, 10);
-  if (*end != '\0' || errno == ERANGE)
+  // std::from_chars: no locale, no allocation; a leading '+' is accepted as strtoll did.
+  const char *first = field.data() + (field[0] == '+' && field.size() > 1 && field[1] != '-' ? 1 : 0);
+  const char *last = field.data() + field.size();
+  int64_t v = 0;
+  const auto [ptr, ec] = std::from_chars(first, last, v);
+  if (ec == std::errc::result_out_of_range)
     fail(std::string("bad ") + what + " '" + field + "' (expected an integer)");
-  return static_cast<int64_t>(v);
+  if (ec != std::errc() || ptr != last)
+    fail(std::string("bad ") + what + " '" + field + "' (expected an integer)");
+  return v;
 }
 
 double TextTableReader::to_double(const std::string &field, const char *what) const {
   if (field.empty())
     fail(std::string("empty ") + what);
-  char *end = nullptr;
-  const double v = std::strtod(field.c_str(), &end);
-  if (*end != '\0')
-    fail(std::string("bad ") + what + " '" + field + "' (expected a number)");
+  const char *first = field.data() + (field[0] == '+' && field.size() > 1 && field[1] != '-' ? 1 : 0);
+  const char *last = field.data() + field.size();
+  double v = 0;
+  const auto [ptr, ec] = std::from_chars(first, last, v);
+  // Out of range: strtod gave ±inf or a denormal/0 there; the first is non-finite (refused below), the second a
+  // number to keep.
+  if (ec == std::errc::result_out_of_range) {
+    char *end = nullptr;
+    v = std::strtod(field.c_str(), &end);
+  } else if (ec != std::errc() || ptr != last) {
+    // from_chars does not read what strtod also took: hexadecimal floats, "inf"/"nan" spelled otherwise. Those are
+    // either refused below or not numbers a dataset holds; anything else is not a number.
+    char *end = nullptr;
+    v = std::strtod(field.c_str(), &end);
+    if (*end != '\0')
+      fail(std::string("bad ") + what + " '" + field + "' (expected a number)");
+  }
   if (!std::isfinite(v))
     fail(std::string("non-finite ") + what + " '" + field + "'");
   return v;

@@ -32,6 +32,7 @@ private:
   std::string file_;
   char sep_;
   std::ifstream in_;
+  std::string line_buf_;
   long line_ = 0;
   bool seen_data_ = false;
   std::vector<std::string> comments_;
