@@ -44,14 +44,22 @@ struct Comparison {
   std::vector<double> dist;
 };
 
+/// OpenCV's pyramids of a and b and lk_flow's made from them.
+struct Pyramids {
+  std::vector<cv::Mat> pa, pb;
+  ov_core::LkPyramid la, lb;
+  Pyramids(const cv::Mat &a, const cv::Mat &b) {
+    cv::buildOpticalFlowPyramid(a, pa, cv::Size(kWin, kWin), kLevels, false);
+    cv::buildOpticalFlowPyramid(b, pb, cv::Size(kWin, kWin), kLevels, false);
+    la.build(pa, kWin);
+    lb.build(pb, kWin);
+  }
+};
+
 /// Tracks `pts` from a to b with both implementations (the same options) and compares their answers.
 Comparison compare(const cv::Mat &a, const cv::Mat &b, const std::vector<cv::Point2f> &pts) {
-  std::vector<cv::Mat> pa, pb;
-  cv::buildOpticalFlowPyramid(a, pa, cv::Size(kWin, kWin), kLevels, false);
-  cv::buildOpticalFlowPyramid(b, pb, cv::Size(kWin, kWin), kLevels, false);
-  ov_core::LkPyramid la, lb;
-  la.build(pa, kWin);
-  lb.build(pb, kWin);
+  const Pyramids py(a, b);
+  const auto &[pa, pb, la, lb] = py;
   ov_core::LkParams p;
   p.win = kWin;
   p.max_level = kLevels;
@@ -130,12 +138,8 @@ TEST(LkFlow, FindsAKnownSubPixelShiftAsOpenCvDoes) {
   EXPECT_EQ(c.both, pts.size());
   EXPECT_LT(quantile(c.dist, 0.99), 0.02);
 
-  std::vector<cv::Mat> pa, pb;
-  cv::buildOpticalFlowPyramid(a, pa, cv::Size(kWin, kWin), kLevels, false);
-  cv::buildOpticalFlowPyramid(b, pb, cv::Size(kWin, kWin), kLevels, false);
-  ov_core::LkPyramid la, lb;
-  la.build(pa, kWin);
-  lb.build(pb, kWin);
+  const Pyramids py(a, b);
+  const ov_core::LkPyramid &la = py.la, &lb = py.lb;
   std::vector<cv::Point2f> next;
   std::vector<unsigned char> status;
   ov_core::lk_flow(la, lb, pts, next, status, ov_core::LkParams{});
