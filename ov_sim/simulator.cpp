@@ -192,7 +192,7 @@ ov_core::ImuCalib declared_imu(const SimOptions &opt) {
   if (!declares_fitted_imu_noise(opt))
     return opt.imu;
   // A synthetic log holds the datasheet noise plus the model's coloured noise (add_imu_errors); a filter told only
-  // the datasheet is overconfident (docs/results.md, "Consistency on images"). A real EuRoC log (ADIS16448) is
+  // the datasheet is overconfident (docs/consistency_images.md). A real EuRoC log (ADIS16448) is
   // noisier than its datasheet as the model measured on it says: declaring the datasheet made semi-real runs
   // overconfident (NEES 58 / 108 on the real cut's span, APE 6 cm instead of 1).
   return fitted_imu_noise(opt.imu_from.empty() ? opt.imu_errors : euroc_v1_01_imu_errors(), opt.imu);

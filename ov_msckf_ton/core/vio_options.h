@@ -122,7 +122,8 @@ struct UpdateOptions {
   double chi2_multiplier = 1.0;  ///< scales the 95% chi-square gate
   int max_features = 80;         ///< per update
   /// Correlation of a track's pixel errors between consecutive observations (AR(1)); 0: independent. KLT's errors
-  /// are not: 0.77 between frames on a rendered V1_02 flight (docs/results.md), which the 1 px weight covers.
+  /// are not: 0.77 between frames on a rendered V1_02 flight (docs/consistency_images.md), which the 1 px weight
+  /// covers.
   double track_correlation = 0.0;
 };
 
