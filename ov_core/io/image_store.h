@@ -18,8 +18,8 @@ public:
   virtual cv::Mat load(const ImageEntry &e) const = 0;
 };
 
-/// 8-bit grayscale pixels of `e`: from its store, or read_gray_image of its path (empty when the file is unreadable: the
-/// caller names the file). Feature-level entries have no pixels (empty).
+/// 8-bit grayscale pixels of `e`: from its store, or read_gray_image of its path (empty when the file is unreadable:
+/// the caller names the file). Feature-level entries have no pixels (empty).
 cv::Mat load_image(const ImageEntry &e);
 
 } // namespace ov_core
