@@ -176,7 +176,11 @@ TEST(LkFlow, PointsOutsideTheImageAreLost) {
   EXPECT_LT(cv::norm(next[0] - pts[0]), 1e-3);
   EXPECT_FALSE(status[1]);
   EXPECT_FALSE(status[2]);
-  // A pyramid built without its padding is refused, not read out of bounds.
+  // A window larger than the pyramid's border, and a pyramid built without its padding, are refused, not read out
+  // of bounds.
+  ov_core::LkParams wide;
+  wide.win = kWin + 2;
+  EXPECT_THROW(ov_core::lk_flow(la, la, pts, next, status, wide), ov_core::UsageError);
   cv::Mat bare = a.clone();
   EXPECT_THROW(la.build({bare}, kWin), ov_core::UsageError);
 }

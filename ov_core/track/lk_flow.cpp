@@ -285,6 +285,8 @@ void lk_flow(const LkPyramid &prev, const LkPyramid &next, const std::vector<cv:
     return;
   if (prev.empty() || next.empty() || p.win < 3)
     throw UsageError("lk_flow: empty pyramid or window below 3 px");
+  if (p.win > prev.window() || p.win > next.window())
+    throw UsageError("lk_flow: window larger than the one the pyramids were built for");
   const int max_level = std::min(std::max(p.max_level, 0), std::min(prev.num_levels(), next.num_levels()) - 1);
   for (int l = 0; l <= max_level; ++l)
     if (prev.level(l).cols != next.level(l).cols || prev.level(l).rows != next.level(l).rows)

@@ -22,6 +22,8 @@ public:
   /// derivatives (views into buffers padded by `win` with BORDER_REFLECT_101, which the planes keep).
   void build(const std::vector<cv::Mat> &levels, int win);
   int num_levels() const { return static_cast<int>(levels_.size()); }
+  /// The window the planes' border was made for: lk_flow refuses a larger one (it would read past the border).
+  int window() const { return win_; }
   bool empty() const { return levels_.empty(); }
 
   struct Level {
