@@ -50,6 +50,14 @@ static bool is_blank(char c) {
   return c == ' ' || c == '\t' || c == '\r' || c == '\n';
 }
 
+/// Narrows [b, e) of s to leave out the blanks at either end.
+static void trim_range(const std::string &s, size_t &b, size_t &e) {
+  while (b < e && is_blank(s[b]))
+    ++b;
+  while (e > b && is_blank(s[e - 1]))
+    --e;
+}
+
 bool TextTableReader::next(std::vector<std::string> &fields) {
   // The line and the fields' strings are reused from row to row: an IMU log has tens of thousands of rows, and a
   // fresh string per number (too long for the small-string buffer) was a measurable part of a short run.
@@ -60,10 +68,7 @@ bool TextTableReader::next(std::vector<std::string> &fields) {
     if (line_ == 1 && raw.rfind(kUtf8Bom, 0) == 0)
       raw.erase(0, 3);
     size_t b = 0, e = raw.size();
-    while (b < e && is_blank(raw[b]))
-      ++b;
-    while (e > b && is_blank(raw[e - 1]))
-      --e;
+    trim_range(raw, b, e);
     if (b == e)
       continue;
     // '#' comments anywhere; a header line without '#' (e.g. "timestamp_ns,px,...") only before the first row.
@@ -95,12 +100,8 @@ bool TextTableReader::next(std::vector<std::string> &fields) {
       while (true) {
         const size_t pos = raw.find(sep_, start);
         const size_t end = pos == std::string::npos || pos > e ? e : pos;
-        // Each field without the blanks around it.
-        size_t fb = start, fe = end;
-        while (fb < fe && is_blank(raw[fb]))
-          ++fb;
-        while (fe > fb && is_blank(raw[fe - 1]))
-          --fe;
+        size_t fb = start, fe = end; // each field without the blanks around it
+        trim_range(raw, fb, fe);
         put(fb, fe);
         if (end == e)
           break;

@@ -77,10 +77,13 @@ inline void scharr8(const float *r0, const float *r1, const float *r2, v8f &dx, 
 struct Patch {
   int win = 0, nv = 0;
   int ng = 0, gw = 0; ///< grid: vectors per row (the window and one column more), floats per row
+  v8f last_mask{};    ///< 1 in the lanes of a row's last vector that lie in the window, 0 beyond
   std::vector<float> g, gx, gy, grid_x, grid_y;
   void resize(int w) {
     win = w;
     nv = (w + 7) / 8;
+    for (int l = 0; l < 8; ++l)
+      last_mask[l] = (nv - 1) * 8 + l < win ? 1.f : 0.f;
     ng = (w + 1 + 7) / 8;
     gw = ng * 8 + 8;
     const size_t n = static_cast<size_t>(win) * static_cast<size_t>(nv) * 8;
@@ -106,7 +109,7 @@ struct Patch {
         std::fill(oy, oy + 8 * ng, 0.f);
         continue;
       }
-      const float *r0 = I.at(I.img, ix, y - 1), *r1 = I.at(I.img, ix, y), *r2 = I.at(I.img, ix, y + 1);
+      const float *r0 = I.at(ix, y - 1), *r1 = I.at(ix, y), *r2 = I.at(ix, y + 1);
       for (int k = 0; k < ng; ++k) {
         v8f dx, dy;
         scharr8(r0 + 8 * k, r1 + 8 * k, r2 + 8 * k, dx, dy);
@@ -125,107 +128,109 @@ struct Patch {
   }
 };
 
+/// The gradient matrix of a window (OpenCV's A, in its units).
+struct Gradient {
+  float A11 = 0, A12 = 0, A22 = 0;
+};
+
+/// Fills `patch` with the first image's window whose top-left corner is at (x, y) of level I (sub-pixel) and returns
+/// its gradient matrix.
+Gradient extract_window(const LkPyramid::Level &I, float x, float y, Patch &patch) {
+  const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
+  const Weights w(x - static_cast<float>(ix), y - static_cast<float>(iy));
+  patch.derivative_grid(I, ix, iy);
+  const int nv = patch.nv;
+  v8f a11 = splat(0.f), a12 = splat(0.f), a22 = splat(0.f);
+  for (int r = 0; r < patch.win; ++r) {
+    const float *src = I.at(ix, iy + r);
+    const float *sx = &patch.grid_x[static_cast<size_t>(r) * static_cast<size_t>(patch.gw)];
+    const float *sy = &patch.grid_y[static_cast<size_t>(r) * static_cast<size_t>(patch.gw)];
+    const size_t row = static_cast<size_t>(r) * static_cast<size_t>(nv) * 8;
+    for (int k = 0; k < nv; ++k) {
+      v8f g = bilinear(src + 8 * k, I.stride, w.w00, w.w01, w.w10, w.w11);
+      v8f gx = bilinear(sx + 8 * k, patch.gw, w.w00, w.w01, w.w10, w.w11);
+      v8f gy = bilinear(sy + 8 * k, patch.gw, w.w00, w.w01, w.w10, w.w11);
+      if (k == nv - 1) {
+        g *= patch.last_mask;
+        gx *= patch.last_mask;
+        gy *= patch.last_mask;
+      }
+      store8(&patch.g[row + 8 * k], g);
+      store8(&patch.gx[row + 8 * k], gx);
+      store8(&patch.gy[row + 8 * k], gy);
+      a11 += gx * gx;
+      a12 += gx * gy;
+      a22 += gy * gy;
+    }
+  }
+  return {hsum(a11) * kFltScale, hsum(a12) * kFltScale, hsum(a22) * kFltScale};
+}
+
 bool outside(int ix, int iy, int win, const LkPyramid::Level &l) {
   return ix < -win || ix >= l.cols || iy < -win || iy >= l.rows;
 }
 
+/// Gauss-Newton on level J from the window's top-left corner `nxt`, with the window in `patch`, its gradient matrix
+/// `A` and D = 1 / det A; `next_pt` follows every step (the window's centre, `half` from its corner). False when the
+/// window leaves the level.
+bool gauss_newton(const LkPyramid::Level &J, const Patch &patch, const Gradient &A, float D, cv::Point2f nxt,
+                  float half, int max_iter, double eps2, cv::Point2f &next_pt) {
+  const int nv = patch.nv;
+  cv::Point2f prev_delta;
+  for (int j = 0; j < max_iter; ++j) {
+    const int jx = static_cast<int>(std::floor(nxt.x)), jy = static_cast<int>(std::floor(nxt.y));
+    if (outside(jx, jy, patch.win, J))
+      return false;
+    const Weights w(nxt.x - static_cast<float>(jx), nxt.y - static_cast<float>(jy));
+    v8f b1v = splat(0.f), b2v = splat(0.f);
+    for (int r = 0; r < patch.win; ++r) {
+      const float *src = J.at(jx, jy + r);
+      const size_t row = static_cast<size_t>(r) * static_cast<size_t>(nv) * 8;
+      for (int k = 0; k < nv; ++k) {
+        const v8f diff = bilinear(src + 8 * k, J.stride, w.w00, w.w01, w.w10, w.w11) - load8(&patch.g[row + 8 * k]);
+        b1v += diff * load8(&patch.gx[row + 8 * k]);
+        b2v += diff * load8(&patch.gy[row + 8 * k]);
+      }
+    }
+    const float b1 = hsum(b1v) * (32.f * kFltScale), b2 = hsum(b2v) * (32.f * kFltScale);
+    const cv::Point2f delta((A.A12 * b2 - A.A22 * b1) * D, (A.A12 * b1 - A.A11 * b2) * D);
+    nxt += delta;
+    next_pt = nxt + cv::Point2f(half, half);
+    if (delta.ddot(delta) <= eps2)
+      break;
+    if (j > 0 && std::abs(delta.x + prev_delta.x) < 0.01f && std::abs(delta.y + prev_delta.y) < 0.01f) {
+      // Oscillating between two points: take the middle.
+      next_pt -= delta * 0.5f;
+      break;
+    }
+    prev_delta = delta;
+  }
+  return true;
+}
+
 void track_point(const LkPyramid &prev, const LkPyramid &next, const cv::Point2f &pt, cv::Point2f &next_pt,
                  unsigned char &status, const LkParams &p, int max_level, int max_iter, double eps2, Patch &patch) {
-  const int win = p.win, nv = patch.nv;
+  const int win = p.win;
   const float half = (win - 1) * 0.5f;
-  v8f last_mask = splat(0.f);
-  for (int l = 0; l < 8; ++l)
-    last_mask[l] = (nv - 1) * 8 + l < win ? 1.f : 0.f;
-
   for (int level = max_level; level >= 0; --level) {
     const LkPyramid::Level &I = prev.level(level);
-    const LkPyramid::Level &J = next.level(level);
     const float scale = static_cast<float>(1. / (1 << level));
-    cv::Point2f prev_pt = pt * scale;
-    cv::Point2f nxt = level == max_level ? (p.use_initial ? next_pt * scale : prev_pt) : next_pt * 2.f;
+    const cv::Point2f prev_pt = pt * scale - cv::Point2f(half, half);
+    const cv::Point2f nxt = level == max_level ? (p.use_initial ? next_pt * scale : pt * scale) : next_pt * 2.f;
     next_pt = nxt;
-
-    prev_pt -= cv::Point2f(half, half);
-    const int ix = static_cast<int>(std::floor(prev_pt.x)), iy = static_cast<int>(std::floor(prev_pt.y));
-    if (outside(ix, iy, win, I)) {
-      if (level == 0)
-        status = 0;
-      continue;
+    // A point is lost only at the finest level; at a coarser one it goes on from where it is.
+    bool found = false;
+    if (!outside(static_cast<int>(std::floor(prev_pt.x)), static_cast<int>(std::floor(prev_pt.y)), win, I)) {
+      const Gradient A = extract_window(I, prev_pt.x, prev_pt.y, patch);
+      const float det = A.A11 * A.A22 - A.A12 * A.A12;
+      const float min_eig = (A.A22 + A.A11 - std::sqrt((A.A11 - A.A22) * (A.A11 - A.A22) + 4.f * A.A12 * A.A12)) /
+                            static_cast<float>(2 * win * win);
+      found = min_eig >= p.min_eig && det >= FLT_EPSILON &&
+              gauss_newton(next.level(level), patch, A, 1.f / det, nxt - cv::Point2f(half, half), half, max_iter, eps2,
+                           next_pt);
     }
-    // The first image's window and its gradient matrix.
-    {
-      const Weights w(prev_pt.x - static_cast<float>(ix), prev_pt.y - static_cast<float>(iy));
-      patch.derivative_grid(I, ix, iy);
-      v8f a11 = splat(0.f), a12 = splat(0.f), a22 = splat(0.f);
-      for (int y = 0; y < win; ++y) {
-        const float *src = I.at(I.img, ix, iy + y);
-        const float *sx = &patch.grid_x[static_cast<size_t>(y) * static_cast<size_t>(patch.gw)];
-        const float *sy = &patch.grid_y[static_cast<size_t>(y) * static_cast<size_t>(patch.gw)];
-        const size_t row = static_cast<size_t>(y) * static_cast<size_t>(nv) * 8;
-        for (int k = 0; k < nv; ++k) {
-          v8f g = bilinear(src + 8 * k, I.stride, w.w00, w.w01, w.w10, w.w11);
-          v8f gx = bilinear(sx + 8 * k, patch.gw, w.w00, w.w01, w.w10, w.w11);
-          v8f gy = bilinear(sy + 8 * k, patch.gw, w.w00, w.w01, w.w10, w.w11);
-          if (k == nv - 1) {
-            g *= last_mask;
-            gx *= last_mask;
-            gy *= last_mask;
-          }
-          store8(&patch.g[row + 8 * k], g);
-          store8(&patch.gx[row + 8 * k], gx);
-          store8(&patch.gy[row + 8 * k], gy);
-          a11 += gx * gx;
-          a12 += gx * gy;
-          a22 += gy * gy;
-        }
-      }
-      const float A11 = hsum(a11) * kFltScale, A12 = hsum(a12) * kFltScale, A22 = hsum(a22) * kFltScale;
-      float D = A11 * A22 - A12 * A12;
-      const float min_eig =
-          (A22 + A11 - std::sqrt((A11 - A22) * (A11 - A22) + 4.f * A12 * A12)) / static_cast<float>(2 * win * win);
-      if (!(min_eig >= p.min_eig) || D < FLT_EPSILON) {
-        if (level == 0)
-          status = 0;
-        continue;
-      }
-      D = 1.f / D;
-
-      // Gauss-Newton on the second image.
-      nxt -= cv::Point2f(half, half);
-      cv::Point2f prev_delta;
-      for (int j = 0; j < max_iter; ++j) {
-        const int jx = static_cast<int>(std::floor(nxt.x)), jy = static_cast<int>(std::floor(nxt.y));
-        if (outside(jx, jy, win, J)) {
-          if (level == 0)
-            status = 0;
-          break;
-        }
-        const Weights wj(nxt.x - static_cast<float>(jx), nxt.y - static_cast<float>(jy));
-        v8f b1v = splat(0.f), b2v = splat(0.f);
-        for (int y = 0; y < win; ++y) {
-          const float *src = J.at(J.img, jx, jy + y);
-          const size_t row = static_cast<size_t>(y) * static_cast<size_t>(nv) * 8;
-          for (int k = 0; k < nv; ++k) {
-            const v8f diff =
-                bilinear(src + 8 * k, J.stride, wj.w00, wj.w01, wj.w10, wj.w11) - load8(&patch.g[row + 8 * k]);
-            b1v += diff * load8(&patch.gx[row + 8 * k]);
-            b2v += diff * load8(&patch.gy[row + 8 * k]);
-          }
-        }
-        const float b1 = hsum(b1v) * (32.f * kFltScale), b2 = hsum(b2v) * (32.f * kFltScale);
-        const cv::Point2f delta((A12 * b2 - A22 * b1) * D, (A12 * b1 - A11 * b2) * D);
-        nxt += delta;
-        next_pt = nxt + cv::Point2f(half, half);
-        if (delta.ddot(delta) <= eps2)
-          break;
-        if (j > 0 && std::abs(delta.x + prev_delta.x) < 0.01f && std::abs(delta.y + prev_delta.y) < 0.01f) {
-          // Oscillating between two points: take the middle.
-          next_pt -= delta * 0.5f;
-          break;
-        }
-        prev_delta = delta;
-      }
-    }
+    if (!found && level == 0)
+      status = 0;
   }
 }
 
@@ -264,7 +269,7 @@ void LkPyramid::build(const std::vector<cv::Mat> &levels, int win) {
     const int padded = L.cols + 2 * win;
     for (int y = -win; y < L.rows + win; ++y) {
       const unsigned char *s = src.data + y * step - win;
-      float *d = L.img.data() + L.origin + static_cast<ptrdiff_t>(y) * L.stride - win;
+      float *d = L.at(-win, y);
       int x = 0;
       for (; x + 8 <= padded; x += 8)
         store8(d + x, bytes_to_floats(s + x));

@@ -29,11 +29,10 @@ public:
   struct Level {
     int cols = 0, rows = 0;
     int stride = 0; ///< floats from one row to the next
-    int origin = 0; ///< index of pixel (0, 0) in the planes
+    int origin = 0; ///< index of pixel (0, 0) in img
     std::vector<float> img;
-    const float *at(const std::vector<float> &plane, int x, int y) const {
-      return plane.data() + origin + static_cast<ptrdiff_t>(y) * stride + x;
-    }
+    const float *at(int x, int y) const { return img.data() + origin + static_cast<ptrdiff_t>(y) * stride + x; }
+    float *at(int x, int y) { return img.data() + origin + static_cast<ptrdiff_t>(y) * stride + x; }
   };
   const Level &level(int i) const { return levels_[static_cast<size_t>(i)]; }
 

@@ -166,7 +166,8 @@ const std::vector<TrackedFeature> &TrackKLT::track(int64_t t_cam_ns, const cv::M
   }
   stats_.t_equalize_ms = ms_since(t0);
 
-  // Built once per image, with its gradients: this frame's pyramid becomes the next frame's "previous" one.
+  // Built once per image (and copied to float planes for lk_flow): this frame's pyramid becomes the next frame's
+  // "previous" one.
   t0 = Clock::now();
   cv::buildOpticalFlowPyramid(img_, pyr_, cv::Size(opt_.win_size, opt_.win_size), opt_.pyr_levels, false);
   lk_curr_.build(pyr_, opt_.win_size);
