@@ -155,3 +155,101 @@ TEST(UpdateStructure, WhitenedTrackRowsHaveIndependentErrors) {
   // Without the whitening the same rows would be taken as independent: a different S (the test can fail).
   EXPECT_GT((UpdaterMSCKF::projected_innovation(lin, P, sigma2) - S_ref).norm(), 1e-3 * S_ref.norm());
 }
+
+// A separately reported covariance (State::P_report; update.covariance_track_correlation, slam.covariance_sigma_px):
+// the mean and P move as without it (the gain of P with the σ²I weight), P_report becomes the Joseph form of that
+// gain under the noise σ²I + ΔR; ekf_update's cov_noise without a reported covariance is refused.
+TEST(UpdateStructure, ReportedCovarianceIsTheJosephFormOfTheFiltersGain) {
+  std::mt19937 rng(17);
+  std::normal_distribution<double> g(0, 1);
+  State nominal(true);
+  nominal.P = random_spd(22, rng) * 1e-2; // IMU 15 + t_d 1 + one clone
+  CloneState c;
+  c.index = 16;
+  nominal.clones[0] = c;
+  State joseph = nominal;
+  joseph.P_report = random_spd(22, rng) * 2e-2; // a different reported covariance: its own recursion
+  const Eigen::MatrixXd Pr0 = joseph.P_report;
+  const std::vector<int> cols = {0, 1, 2, 15, 16, 17, 18, 19, 20, 21};
+  const int nc = static_cast<int>(cols.size()), m = 7;
+  const Eigen::MatrixXd Hc = Eigen::MatrixXd::NullaryExpr(m, nc, [&]() { return g(rng); });
+  const Eigen::VectorXd r = Eigen::VectorXd::NullaryExpr(m, [&]() { return 0.01 * g(rng); });
+  const Eigen::MatrixXd A = Eigen::MatrixXd::NullaryExpr(m, m, [&]() { return 0.1 * g(rng); });
+  const Eigen::MatrixXd dR = A * A.transpose();
+  const double sigma2 = 0.04;
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, 22);
+  for (int j = 0; j < nc; ++j)
+    H.col(cols[j]) = Hc.col(j);
+  const Eigen::MatrixXd P0 = nominal.P;
+  EXPECT_THROW(state_helper::ekf_update(nominal, cols, Hc, r, sigma2, &dR), ov_core::UsageError);
+  state_helper::ekf_update(nominal, cols, Hc, r, sigma2);
+  state_helper::ekf_update(joseph, cols, Hc, r, sigma2, &dR);
+  Eigen::MatrixXd S = H * P0 * H.transpose();
+  S.diagonal().array() += sigma2;
+  const Eigen::MatrixXd K = P0 * H.transpose() * S.inverse();
+  const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(22, 22) - K * H;
+  Eigen::MatrixXd R = dR;
+  R.diagonal().array() += sigma2;
+  const Eigen::MatrixXd Pr_ref = IKH * Pr0 * IKH.transpose() + K * R * K.transpose();
+  EXPECT_LT((joseph.P_report - Pr_ref).norm(), 1e-10 * Pr_ref.norm());
+  EXPECT_LT((joseph.P_report - joseph.P_report.transpose()).norm(), 1e-15 * Pr_ref.norm());
+  EXPECT_EQ(joseph.P, nominal.P); // the filter's own covariance, gain and mean are untouched
+  EXPECT_EQ(joseph.td, nominal.td);
+  EXPECT_EQ(joseph.imu.p, nominal.imu.p);
+  // Without ΔR and with P_report = P the Joseph form is the filter's own P⁺ (the optimal gain's).
+  State same = State(true);
+  same.P = P0;
+  same.clones[0] = c;
+  same.P_report = P0;
+  state_helper::ekf_update(same, cols, Hc, r, sigma2);
+  EXPECT_LT((same.P_report - same.P).norm(), 1e-10 * P0.norm());
+  const Eigen::MatrixXd wrong = Eigen::MatrixXd::Identity(m + 1, m + 1);
+  EXPECT_THROW(state_helper::ekf_update(joseph, cols, Hc, r, sigma2, &wrong), ov_core::UsageError);
+}
+
+// The projected rows' noise factor: B Bᵀ = Q₂ᵀ C Q₂ for the AR(1) correlation C, and it follows the rows through the
+// compression (Q₁ᵀ applied to H, r and B alike).
+TEST(UpdateStructure, ProjectedTrackNoiseFactorCarriesTheArOneCorrelation) {
+  std::mt19937 rng(23);
+  std::normal_distribution<double> g(0, 1);
+  const int m = 6, rows = 2 * m;
+  const double rho = 0.8;
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(rows, rows);
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j)
+      for (int c = 0; c < 2; ++c)
+        C(2 * i + c, 2 * j + c) = std::pow(rho, std::abs(i - j));
+  const Eigen::Matrix<double, Eigen::Dynamic, 3> H_f =
+      Eigen::Matrix<double, Eigen::Dynamic, 3>::NullaryExpr(rows, 3, [&]() { return g(rng); });
+  const UpdaterMSCKF::FeatureQR qr(H_f);
+  const Eigen::MatrixXd Q = qr.householderQ();
+  const Eigen::MatrixXd Q2 = Q.rightCols(rows - 3);
+  const Eigen::MatrixXd B = UpdaterMSCKF::projected_track_noise_factor(qr, rho);
+  EXPECT_LT((B * B.transpose() - Q2.transpose() * C * Q2).norm(), 1e-12 * C.norm());
+  EXPECT_LT((UpdaterMSCKF::projected_track_noise_factor(qr, 0.0) - Q2.transpose()).norm(), 1e-12);
+  EXPECT_THROW(UpdaterMSCKF::projected_track_noise_factor(qr, 1.0), ov_core::UsageError);
+
+  // Compression: H (9 × 4) to its triangle, with the thin Q₁ that carries a noise covariance along: the same H and
+  // r as without it, Q₁ᵀ H₀ = the triangle, orthonormal columns.
+  Eigen::MatrixXd H = Eigen::MatrixXd::NullaryExpr(rows - 3, 4, [&]() { return g(rng); });
+  Eigen::VectorXd r = Eigen::VectorXd::NullaryExpr(rows - 3, [&]() { return g(rng); });
+  const Eigen::MatrixXd H0 = H;
+  const Eigen::VectorXd r0 = r;
+  Eigen::MatrixXd Q1;
+  UpdaterMSCKF::compress(H, r, Q1);
+  Eigen::MatrixXd H_plain = H0;
+  Eigen::VectorXd r_plain = r0;
+  UpdaterMSCKF::compress(H_plain, r_plain);
+  EXPECT_EQ(H, H_plain);
+  EXPECT_EQ(r, r_plain);
+  ASSERT_EQ(Q1.rows(), rows - 3);
+  ASSERT_EQ(Q1.cols(), 4);
+  EXPECT_LT((Q1.transpose() * H0 - H).norm(), 1e-12 * H0.norm());
+  EXPECT_LT((Q1.transpose() * r0 - r).norm(), 1e-12 * r0.norm());
+  EXPECT_LT((Q1.transpose() * Q1 - Eigen::MatrixXd::Identity(4, 4)).norm(), 1e-12);
+  // Nothing to compress: Q₁ is the identity.
+  Eigen::MatrixXd Hs = H0.topRows(3);
+  Eigen::VectorXd rs = r0.head(3);
+  UpdaterMSCKF::compress(Hs, rs, Q1);
+  EXPECT_EQ(Q1, Eigen::MatrixXd::Identity(3, 3));
+}

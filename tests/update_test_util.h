@@ -140,6 +140,30 @@ inline void observe(const Scene &sc, ov_core::FeatureDatabase &db, double noise_
   }
 }
 
+/// As observe, with each point's pixel errors AR(1) over the images (e_k = ρ e_{k−1} + √(1 − ρ²) w_k, marginal σ
+/// noise_px, u and v apart): KLT's tracks drift this way.
+inline void observe_ar1(const Scene &sc, ov_core::FeatureDatabase &db, double noise_px, double rho, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, noise_px);
+  std::vector<Eigen::Vector2d> e(sc.points.size());
+  for (auto &ei : e)
+    ei = Eigen::Vector2d(n(rng), n(rng));
+  const double s = std::sqrt(1.0 - rho * rho);
+  bool first = true;
+  for (int64_t t : sc.stamps) {
+    const Pose P = sc.pose_at(sc.t_of(t) + sc.td_true);
+    for (size_t id = 0; id < sc.points.size(); ++id) {
+      if (!first)
+        e[id] = rho * e[id] + s * Eigen::Vector2d(n(rng), n(rng));
+      Eigen::Vector2d xy;
+      ASSERT_TRUE(sc.project(P, sc.points[id], xy));
+      const Eigen::Vector2d uv = sc.cam.distort(xy) + e[id];
+      db.add_observation(id, t, uv, sc.cam.undistort(uv));
+    }
+    first = false;
+  }
+}
+
 inline std::vector<const ov_core::Feature *> all_features(const ov_core::FeatureDatabase &db) {
   std::vector<const ov_core::Feature *> out;
   db.features_older_than(std::numeric_limits<int64_t>::max(), out);

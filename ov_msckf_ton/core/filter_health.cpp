@@ -69,6 +69,8 @@ std::string FilterHealth::nonfinite_part(const State &s) {
       return "cloned pose at camera time " + std::to_string(t) + " ns";
   if (!s.P.allFinite())
     return "covariance";
+  if (s.separate_report() && !s.P_report.allFinite())
+    return "reported covariance";
   // Rounding leaves tiny negative variances after long runs; a clearly negative one means the covariance is broken.
   for (int i = 0; i < s.dim(); ++i)
     if (s.P(i, i) < -1e-9)

@@ -39,6 +39,7 @@ UpdaterMSCKFOptions updater_options(const VioOptions &o) {
   u.min_parallax_deg = o.update.min_parallax_deg;
   u.max_features = o.update.max_features;
   u.track_correlation = o.update.track_correlation;
+  u.covariance_track_correlation = o.update.covariance_track_correlation;
   u.td_velocity_debias = o.td.velocity_debias;
   u.readout_state_velocity = o.calibration.readout_state_velocity;
   return u;
@@ -49,6 +50,7 @@ UpdaterSlamOptions slam_options(const VioOptions &o) {
   u.sigma_px = o.slam.sigma_px > 0 ? o.slam.sigma_px : o.update.sigma_px;
   u.chi2_multiplier = o.slam.chi2_multiplier;
   u.track_correlation = o.slam.track_correlation;
+  u.covariance_sigma_px = o.slam.covariance_sigma_px;
   u.state_velocity = o.slam.state_velocity;
   return u;
 }
@@ -288,6 +290,9 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
     td_model_->initialize(s);
   }
   add_calibration_variables();
+  // A track-error model for the reported covariance: from here on P_report follows P's gains (State::P_report).
+  if (opt_.update.covariance_track_correlation > 0 || opt_.slam.covariance_sigma_px > 0)
+    s.P_report = s.P;
   initialized_ = true;
   init_imu_.clear();
   return true;
@@ -574,13 +579,15 @@ ov_core::StateSample VioManager::snapshot() const {
   o.bg = s.imu.bg;
   o.ba = s.imu.ba;
   o.td_s = s.td;
-  o.td_sigma_s = s.td_sigma();
+  // The sigmas a user sees are the reported covariance's (the filter's own P unless a track-error model is set).
+  const Eigen::MatrixXd &P = s.reported_P();
+  o.td_sigma_s = s.estimates_td() ? std::sqrt(std::max(0.0, P(s.td_index, s.td_index))) : 0.0;
   o.has_velocity = true;
   o.has_td = true;
-  o.P_pose.topLeftCorner<3, 3>() = s.P.block<3, 3>(ImuState::kTheta, ImuState::kTheta);
-  o.P_pose.topRightCorner<3, 3>() = s.P.block<3, 3>(ImuState::kTheta, ImuState::kPos);
-  o.P_pose.bottomLeftCorner<3, 3>() = s.P.block<3, 3>(ImuState::kPos, ImuState::kTheta);
-  o.P_pose.bottomRightCorner<3, 3>() = s.P.block<3, 3>(ImuState::kPos, ImuState::kPos);
+  o.P_pose.topLeftCorner<3, 3>() = P.block<3, 3>(ImuState::kTheta, ImuState::kTheta);
+  o.P_pose.topRightCorner<3, 3>() = P.block<3, 3>(ImuState::kTheta, ImuState::kPos);
+  o.P_pose.bottomLeftCorner<3, 3>() = P.block<3, 3>(ImuState::kPos, ImuState::kTheta);
+  o.P_pose.bottomRightCorner<3, 3>() = P.block<3, 3>(ImuState::kPos, ImuState::kPos);
   o.has_pose_cov = true;
   return o;
 }

@@ -149,11 +149,13 @@ std::vector<Field> fields(VioOptions &o) {
       field(U, "chi2_multiplier", up.chi2_multiplier),
       field(U, "max_features", up.max_features),
       field(U, "track_correlation", up.track_correlation),
+      field(U, "covariance_track_correlation", up.covariance_track_correlation),
       field(L, "max_features", o.slam.max_features),
       field(L, "max_init_per_frame", o.slam.max_init_per_frame),
       field(L, "chi2_multiplier", o.slam.chi2_multiplier),
       field(L, "sigma_px", o.slam.sigma_px),
       field(L, "track_correlation", o.slam.track_correlation),
+      field(L, "covariance_sigma_px", o.slam.covariance_sigma_px),
       field(L, "state_velocity", o.slam.state_velocity),
       field(C, "extrinsics", cal.extrinsics),
       field(C, "sigma_ext_rot", cal.sigma_ext_rot),
@@ -279,6 +281,15 @@ void validate_vio_options(const VioOptions &o) {
   require(u.sigma_px > 0, "update.sigma_px must be > 0");
   require(u.chi2_multiplier > 0, "update.chi2_multiplier must be > 0");
   require(u.max_features >= 0, "update.max_features must be >= 0 (0 = no limit)");
+  require(u.covariance_track_correlation >= 0 && u.covariance_track_correlation < 1,
+          "update.covariance_track_correlation must lie in [0, 1)");
+  require((u.covariance_track_correlation == 0 && o.slam.covariance_sigma_px == 0) ||
+              (u.track_correlation == 0 && o.slam.track_correlation == 0),
+          "update.covariance_track_correlation and slam.covariance_sigma_px are for the independent weights: they "
+          "need update.track_correlation and slam.track_correlation 0");
+  require(o.slam.covariance_sigma_px == 0 ||
+              o.slam.covariance_sigma_px >= (o.slam.sigma_px > 0 ? o.slam.sigma_px : u.sigma_px),
+          "slam.covariance_sigma_px must be 0 (off) or at least the landmarks' sigma_px");
   require(o.slam.max_features >= 0 && o.slam.max_init_per_frame >= 0 && o.slam.chi2_multiplier > 0,
           "slam.max_features and slam.max_init_per_frame >= 0, slam.chi2_multiplier > 0");
   const auto &c = o.calibration;

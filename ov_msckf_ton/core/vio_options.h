@@ -125,6 +125,9 @@ struct UpdateOptions {
   /// are not: 0.77 between frames on a rendered V1_02 flight (docs/consistency_images.md), which the 1 px weight
   /// covers.
   double track_correlation = 0.0;
+  /// The AR(1) ρ of those errors in the covariance only: the gain keeps the independent sigma_px weight, the
+  /// covariance is that weight's error under correlated errors (UpdaterMSCKFOptions::covariance_track_correlation).
+  double covariance_track_correlation = 0.0;
 };
 
 /// SLAM features (update/updater_slam.h): features tracked through the whole window become landmarks in the state.
@@ -136,6 +139,9 @@ struct SlamOptions {
   /// Correlation of a landmark's pixel errors between consecutive images (AR(1)); 0: independent. A landmark is
   /// re-observed at every image, so a slowly wandering track error is otherwise counted again at each.
   double track_correlation = 0.0;
+  /// Pixel noise of a landmark's re-observations in the covariance only (UpdaterSlamOptions::covariance_sigma_px);
+  /// 0: off.
+  double covariance_sigma_px = 0.0;
   /// Image-plane modes: a landmark's t_d row uses the image velocity its state predicts, not the tracked backward
   /// difference that shares the row's pixel noise (UpdaterSlamOptions::state_velocity; docs/ton.md).
   bool state_velocity = true;

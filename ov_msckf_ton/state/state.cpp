@@ -12,23 +12,27 @@ State::State(bool estimate_td) {
 
 int State::add_variable(const Eigen::MatrixXd &prior) {
   const int n = dim(), k = static_cast<int>(prior.rows());
-  Eigen::MatrixXd Pn = Eigen::MatrixXd::Zero(n + k, n + k);
-  Pn.topLeftCorner(n, n) = P;
-  Pn.bottomRightCorner(k, k) = prior;
-  P = std::move(Pn);
+  for_each_covariance([&](Eigen::MatrixXd &C) {
+    Eigen::MatrixXd Pn = Eigen::MatrixXd::Zero(n + k, n + k);
+    Pn.topLeftCorner(n, n) = C;
+    Pn.bottomRightCorner(k, k) = prior;
+    C = std::move(Pn);
+  });
   return n;
 }
 
 void State::remove_block(int idx, int size) {
   const int n = dim(), m = n - size;
   // Keep [0, idx) and [idx + size, n): four contiguous blocks, no index lists.
-  Eigen::MatrixXd Pn(m, m);
   const int tail = n - idx - size;
-  Pn.topLeftCorner(idx, idx) = P.topLeftCorner(idx, idx);
-  Pn.topRightCorner(idx, tail) = P.topRightCorner(idx, tail);
-  Pn.bottomLeftCorner(tail, idx) = P.bottomLeftCorner(tail, idx);
-  Pn.bottomRightCorner(tail, tail) = P.bottomRightCorner(tail, tail);
-  P = std::move(Pn);
+  for_each_covariance([&](Eigen::MatrixXd &C) {
+    Eigen::MatrixXd Pn(m, m);
+    Pn.topLeftCorner(idx, idx) = C.topLeftCorner(idx, idx);
+    Pn.topRightCorner(idx, tail) = C.topRightCorner(idx, tail);
+    Pn.bottomLeftCorner(tail, idx) = C.bottomLeftCorner(tail, idx);
+    Pn.bottomRightCorner(tail, tail) = C.bottomRightCorner(tail, tail);
+    C = std::move(Pn);
+  });
   const auto shift = [&](int &i) {
     if (i > idx)
       i -= size;

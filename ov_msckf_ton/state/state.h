@@ -123,8 +123,22 @@ public:
   std::map<size_t, LandmarkState> landmarks; ///< by feature id
   CalibState calib;
   Eigen::MatrixXd P;
+  /// The covariance the run reports (trajectory sigmas, NEES) when the filter's weights are not its error model:
+  /// the error covariance of the filter's own gains under a model of the track errors (update.
+  /// covariance_track_correlation, slam.covariance_sigma_px). The gains and gates use P; every operation on P
+  /// applies to P_report alike (the same Φ, Q, cloning, marginalisation), the updates with the Joseph form of P's
+  /// gain under the model's noise (state_helper::ekf_update). Empty: P is both.
+  Eigen::MatrixXd P_report;
 
   int dim() const { return static_cast<int>(P.rows()); }
+  bool separate_report() const { return P_report.size() != 0; }
+  const Eigen::MatrixXd &reported_P() const { return separate_report() ? P_report : P; }
+  /// P, then P_report when it is kept: for the operations that act on both alike.
+  template <class F> void for_each_covariance(F &&f) {
+    f(P);
+    if (separate_report())
+      f(P_report);
+  }
   bool estimates_td() const { return td_index >= 0; }
   double td_sigma() const { return estimates_td() ? std::sqrt(std::max(0.0, P(td_index, td_index))) : 0.0; }
   double td_variance() const { return estimates_td() ? P(td_index, td_index) : 0.0; }

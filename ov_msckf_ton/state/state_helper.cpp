@@ -12,25 +12,29 @@ namespace state_helper {
 void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q) {
   const int n = s.dim();
   constexpr int I = ImuState::kSize;
-  const Eigen::Matrix<double, 15, 15> Pii = Phi * s.P.topLeftCorner<I, I>() * Phi.transpose() + Q;
-  // Only the IMU block is recomputed; the rest of P keeps its exact symmetry (its cross terms are mirrored).
-  s.P.topLeftCorner<I, I>() = 0.5 * (Pii + Pii.transpose());
-  if (n > I) {
-    const Eigen::MatrixXd Pix = Phi * s.P.topRightCorner(I, n - I);
-    s.P.topRightCorner(I, n - I) = Pix;
-    s.P.bottomLeftCorner(n - I, I) = Pix.transpose();
-  }
+  s.for_each_covariance([&](Eigen::MatrixXd &P) {
+    const Eigen::Matrix<double, 15, 15> Pii = Phi * P.topLeftCorner<I, I>() * Phi.transpose() + Q;
+    // Only the IMU block is recomputed; the rest of P keeps its exact symmetry (its cross terms are mirrored).
+    P.topLeftCorner<I, I>() = 0.5 * (Pii + Pii.transpose());
+    if (n > I) {
+      const Eigen::MatrixXd Pix = Phi * P.topRightCorner(I, n - I);
+      P.topRightCorner(I, n - I) = Pix;
+      P.bottomLeftCorner(n - I, I) = Pix.transpose();
+    }
+  });
 }
 
 void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q,
                           const Eigen::Matrix<double, 15, 12> &Gamma, int cal_index) {
   constexpr int I = ImuState::kSize;
-  const Eigen::MatrixXd rows = Phi * s.P.topRows(I) + Gamma * s.P.middleRows(cal_index, 12); // A·P, 15 x n
-  const Eigen::Matrix<double, 15, 15> Pii =
-      rows.leftCols(I) * Phi.transpose() + rows.middleCols(cal_index, 12) * Gamma.transpose() + Q;
-  s.P.topRows(I) = rows;
-  s.P.leftCols(I) = rows.transpose();
-  s.P.topLeftCorner<I, I>() = 0.5 * (Pii + Pii.transpose());
+  s.for_each_covariance([&](Eigen::MatrixXd &P) {
+    const Eigen::MatrixXd rows = Phi * P.topRows(I) + Gamma * P.middleRows(cal_index, 12); // A·P, 15 x n
+    const Eigen::Matrix<double, 15, 15> Pii =
+        rows.leftCols(I) * Phi.transpose() + rows.middleCols(cal_index, 12) * Gamma.transpose() + Q;
+    P.topRows(I) = rows;
+    P.leftCols(I) = rows.transpose();
+    P.topLeftCorner<I, I>() = 0.5 * (Pii + Pii.transpose());
+  });
 }
 
 void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w_B, const Eigen::Vector3d &v_W) {
@@ -45,13 +49,15 @@ void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w
     J.block<3, 1>(0, s.td_index) = s.imu.R * w_B; // world-frame rotation error: R(t+δ) = Exp(R ω δ) R(t)
     J.block<3, 1>(3, s.td_index) = v_W;
   }
-  const Eigen::MatrixXd PJt = s.P * J.transpose();
-  Eigen::MatrixXd Pn(n + 6, n + 6);
-  Pn.topLeftCorner(n, n) = s.P;
-  Pn.topRightCorner(n, 6) = PJt;
-  Pn.bottomLeftCorner(6, n) = PJt.transpose();
-  Pn.bottomRightCorner(6, 6) = J * PJt;
-  s.P = 0.5 * (Pn + Pn.transpose());
+  s.for_each_covariance([&](Eigen::MatrixXd &P) {
+    const Eigen::MatrixXd PJt = P * J.transpose();
+    Eigen::MatrixXd Pn(n + 6, n + 6);
+    Pn.topLeftCorner(n, n) = P;
+    Pn.topRightCorner(n, 6) = PJt;
+    Pn.bottomLeftCorner(6, n) = PJt.transpose();
+    Pn.bottomRightCorner(6, 6) = J * PJt;
+    P = 0.5 * (Pn + Pn.transpose());
+  });
 
   CloneState c;
   c.t_cam_ns = t_cam_ns;
@@ -88,10 +94,21 @@ void marginalize_landmark(State &s, size_t id) {
 
 namespace {
 
+/// Copies the lower triangle onto the upper: the updates write the lower one only.
+void mirror_lower(Eigen::MatrixXd &P) {
+  const Eigen::Index n = P.rows();
+  for (Eigen::Index j = 1; j < n; ++j)
+    for (Eigen::Index i = 0; i < j; ++i)
+      P(i, j) = P(j, i);
+}
+
 /// The update once PHᵀ (n × m) and S = H P Hᵀ + σ²I (m × m) are known. P − K S Kᵀ = P − W Wᵀ with W = PHᵀ L⁻ᵀ
 /// (S = L Lᵀ): one symmetric rank-m downdate of the lower triangle, mirrored, so P stays exactly symmetric
-/// without forming K or a second n × n temporary.
-double apply_update(State &s, const Eigen::MatrixXd &PHt, const Eigen::MatrixXd &S, const Eigen::VectorXd &r) {
+/// without forming K or a second n × n temporary. The reported covariance, where kept, takes the Joseph form of the
+/// same gain K under the noise σ²I + cov_noise: (I − KH)P_r(I − KH)ᵀ + K(σ²I + ΔR)Kᵀ.
+double apply_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, const Eigen::MatrixXd &PHt,
+                    const Eigen::MatrixXd &S, const Eigen::VectorXd &r, double sigma2,
+                    const Eigen::MatrixXd *cov_noise) {
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success)
     throw ov_core::UsageError("innovation covariance is not positive definite");
@@ -100,10 +117,29 @@ double apply_update(State &s, const Eigen::MatrixXd &PHt, const Eigen::MatrixXd 
   Eigen::MatrixXd Wt = PHt.transpose(); // m × n, becomes L⁻¹ PHᵀᵀ = Wᵀ
   llt.matrixL().solveInPlace(Wt);
   s.P.selfadjointView<Eigen::Lower>().rankUpdate(Wt.transpose(), -1.0);
-  const Eigen::Index n = s.P.rows();
-  for (Eigen::Index j = 1; j < n; ++j)
-    for (Eigen::Index i = 0; i < j; ++i)
-      s.P(i, j) = s.P(j, i);
+  mirror_lower(s.P);
+  if (s.separate_report()) {
+    llt.matrixU().solveInPlace(Wt); // Kᵀ = S⁻¹ PHᵀᵀ = L⁻ᵀ Wᵀ
+    const Eigen::Index n = s.P.rows(), m = Hc.rows(), nc = static_cast<Eigen::Index>(cols.size());
+    Eigen::MatrixXd Pr_cols(n, nc); // P_r's columns at the compact columns
+    for (Eigen::Index j = 0; j < nc; ++j)
+      Pr_cols.col(j) = s.P_report.col(cols[j]);
+    const Eigen::MatrixXd HPr_t = Pr_cols * Hc.transpose(); // (H P_r)ᵀ, n × m
+    Eigen::MatrixXd HPr_t_c(nc, m);
+    for (Eigen::Index j = 0; j < nc; ++j)
+      HPr_t_c.row(j) = HPr_t.row(cols[j]);
+    Eigen::MatrixXd T = Hc * HPr_t_c; // H P_r Hᵀ + σ²I + ΔR
+    T.diagonal().array() += sigma2;
+    if (cov_noise)
+      T += *cov_noise;
+    // P_r − K(H P_r) − (H P_r)ᵀKᵀ + K T Kᵀ = P_r + K Yᵀ + Y Kᵀ with Y = ½K T − (H P_r)ᵀ (n × m): both products on
+    // the lower triangle only, mirrored.
+    const Eigen::MatrixXd K = Wt.transpose();
+    const Eigen::MatrixXd Y = 0.5 * K * T - HPr_t;
+    s.P_report.triangularView<Eigen::Lower>() += K * Y.transpose();
+    s.P_report.triangularView<Eigen::Lower>() += Y * K.transpose();
+    mirror_lower(s.P_report);
+  }
   s.boxplus(dx);
   return r.dot(Sinv_r);
 }
@@ -114,11 +150,19 @@ double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, 
   const Eigen::MatrixXd PHt = s.P * H.transpose();
   Eigen::MatrixXd S = H * PHt;
   S.diagonal().array() += sigma2;
-  return apply_update(s, PHt, S, r);
+  std::vector<int> cols;
+  if (s.separate_report())
+    for (int j = 0; j < s.dim(); ++j)
+      cols.push_back(j);
+  return apply_update(s, cols, H, PHt, S, r, sigma2, nullptr);
 }
 
 double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, const Eigen::VectorXd &r,
-                  double sigma2) {
+                  double sigma2, const Eigen::MatrixXd *cov_noise) {
+  if (cov_noise && (cov_noise->rows() != r.size() || cov_noise->cols() != r.size()))
+    throw ov_core::UsageError("ekf_update: the covariance's extra noise differs in size from the residual");
+  if (cov_noise && !s.separate_report())
+    throw ov_core::UsageError("ekf_update: extra noise for the covariance needs a separately reported covariance");
   const int n = s.dim(), nc = static_cast<int>(cols.size());
   if (Hc.cols() != nc || Hc.rows() != r.size())
     throw ov_core::UsageError("ekf_update: Jacobian, columns and residual differ in size");
@@ -145,7 +189,7 @@ double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd 
   else
     S.noalias() = Hc * PHt_c;
   S.diagonal().array() += sigma2;
-  return apply_update(s, PHt, S, r);
+  return apply_update(s, cols, Hc, PHt, S, r, sigma2, cov_noise);
 }
 
 Eigen::MatrixXd sub_covariance(const State &s, const std::vector<int> &cols) {

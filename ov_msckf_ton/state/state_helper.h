@@ -32,8 +32,13 @@ double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, 
 /// The same with a compact Jacobian: column j of Hc is state column cols[j], every other column of H is zero. Costs
 /// O(n·|cols|·m + n²·m) instead of O(n³): the MSCKF and SLAM Jacobians involve the clones but not the landmarks
 /// (or the reverse), so most of the state's columns are zero.
+///
+/// Where the state keeps a separately reported covariance (State::P_report), it becomes the Joseph form of this
+/// update's gain K (computed from P with the σ²I weight) under the noise the track-error model gives the rows,
+/// σ²I + cov_noise (m × m, symmetric; null: σ²I): P_r⁺ = (I − KH)P_r(I − KH)ᵀ + K(σ²I + ΔR)Kᵀ — the error covariance
+/// the weights that measured best really leave. cov_noise without a reported covariance is refused.
 double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, const Eigen::VectorXd &r,
-                  double sigma2);
+                  double sigma2, const Eigen::MatrixXd *cov_noise = nullptr);
 
 /// P restricted to the rows and columns `cols`, in that order.
 Eigen::MatrixXd sub_covariance(const State &s, const std::vector<int> &cols);

@@ -27,17 +27,19 @@ void propagate_td_covariance(State &s, double q_td, double q_rate, double dt_s) 
   if (!s.estimates_td() || !(dt_s > 0))
     return;
   const int d = s.td_index, r = s.td_rate_index;
-  if (r >= 0) {
-    // Φ P Φᵀ with Φ = I + dt·e_d e_rᵀ: row d += dt·row r, then column d += dt·column r.
-    s.P.row(d) += dt_s * s.P.row(r);
-    s.P.col(d) += dt_s * s.P.col(r);
-    const double qr = q_rate * q_rate;
-    s.P(d, d) += qr * dt_s * dt_s * dt_s / 3.0;
-    s.P(d, r) += qr * dt_s * dt_s / 2.0;
-    s.P(r, d) += qr * dt_s * dt_s / 2.0;
-    s.P(r, r) += qr * dt_s;
-  }
-  s.P(d, d) += q_td * q_td * dt_s;
+  s.for_each_covariance([&](Eigen::MatrixXd &P) {
+    if (r >= 0) {
+      // Φ P Φᵀ with Φ = I + dt·e_d e_rᵀ: row d += dt·row r, then column d += dt·column r.
+      P.row(d) += dt_s * P.row(r);
+      P.col(d) += dt_s * P.col(r);
+      const double qr = q_rate * q_rate;
+      P(d, d) += qr * dt_s * dt_s * dt_s / 3.0;
+      P(d, r) += qr * dt_s * dt_s / 2.0;
+      P(r, d) += qr * dt_s * dt_s / 2.0;
+      P(r, r) += qr * dt_s;
+    }
+    P(d, d) += q_td * q_td * dt_s;
+  });
 }
 
 } // namespace ov_msckf_ton

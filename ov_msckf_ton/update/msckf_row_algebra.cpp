@@ -36,6 +36,47 @@ void UpdaterMSCKF::compress(Eigen::MatrixXd &H, Eigen::VectorXd &r) {
   r = r.head(cols).eval();
 }
 
+void UpdaterMSCKF::compress(Eigen::MatrixXd &H, Eigen::VectorXd &r, Eigen::MatrixXd &Q1) {
+  const Eigen::Index rows = H.rows(), cols = H.cols();
+  if (rows <= cols) {
+    Q1.setIdentity(rows, rows);
+    return;
+  }
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(H);
+  r.applyOnTheLeft(qr.householderQ().adjoint());
+  // The thin Q₁ (rows × cols): Q applied to the first cols columns of the identity.
+  Q1.setIdentity(rows, cols);
+  Q1.applyOnTheLeft(qr.householderQ());
+  H = qr.matrixQR().topRows(cols).triangularView<Eigen::Upper>();
+  r = r.head(cols).eval();
+}
+
+Eigen::MatrixXd UpdaterMSCKF::track_noise_factor(Eigen::Index rows, double rho) {
+  if (rows % 2 != 0 || !(rho >= 0 && rho < 1))
+    throw ov_core::UsageError("track_noise_factor: need an even row count and 0 <= rho < 1");
+  // e_k = ρ e_{k−1} + √(1 − ρ²) w_k, e_0 = w_0 (unit stationary variance): L_kj = ρ^(k−j), times √(1 − ρ²) for j > 0.
+  const Eigen::Index m = rows / 2;
+  const double s = std::sqrt(1.0 - rho * rho);
+  Eigen::MatrixXd L = Eigen::MatrixXd::Zero(rows, rows);
+  for (Eigen::Index j = 0; j < m; ++j) {
+    double v = j == 0 ? 1.0 : s;
+    for (Eigen::Index k = j; k < m; ++k, v *= rho) {
+      L(2 * k, 2 * j) = v;
+      L(2 * k + 1, 2 * j + 1) = v;
+    }
+  }
+  return L;
+}
+
+Eigen::MatrixXd UpdaterMSCKF::projected_track_noise_factor(const FeatureQR &qr, double rho) {
+  const Eigen::Index rows = qr.rows();
+  if (rows <= 3)
+    throw ov_core::UsageError("projected_track_noise_factor: need more than 3 rows");
+  Eigen::MatrixXd L = track_noise_factor(rows, rho);
+  L.applyOnTheLeft(qr.householderQ().adjoint());
+  return L.bottomRows(rows - 3);
+}
+
 void UpdaterMSCKF::whiten_track_rows(Eigen::Ref<Eigen::MatrixXd> M, double rho) {
   if (rho == 0.0)
     return;

@@ -42,6 +42,11 @@ UpdaterMSCKF::UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKF
   if (opt_.td_velocity_debias != 0 && opt_.track_correlation != 0)
     throw ov_core::UsageError(
         "UpdaterMSCKF: td_velocity_debias assumes independent pixel errors (track_correlation 0)");
+  if (!(opt_.covariance_track_correlation >= 0 && opt_.covariance_track_correlation < 1))
+    throw ov_core::UsageError("UpdaterMSCKF: covariance_track_correlation must be in [0, 1)");
+  if (opt_.covariance_track_correlation != 0 && opt_.track_correlation != 0)
+    throw ov_core::UsageError("UpdaterMSCKF: covariance_track_correlation is for the independent weight: it needs "
+                              "track_correlation 0");
   if (opt_.min_observations < 2)
     throw ov_core::UsageError("UpdaterMSCKF: min_observations must be at least 2 (two views leave one row)");
   if (!(opt_.min_depth > 0) || !(opt_.max_depth > opt_.min_depth))
@@ -484,6 +489,8 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
       ++st.gated_chi2;
       continue;
     }
+    if (opt_.covariance_track_correlation != 0.0)
+      a.B = projected_track_noise_factor(qr_, opt_.covariance_track_correlation);
     ++n_acc;
     ++st.features_used;
     td_bias += td_bias_to_remove(lin_, f, velocities, qr_);
@@ -520,9 +527,27 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
     r.segment(row, rows) = a.r;
     row += rows;
   }
-  compress(H, r);
-  st.rows_update = static_cast<int>(r.size());
-  st.mahalanobis = state_helper::ekf_update(state, cols_, H, r, sigma2);
+  if (opt_.covariance_track_correlation == 0.0) {
+    compress(H, r);
+    st.rows_update = static_cast<int>(r.size());
+    st.mahalanobis = state_helper::ekf_update(state, cols_, H, r, sigma2);
+  } else {
+    // The rows' extra noise ΔR = σ²·blockdiag(B_f B_fᵀ − I), compressed with them: Σ_f Q₁_fᵀ ΔR_f Q₁_f (Q₁_f the
+    // feature's rows of the thin Q₁); the gain keeps σ²I (ekf_update's cov_noise).
+    compress(H, r, Q1_);
+    st.rows_update = static_cast<int>(r.size());
+    Eigen::MatrixXd dR = Eigen::MatrixXd::Zero(r.size(), r.size());
+    Eigen::Index brow = 0;
+    for (size_t k = 0; k < n_acc; ++k) {
+      const Eigen::MatrixXd &Bf = accepted_[k].B;
+      Eigen::MatrixXd dRf = sigma2 * (Bf * Bf.transpose());
+      dRf.diagonal().array() -= sigma2;
+      const auto Q1f = Q1_.middleRows(brow, Bf.rows());
+      dR.noalias() += Q1f.transpose() * (dRf * Q1f);
+      brow += Bf.rows();
+    }
+    st.mahalanobis = state_helper::ekf_update(state, cols_, H, r, sigma2, &dR);
+  }
   st.td_debias_s = remove_td_bias(state, td_bias);
   st.td_after = state.td;
   return st;

@@ -33,6 +33,12 @@ struct UpdaterMSCKFOptions {
   /// ρ of the AR(1) model of a track's pixel errors between consecutive observations (u and v apart): the feature's
   /// rows are whitened before the nullspace projection. 0: independent errors (σ²I).
   double track_correlation = 0.0;
+  /// ρ of the AR(1) model of a track's errors under which the reported covariance (State::P_report) is updated,
+  /// while the gain keeps the independent σ_px weight (state_helper::ekf_update's cov_noise: the Joseph form of that
+  /// gain's error). KLT's errors are correlated from image to image; whitening them in the gain (track_correlation)
+  /// costs accuracy on long flights (docs/consistency_images.md), ignoring them leaves the covariance overconfident.
+  /// 0: off. Only with track_correlation 0.
+  double covariance_track_correlation = 0.0;
   /// Image-plane t_d rows: take out the bias a tracked velocity puts into t̂_d. The t_d column V_k of a row is a
   /// difference of the track's measured points, so its noise correlates with the residuals' (errors in variables):
   /// eq. 2's V_k contains observation k's own noise, the central difference its neighbours', and the nullspace
@@ -132,6 +138,14 @@ public:
   /// When H has more rows than columns, replaces (H, r) by (R, Q₁ᵀr) of H's QR: the same information in at most
   /// dim rows, noise still σ²I.
   static void compress(Eigen::MatrixXd &H, Eigen::VectorXd &r);
+  /// The same, also returning the thin Q₁ (rows × the rows kept; the identity when nothing is compressed), so that a
+  /// noise covariance D of the original rows becomes Q₁ᵀ D Q₁.
+  static void compress(Eigen::MatrixXd &H, Eigen::VectorXd &r, Eigen::MatrixXd &Q1);
+  /// L with L Lᵀ = C, the AR(1) correlation of a track's stacked rows (C_ij = ρ^|i−j| per coordinate; rows even).
+  static Eigen::MatrixXd track_noise_factor(Eigen::Index rows, double rho);
+  /// The noise factor of one feature's nullspace-projected rows for AR(1) errors (covariance_track_correlation):
+  /// B = Q₂ᵀ L, so that the projected rows' noise is σ²BBᵀ.
+  static Eigen::MatrixXd projected_track_noise_factor(const FeatureQR &qr, double rho);
   /// The innovation covariance of the nullspace-projected rows, S = Q₂ᵀ H_x P Hₓᵀ Q₂ + σ²I ((2m − 3) square), from
   /// H_x's structure (linearize's layout: clone k's six columns 6k..6k+5 are non-zero only in rows 2k, 2k + 1; the
   /// columns after 6m are dense): H_x P Hₓᵀ costs O(m²) for the clone blocks instead of O(m·(6m)²) with the
@@ -215,9 +229,11 @@ private:
     std::vector<int> cols;
     Eigen::MatrixXd H;
     Eigen::VectorXd r;
+    Eigen::MatrixXd B; ///< projected_track_noise_factor (covariance_track_correlation only)
   };
   std::vector<Accepted> accepted_;
   std::vector<int> cols_, where_; ///< the stacked system's state columns, and each state column's place in it
+  Eigen::MatrixXd Q1_;            ///< the compression's thin Q (covariance_track_correlation)
 };
 
 } // namespace ov_msckf_ton

@@ -19,6 +19,8 @@ UpdaterSLAM::UpdaterSLAM(const ov_core::CameraCalib &calib, const UpdaterSlamOpt
     throw ov_core::UsageError("UpdaterSLAM: track_correlation must be in [0, 1)");
   if (msckf_.options().td_velocity_debias != 0 && opt_.track_correlation != 0)
     throw ov_core::UsageError("UpdaterSLAM: td_velocity_debias assumes independent pixel errors (track_correlation 0)");
+  if (!(opt_.covariance_sigma_px == 0 || opt_.covariance_sigma_px >= opt_.sigma_px))
+    throw ov_core::UsageError("UpdaterSLAM: covariance_sigma_px must be 0 (off) or at least sigma_px");
 }
 
 void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feature *> &features, int64_t t_cam_ns,
@@ -89,16 +91,45 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
     l.index = state.add_variable(P_ff);
     state.P.block(0, l.index, n, 3) = P_xf;
     state.P.block(l.index, 0, 3, n) = P_xf.transpose();
+    Eigen::MatrixXd dR2; // the rest's extra noise under the reported covariance's track model
+    if (state.separate_report())
+      dR2 = report_initialization(state, l.index, lin_.cols, H1, R1inv, qr, sigma2);
     state.landmarks[l.id] = l;
     // The rest of the window's information, now that the landmark is in the state.
     if (r2.size() > 0) {
       // Its t_d column is the window's tracked velocities, as in an MSCKF update: the same errors-in-variables bias.
       const double bias = msckf_.td_bias_to_remove(lin_, *f, velocities, qr);
-      state_helper::ekf_update(state, lin_.cols, H2, r2, sigma2);
+      state_helper::ekf_update(state, lin_.cols, H2, r2, sigma2, dR2.size() ? &dR2 : nullptr);
       UpdaterMSCKF::remove_td_bias(state, bias);
     }
     ++stats.initialised;
   }
+}
+
+Eigen::MatrixXd UpdaterSLAM::report_initialization(State &state, int index, const std::vector<int> &cols,
+                                                   const Eigen::MatrixXd &H1, const Eigen::Matrix3d &R1inv,
+                                                   const UpdaterMSCKF::FeatureQR &qr, double sigma2) const {
+  // The window's rows under the MSCKF's track model (AR(1) ρ_c; independent when 0): noise σ²·(QᵀL)(QᵀL)ᵀ split
+  // like the rows. The landmark's error −R₁⁻¹(H₁δx + n₁) then has the reported cross-covariance −P_r H₁ᵀR₁⁻ᵀ and
+  // covariance R₁⁻¹(H₁P_rH₁ᵀ + σ²B₁B₁ᵀ)R₁⁻ᵀ. (n₁'s correlation with the rest's noise n₂ is left out.)
+  const double rho = msckf_.options().covariance_track_correlation;
+  const Eigen::Index rows = qr.rows();
+  Eigen::MatrixXd B = UpdaterMSCKF::track_noise_factor(rows, rho);
+  B.applyOnTheLeft(qr.householderQ().adjoint());
+  const int n = state.dim() - 3;
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, 3); // P_r H₁ᵀ over the state before the landmark
+  for (size_t j = 0; j < cols.size(); ++j)
+    M.noalias() += state.P_report.col(cols[j]).head(n) * H1.col(static_cast<Eigen::Index>(j)).transpose();
+  Eigen::Matrix3d S1 = sigma2 * B.topRows(3) * B.topRows(3).transpose();
+  for (size_t j = 0; j < cols.size(); ++j)
+    S1.noalias() += H1.col(static_cast<Eigen::Index>(j)) * M.row(cols[j]);
+  const Eigen::MatrixXd P_xf = -M * R1inv.transpose();
+  state.P_report.block(0, index, n, 3) = P_xf;
+  state.P_report.block(index, 0, 3, n) = P_xf.transpose();
+  state.P_report.block<3, 3>(index, index) = R1inv * S1 * R1inv.transpose();
+  Eigen::MatrixXd dR2 = sigma2 * B.bottomRows(rows - 3) * B.bottomRows(rows - 3).transpose();
+  dR2.diagonal().array() -= sigma2;
+  return dR2;
 }
 
 bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
@@ -289,7 +320,14 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
     r.segment<2>(2 * k) = rows_r[k];
   }
   UpdaterMSCKF::compress(H, r);
-  state_helper::ekf_update(state, cols, H, r, sigma2);
+  if (state.separate_report() && opt_.covariance_sigma_px > opt_.sigma_px) {
+    // Independent rows of σ_c² (the compression's Q₁ keeps a multiple of I as it is) under the σ² gain.
+    const Eigen::MatrixXd dR =
+        Eigen::MatrixXd::Identity(r.size(), r.size()) * (opt_.covariance_sigma_px * opt_.covariance_sigma_px - sigma2);
+    state_helper::ekf_update(state, cols, H, r, sigma2, &dR);
+  } else {
+    state_helper::ekf_update(state, cols, H, r, sigma2);
+  }
   stats.updated += static_cast<int>(rows_r.size());
 }
 

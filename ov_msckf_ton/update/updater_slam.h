@@ -22,6 +22,10 @@ struct UpdaterSlamOptions {
   /// ρ of the AR(1) model of a landmark's pixel errors between consecutive images: its window rows are whitened at
   /// initialisation, each later observation differenced against the one before. 0: independent errors.
   double track_correlation = 0.0;
+  /// Pixel noise [px] under which a landmark's re-observations update the covariance, while the gain keeps sigma_px
+  /// (state_helper::ekf_update's cov_noise): the long-run σ of a wandering track error that each image's
+  /// observation repeats. 0: sigma_px (off).
+  double covariance_sigma_px = 0.0;
   /// Image-plane modes: a landmark's row takes the image velocity its state predicts (landmark, camera pose,
   /// body rate and velocity at the image) instead of the tracked one. A landmark is always updated with its newest
   /// observation, where the tracked velocity is the backward difference of eq. 2, whose pixel noise is also the
@@ -70,6 +74,13 @@ public:
   void update(State &state, const ov_core::FeatureDatabase &db, int64_t t_cam_ns, TdObservation td_obs,
               const VelocityProvider &velocities, SlamStats &stats, std::vector<size_t> &drop,
               const BodyMotion *motion = nullptr);
+
+  /// With a separately reported covariance (State::P_report): the new landmark's (at `index`) reported covariance and
+  /// cross-covariance from the window's rows (H1 its top three, R1inv, qr of H_f) under the track model; returns the
+  /// extra noise of the remaining rows for their update (ekf_update's cov_noise).
+  Eigen::MatrixXd report_initialization(State &state, int index, const std::vector<int> &cols,
+                                        const Eigen::MatrixXd &H1, const Eigen::Matrix3d &R1inv,
+                                        const UpdaterMSCKF::FeatureQR &qr, double sigma2) const;
 
   /// Residual and Jacobians of landmark `l` seen at observation `obs_index` of `feature` in `clone`; false when
   /// the landmark is behind the camera or outside the depth range.
