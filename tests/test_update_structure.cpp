@@ -158,7 +158,7 @@ TEST(UpdateStructure, WhitenedTrackRowsHaveIndependentErrors) {
 
 // A separately reported covariance (State::P_report; update.covariance_track_correlation, slam.covariance_sigma_px):
 // the mean and P move as without it (the gain of P with the σ²I weight), P_report becomes the Joseph form of that
-// gain under the noise σ²I + ΔR; ekf_update's cov_noise without a reported covariance is refused.
+// gain under the noise σ²I + ΔR (given as G = HᵀΔRH); ekf_update's G without a reported covariance is refused.
 TEST(UpdateStructure, ReportedCovarianceIsTheJosephFormOfTheFiltersGain) {
   std::mt19937 rng(17);
   std::normal_distribution<double> g(0, 1);
@@ -181,9 +181,10 @@ TEST(UpdateStructure, ReportedCovarianceIsTheJosephFormOfTheFiltersGain) {
   for (int j = 0; j < nc; ++j)
     H.col(cols[j]) = Hc.col(j);
   const Eigen::MatrixXd P0 = nominal.P;
-  EXPECT_THROW(state_helper::ekf_update(nominal, cols, Hc, r, sigma2, &dR), ov_core::UsageError);
+  const Eigen::MatrixXd G = Hc.transpose() * dR * Hc;
+  EXPECT_THROW(state_helper::ekf_update(nominal, cols, Hc, r, sigma2, &G), ov_core::UsageError);
   state_helper::ekf_update(nominal, cols, Hc, r, sigma2);
-  state_helper::ekf_update(joseph, cols, Hc, r, sigma2, &dR);
+  state_helper::ekf_update(joseph, cols, Hc, r, sigma2, &G);
   Eigen::MatrixXd S = H * P0 * H.transpose();
   S.diagonal().array() += sigma2;
   const Eigen::MatrixXd K = P0 * H.transpose() * S.inverse();
@@ -203,12 +204,11 @@ TEST(UpdateStructure, ReportedCovarianceIsTheJosephFormOfTheFiltersGain) {
   same.P_report = P0;
   state_helper::ekf_update(same, cols, Hc, r, sigma2);
   EXPECT_LT((same.P_report - same.P).norm(), 1e-10 * P0.norm());
-  const Eigen::MatrixXd wrong = Eigen::MatrixXd::Identity(m + 1, m + 1);
+  const Eigen::MatrixXd wrong = Eigen::MatrixXd::Identity(nc + 1, nc + 1);
   EXPECT_THROW(state_helper::ekf_update(joseph, cols, Hc, r, sigma2, &wrong), ov_core::UsageError);
 }
 
-// The projected rows' noise factor: B Bᵀ = Q₂ᵀ C Q₂ for the AR(1) correlation C, and it follows the rows through the
-// compression (Q₁ᵀ applied to H, r and B alike).
+// The projected rows' noise factor: B Bᵀ = Q₂ᵀ C Q₂ for the AR(1) correlation C.
 TEST(UpdateStructure, ProjectedTrackNoiseFactorCarriesTheArOneCorrelation) {
   std::mt19937 rng(23);
   std::normal_distribution<double> g(0, 1);
@@ -228,28 +228,4 @@ TEST(UpdateStructure, ProjectedTrackNoiseFactorCarriesTheArOneCorrelation) {
   EXPECT_LT((B * B.transpose() - Q2.transpose() * C * Q2).norm(), 1e-12 * C.norm());
   EXPECT_LT((UpdaterMSCKF::projected_track_noise_factor(qr, 0.0) - Q2.transpose()).norm(), 1e-12);
   EXPECT_THROW(UpdaterMSCKF::projected_track_noise_factor(qr, 1.0), ov_core::UsageError);
-
-  // Compression: H (9 × 4) to its triangle, with the thin Q₁ that carries a noise covariance along: the same H and
-  // r as without it, Q₁ᵀ H₀ = the triangle, orthonormal columns.
-  Eigen::MatrixXd H = Eigen::MatrixXd::NullaryExpr(rows - 3, 4, [&]() { return g(rng); });
-  Eigen::VectorXd r = Eigen::VectorXd::NullaryExpr(rows - 3, [&]() { return g(rng); });
-  const Eigen::MatrixXd H0 = H;
-  const Eigen::VectorXd r0 = r;
-  Eigen::MatrixXd Q1;
-  UpdaterMSCKF::compress(H, r, Q1);
-  Eigen::MatrixXd H_plain = H0;
-  Eigen::VectorXd r_plain = r0;
-  UpdaterMSCKF::compress(H_plain, r_plain);
-  EXPECT_EQ(H, H_plain);
-  EXPECT_EQ(r, r_plain);
-  ASSERT_EQ(Q1.rows(), rows - 3);
-  ASSERT_EQ(Q1.cols(), 4);
-  EXPECT_LT((Q1.transpose() * H0 - H).norm(), 1e-12 * H0.norm());
-  EXPECT_LT((Q1.transpose() * r0 - r).norm(), 1e-12 * r0.norm());
-  EXPECT_LT((Q1.transpose() * Q1 - Eigen::MatrixXd::Identity(4, 4)).norm(), 1e-12);
-  // Nothing to compress: Q₁ is the identity.
-  Eigen::MatrixXd Hs = H0.topRows(3);
-  Eigen::VectorXd rs = r0.head(3);
-  UpdaterMSCKF::compress(Hs, rs, Q1);
-  EXPECT_EQ(Q1, Eigen::MatrixXd::Identity(3, 3));
 }

@@ -105,10 +105,10 @@ void mirror_lower(Eigen::MatrixXd &P) {
 /// The update once PHᵀ (n × m) and S = H P Hᵀ + σ²I (m × m) are known. P − K S Kᵀ = P − W Wᵀ with W = PHᵀ L⁻ᵀ
 /// (S = L Lᵀ): one symmetric rank-m downdate of the lower triangle, mirrored, so P stays exactly symmetric
 /// without forming K or a second n × n temporary. The reported covariance, where kept, takes the Joseph form of the
-/// same gain K under the noise σ²I + cov_noise: (I − KH)P_r(I − KH)ᵀ + K(σ²I + ΔR)Kᵀ.
+/// same gain K under the noise σ²I + ΔR: (I − KH)P_r(I − KH)ᵀ + K(σ²I + ΔR)Kᵀ, with G = HᵀΔRH (ekf_update).
 double apply_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, const Eigen::MatrixXd &PHt,
                     const Eigen::MatrixXd &S, const Eigen::VectorXd &r, double sigma2,
-                    const Eigen::MatrixXd *cov_noise) {
+                    const Eigen::MatrixXd *cov_noise_cols) {
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success)
     throw ov_core::UsageError("innovation covariance is not positive definite");
@@ -128,16 +128,22 @@ double apply_update(State &s, const std::vector<int> &cols, const Eigen::MatrixX
     Eigen::MatrixXd HPr_t_c(nc, m);
     for (Eigen::Index j = 0; j < nc; ++j)
       HPr_t_c.row(j) = HPr_t.row(cols[j]);
-    Eigen::MatrixXd T = Hc * HPr_t_c; // H P_r Hᵀ + σ²I + ΔR
+    Eigen::MatrixXd T = Hc * HPr_t_c; // H P_r Hᵀ + σ²I
     T.diagonal().array() += sigma2;
-    if (cov_noise)
-      T += *cov_noise;
     // P_r − K(H P_r) − (H P_r)ᵀKᵀ + K T Kᵀ = P_r + K Yᵀ + Y Kᵀ with Y = ½K T − (H P_r)ᵀ (n × m): both products on
     // the lower triangle only, mirrored.
     const Eigen::MatrixXd K = Wt.transpose();
     const Eigen::MatrixXd Y = 0.5 * K * T - HPr_t;
     s.P_report.triangularView<Eigen::Lower>() += K * Y.transpose();
     s.P_report.triangularView<Eigen::Lower>() += Y * K.transpose();
+    if (cov_noise_cols) {
+      // K ΔR Kᵀ = P⁺Hᵀ ΔR H P⁺/σ⁴ (K = P⁺Hᵀ/σ² for the σ²I weight): P⁺'s columns at cols, G = HᵀΔRH.
+      Eigen::MatrixXd Z(n, nc);
+      for (Eigen::Index j = 0; j < nc; ++j)
+        Z.col(j) = s.P.col(cols[j]) / sigma2;
+      const Eigen::MatrixXd ZG = Z * *cov_noise_cols;
+      s.P_report.triangularView<Eigen::Lower>() += ZG * Z.transpose();
+    }
     mirror_lower(s.P_report);
   }
   s.boxplus(dx);
@@ -158,10 +164,11 @@ double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, 
 }
 
 double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, const Eigen::VectorXd &r,
-                  double sigma2, const Eigen::MatrixXd *cov_noise) {
-  if (cov_noise && (cov_noise->rows() != r.size() || cov_noise->cols() != r.size()))
-    throw ov_core::UsageError("ekf_update: the covariance's extra noise differs in size from the residual");
-  if (cov_noise && !s.separate_report())
+                  double sigma2, const Eigen::MatrixXd *cov_noise_cols) {
+  if (cov_noise_cols && (cov_noise_cols->rows() != static_cast<Eigen::Index>(cols.size()) ||
+                         cov_noise_cols->cols() != static_cast<Eigen::Index>(cols.size())))
+    throw ov_core::UsageError("ekf_update: the covariance's extra noise differs in size from the columns");
+  if (cov_noise_cols && !s.separate_report())
     throw ov_core::UsageError("ekf_update: extra noise for the covariance needs a separately reported covariance");
   const int n = s.dim(), nc = static_cast<int>(cols.size());
   if (Hc.cols() != nc || Hc.rows() != r.size())
@@ -189,7 +196,7 @@ double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd 
   else
     S.noalias() = Hc * PHt_c;
   S.diagonal().array() += sigma2;
-  return apply_update(s, cols, Hc, PHt, S, r, sigma2, cov_noise);
+  return apply_update(s, cols, Hc, PHt, S, r, sigma2, cov_noise_cols);
 }
 
 Eigen::MatrixXd sub_covariance(const State &s, const std::vector<int> &cols) {

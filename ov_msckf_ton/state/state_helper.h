@@ -35,10 +35,12 @@ double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, 
 ///
 /// Where the state keeps a separately reported covariance (State::P_report), it becomes the Joseph form of this
 /// update's gain K (computed from P with the σ²I weight) under the noise the track-error model gives the rows,
-/// σ²I + cov_noise (m × m, symmetric; null: σ²I): P_r⁺ = (I − KH)P_r(I − KH)ᵀ + K(σ²I + ΔR)Kᵀ — the error covariance
-/// the weights that measured best really leave. cov_noise without a reported covariance is refused.
+/// σ²I + ΔR: P_r⁺ = (I − KH)P_r(I − KH)ᵀ + K(σ²I + ΔR)Kᵀ — the error covariance the weights that measured best
+/// really leave. ΔR comes as G = Hcᵀ ΔR Hc (|cols| × |cols|, symmetric; null: ΔR = 0), so that it may be given in any
+/// row basis (before or after a compression): K = P⁺Hᵀ/σ² makes K ΔR Kᵀ = P⁺_c G P⁺_cᵀ/σ⁴. A G without a reported
+/// covariance is refused.
 double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, const Eigen::VectorXd &r,
-                  double sigma2, const Eigen::MatrixXd *cov_noise = nullptr);
+                  double sigma2, const Eigen::MatrixXd *cov_noise_cols = nullptr);
 
 /// P restricted to the rows and columns `cols`, in that order.
 Eigen::MatrixXd sub_covariance(const State &s, const std::vector<int> &cols);

@@ -36,21 +36,6 @@ void UpdaterMSCKF::compress(Eigen::MatrixXd &H, Eigen::VectorXd &r) {
   r = r.head(cols).eval();
 }
 
-void UpdaterMSCKF::compress(Eigen::MatrixXd &H, Eigen::VectorXd &r, Eigen::MatrixXd &Q1) {
-  const Eigen::Index rows = H.rows(), cols = H.cols();
-  if (rows <= cols) {
-    Q1.setIdentity(rows, rows);
-    return;
-  }
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr(H);
-  r.applyOnTheLeft(qr.householderQ().adjoint());
-  // The thin Q₁ (rows × cols): Q applied to the first cols columns of the identity.
-  Q1.setIdentity(rows, cols);
-  Q1.applyOnTheLeft(qr.householderQ());
-  H = qr.matrixQR().topRows(cols).triangularView<Eigen::Upper>();
-  r = r.head(cols).eval();
-}
-
 Eigen::MatrixXd UpdaterMSCKF::track_noise_factor(Eigen::Index rows, double rho) {
   if (rows % 2 != 0 || !(rho >= 0 && rho < 1))
     throw ov_core::UsageError("track_noise_factor: need an even row count and 0 <= rho < 1");

@@ -527,27 +527,24 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
     r.segment(row, rows) = a.r;
     row += rows;
   }
-  if (opt_.covariance_track_correlation == 0.0) {
-    compress(H, r);
-    st.rows_update = static_cast<int>(r.size());
-    st.mahalanobis = state_helper::ekf_update(state, cols_, H, r, sigma2);
-  } else {
-    // The rows' extra noise ΔR = σ²·blockdiag(B_f B_fᵀ − I), compressed with them: Σ_f Q₁_fᵀ ΔR_f Q₁_f (Q₁_f the
-    // feature's rows of the thin Q₁); the gain keeps σ²I (ekf_update's cov_noise).
-    compress(H, r, Q1_);
-    st.rows_update = static_cast<int>(r.size());
-    Eigen::MatrixXd dR = Eigen::MatrixXd::Zero(r.size(), r.size());
-    Eigen::Index brow = 0;
+  // The reported covariance's extra noise (covariance_track_correlation), seen through each feature's projected rows:
+  // G = Σ_f H_fᵀ ΔR_f H_f with ΔR_f = σ²(B_f B_fᵀ − I) — independent of the compression below.
+  Eigen::MatrixXd G;
+  if (opt_.covariance_track_correlation != 0.0) {
+    G.setZero(static_cast<Eigen::Index>(cols_.size()), static_cast<Eigen::Index>(cols_.size()));
     for (size_t k = 0; k < n_acc; ++k) {
-      const Eigen::MatrixXd &Bf = accepted_[k].B;
-      Eigen::MatrixXd dRf = sigma2 * (Bf * Bf.transpose());
-      dRf.diagonal().array() -= sigma2;
-      const auto Q1f = Q1_.middleRows(brow, Bf.rows());
-      dR.noalias() += Q1f.transpose() * (dRf * Q1f);
-      brow += Bf.rows();
+      const Accepted &a = accepted_[k];
+      Eigen::MatrixXd dR = sigma2 * (a.B * a.B.transpose());
+      dR.diagonal().array() -= sigma2;
+      const Eigen::MatrixXd Gf = a.H.transpose() * dR * a.H;
+      for (size_t j = 0; j < a.cols.size(); ++j)
+        for (size_t i = 0; i < a.cols.size(); ++i)
+          G(where_[a.cols[i]], where_[a.cols[j]]) += Gf(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
     }
-    st.mahalanobis = state_helper::ekf_update(state, cols_, H, r, sigma2, &dR);
   }
+  compress(H, r);
+  st.rows_update = static_cast<int>(r.size());
+  st.mahalanobis = state_helper::ekf_update(state, cols_, H, r, sigma2, G.size() ? &G : nullptr);
   st.td_debias_s = remove_td_bias(state, td_bias);
   st.td_after = state.td;
   return st;

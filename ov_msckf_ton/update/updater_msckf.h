@@ -34,10 +34,11 @@ struct UpdaterMSCKFOptions {
   /// rows are whitened before the nullspace projection. 0: independent errors (σ²I).
   double track_correlation = 0.0;
   /// ρ of the AR(1) model of a track's errors under which the reported covariance (State::P_report) is updated,
-  /// while the gain keeps the independent σ_px weight (state_helper::ekf_update's cov_noise: the Joseph form of that
-  /// gain's error). KLT's errors are correlated from image to image; whitening them in the gain (track_correlation)
-  /// costs accuracy on long flights (docs/consistency_images.md), ignoring them leaves the covariance overconfident.
-  /// 0: off. Only with track_correlation 0.
+  /// while the gain keeps the independent σ_px weight (state_helper::ekf_update's cov_noise_cols: the Joseph form of
+  /// that gain's error). KLT's errors are correlated from image to image; whitening them in the gain
+  /// (track_correlation) costs accuracy on long flights (docs/consistency_images.md), ignoring them leaves the
+  /// covariance overconfident. 0: off. Only with track_correlation 0. Needs a state with a reported covariance
+  /// (VioManager keeps one then).
   double covariance_track_correlation = 0.0;
   /// Image-plane t_d rows: take out the bias a tracked velocity puts into t̂_d. The t_d column V_k of a row is a
   /// difference of the track's measured points, so its noise correlates with the residuals' (errors in variables):
@@ -138,9 +139,6 @@ public:
   /// When H has more rows than columns, replaces (H, r) by (R, Q₁ᵀr) of H's QR: the same information in at most
   /// dim rows, noise still σ²I.
   static void compress(Eigen::MatrixXd &H, Eigen::VectorXd &r);
-  /// The same, also returning the thin Q₁ (rows × the rows kept; the identity when nothing is compressed), so that a
-  /// noise covariance D of the original rows becomes Q₁ᵀ D Q₁.
-  static void compress(Eigen::MatrixXd &H, Eigen::VectorXd &r, Eigen::MatrixXd &Q1);
   /// L with L Lᵀ = C, the AR(1) correlation of a track's stacked rows (C_ij = ρ^|i−j| per coordinate; rows even).
   static Eigen::MatrixXd track_noise_factor(Eigen::Index rows, double rho);
   /// The noise factor of one feature's nullspace-projected rows for AR(1) errors (covariance_track_correlation):
@@ -233,7 +231,6 @@ private:
   };
   std::vector<Accepted> accepted_;
   std::vector<int> cols_, where_; ///< the stacked system's state columns, and each state column's place in it
-  Eigen::MatrixXd Q1_;            ///< the compression's thin Q (covariance_track_correlation)
 };
 
 } // namespace ov_msckf_ton
