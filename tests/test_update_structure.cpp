@@ -160,52 +160,60 @@ TEST(UpdateStructure, WhitenedTrackRowsHaveIndependentErrors) {
 // the mean and P move as without it (the gain of P with the σ²I weight), P_report becomes the Joseph form of that
 // gain under the noise σ²I + ΔR (given as G = HᵀΔRH); ekf_update's G without a reported covariance is refused.
 TEST(UpdateStructure, ReportedCovarianceIsTheJosephFormOfTheFiltersGain) {
-  std::mt19937 rng(17);
-  std::normal_distribution<double> g(0, 1);
-  State nominal(true);
-  nominal.P = random_spd(22, rng) * 1e-2; // IMU 15 + t_d 1 + one clone
-  CloneState c;
-  c.index = 16;
-  nominal.clones[0] = c;
-  State joseph = nominal;
-  joseph.P_report = random_spd(22, rng) * 2e-2; // a different reported covariance: its own recursion
-  const Eigen::MatrixXd Pr0 = joseph.P_report;
-  const std::vector<int> cols = {0, 1, 2, 15, 16, 17, 18, 19, 20, 21};
-  const int nc = static_cast<int>(cols.size()), m = 7;
-  const Eigen::MatrixXd Hc = Eigen::MatrixXd::NullaryExpr(m, nc, [&]() { return g(rng); });
-  const Eigen::VectorXd r = Eigen::VectorXd::NullaryExpr(m, [&]() { return 0.01 * g(rng); });
-  const Eigen::MatrixXd A = Eigen::MatrixXd::NullaryExpr(m, m, [&]() { return 0.1 * g(rng); });
-  const Eigen::MatrixXd dR = A * A.transpose();
-  const double sigma2 = 0.04;
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, 22);
-  for (int j = 0; j < nc; ++j)
-    H.col(cols[j]) = Hc.col(j);
-  const Eigen::MatrixXd P0 = nominal.P;
-  const Eigen::MatrixXd G = Hc.transpose() * dR * Hc;
-  EXPECT_THROW(state_helper::ekf_update(nominal, cols, Hc, r, sigma2, &G), ov_core::UsageError);
-  state_helper::ekf_update(nominal, cols, Hc, r, sigma2);
-  state_helper::ekf_update(joseph, cols, Hc, r, sigma2, &G);
-  Eigen::MatrixXd S = H * P0 * H.transpose();
-  S.diagonal().array() += sigma2;
-  const Eigen::MatrixXd K = P0 * H.transpose() * S.inverse();
-  const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(22, 22) - K * H;
-  Eigen::MatrixXd R = dR;
-  R.diagonal().array() += sigma2;
-  const Eigen::MatrixXd Pr_ref = IKH * Pr0 * IKH.transpose() + K * R * K.transpose();
-  EXPECT_LT((joseph.P_report - Pr_ref).norm(), 1e-10 * Pr_ref.norm());
-  EXPECT_LT((joseph.P_report - joseph.P_report.transpose()).norm(), 1e-15 * Pr_ref.norm());
-  EXPECT_EQ(joseph.P, nominal.P); // the filter's own covariance, gain and mean are untouched
-  EXPECT_EQ(joseph.td, nominal.td);
-  EXPECT_EQ(joseph.imu.p, nominal.imu.p);
-  // Without ΔR and with P_report = P the Joseph form is the filter's own P⁺ (the optimal gain's).
-  State same = State(true);
-  same.P = P0;
-  same.clones[0] = c;
-  same.P_report = P0;
-  state_helper::ekf_update(same, cols, Hc, r, sigma2);
-  EXPECT_LT((same.P_report - same.P).norm(), 1e-10 * P0.norm());
-  const Eigen::MatrixXd wrong = Eigen::MatrixXd::Identity(nc + 1, nc + 1);
-  EXPECT_THROW(state_helper::ekf_update(joseph, cols, Hc, r, sigma2, &wrong), ov_core::UsageError);
+  // Fewer rows than columns (the rows' form) and a square system (the columns' form, as after the MSCKF's compression).
+  for (const int m : {7, 10}) {
+    SCOPED_TRACE(m);
+    std::mt19937 rng(17);
+    std::normal_distribution<double> g(0, 1);
+    State nominal(true);
+    nominal.P = random_spd(22, rng) * 1e-2; // IMU 15 + t_d 1 + one clone
+    CloneState c;
+    c.index = 16;
+    nominal.clones[0] = c;
+    State joseph = nominal;
+    joseph.P_report = random_spd(22, rng) * 2e-2; // a different reported covariance: its own recursion
+    const Eigen::MatrixXd Pr0 = joseph.P_report;
+    const std::vector<int> cols = {0, 1, 2, 15, 16, 17, 18, 19, 20, 21};
+    const int nc = static_cast<int>(cols.size());
+    const Eigen::MatrixXd Hc = Eigen::MatrixXd::NullaryExpr(m, nc, [&]() { return g(rng); });
+    const Eigen::VectorXd r = Eigen::VectorXd::NullaryExpr(m, [&]() { return 0.01 * g(rng); });
+    const Eigen::MatrixXd A = Eigen::MatrixXd::NullaryExpr(m, m, [&]() { return 0.1 * g(rng); });
+    const Eigen::MatrixXd dR = A * A.transpose();
+    const double sigma2 = 0.04;
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, 22);
+    for (int j = 0; j < nc; ++j)
+      H.col(cols[j]) = Hc.col(j);
+    const Eigen::MatrixXd P0 = nominal.P;
+    const Eigen::MatrixXd G = Hc.transpose() * dR * Hc;
+    EXPECT_THROW(state_helper::ekf_update(nominal, cols, Hc, r, sigma2, {nullptr, &G}), ov_core::UsageError);
+    state_helper::ekf_update(nominal, cols, Hc, r, sigma2);
+    State joseph_rows = joseph;
+    state_helper::ekf_update(joseph, cols, Hc, r, sigma2, {nullptr, &G});
+    state_helper::ekf_update(joseph_rows, cols, Hc, r, sigma2, {&dR, nullptr}); // ΔR in the rows' basis
+    Eigen::MatrixXd S = H * P0 * H.transpose();
+    S.diagonal().array() += sigma2;
+    const Eigen::MatrixXd K = P0 * H.transpose() * S.inverse();
+    const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(22, 22) - K * H;
+    Eigen::MatrixXd R = dR;
+    R.diagonal().array() += sigma2;
+    const Eigen::MatrixXd Pr_ref = IKH * Pr0 * IKH.transpose() + K * R * K.transpose();
+    EXPECT_LT((joseph.P_report - Pr_ref).norm(), 1e-10 * Pr_ref.norm());
+    EXPECT_LT((joseph_rows.P_report - Pr_ref).norm(), 1e-10 * Pr_ref.norm());
+    EXPECT_LT((joseph.P_report - joseph.P_report.transpose()).norm(), 1e-15 * Pr_ref.norm());
+    EXPECT_EQ(joseph.P, nominal.P); // the filter's own covariance, gain and mean are untouched
+    EXPECT_EQ(joseph.td, nominal.td);
+    EXPECT_EQ(joseph.imu.p, nominal.imu.p);
+    // Without ΔR and with P_report = P the Joseph form is the filter's own P⁺ (the optimal gain's).
+    State same = State(true);
+    same.P = P0;
+    same.clones[0] = c;
+    same.P_report = P0;
+    state_helper::ekf_update(same, cols, Hc, r, sigma2);
+    EXPECT_LT((same.P_report - same.P).norm(), 1e-10 * P0.norm());
+    const Eigen::MatrixXd wrong = Eigen::MatrixXd::Identity(nc + 1, nc + 1);
+    EXPECT_THROW(state_helper::ekf_update(joseph, cols, Hc, r, sigma2, {nullptr, &wrong}), ov_core::UsageError);
+    EXPECT_THROW(state_helper::ekf_update(joseph, cols, Hc, r, sigma2, {&wrong, nullptr}), ov_core::UsageError);
+  }
 }
 
 // The projected rows' noise factor: B Bᵀ = Q₂ᵀ C Q₂ for the AR(1) correlation C.

@@ -102,13 +102,63 @@ void mirror_lower(Eigen::MatrixXd &P) {
       P(i, j) = P(j, i);
 }
 
+/// The reported covariance's Joseph form for the gain K of P (apply_update): P_r⁺ = P_r − K H P_r − P_r Hᵀ Kᵀ +
+/// K (H P_r Hᵀ + σ²I) Kᵀ + K ΔR Kᵀ, where K ΔR Kᵀ = Z G Zᵀ with Z = P⁺_c/σ² (P⁺'s columns at cols; K = P⁺Hᵀ/σ²
+/// for the σ²I weight) and G = HᵀΔRH. Both forms below write P_r + A Bᵀ + B Aᵀ on the lower triangle, mirrored.
+void joseph_report(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, Eigen::MatrixXd &Wt,
+                   const Eigen::LLT<Eigen::MatrixXd> &llt, double sigma2, const ReportNoise &noise) {
+  const Eigen::Index n = s.P.rows(), m = Hc.rows(), nc = static_cast<Eigen::Index>(cols.size());
+  Eigen::MatrixXd Pr_cols(n, nc), Z(n, nc); // P_r's and P⁺/σ²'s columns at the compact columns
+  for (Eigen::Index j = 0; j < nc; ++j) {
+    Pr_cols.col(j) = s.P_report.col(cols[j]);
+    Z.col(j) = s.P.col(cols[j]) / sigma2;
+  }
+  Eigen::MatrixXd A, B;
+  if (m == nc) {
+    // Square (the MSCKF's compressed rows): in the columns' space, K = Z Hᵀ, J = HᵀH:
+    // P_r⁺ = P_r + Z Bᵀ + B Zᵀ with B = ½ Z M − P_r,c J and M = J P_r,cc J + σ²J + G — no Kᵀ solve.
+    const Eigen::MatrixXd J = Hc.transpose() * Hc;
+    Eigen::MatrixXd Pcc(nc, nc);
+    for (Eigen::Index j = 0; j < nc; ++j)
+      for (Eigen::Index i = 0; i < nc; ++i)
+        Pcc(i, j) = Pr_cols(cols[i], j);
+    Eigen::MatrixXd M = J * Pcc * J + sigma2 * J;
+    if (noise.cols)
+      M += *noise.cols;
+    if (noise.rows)
+      M += Hc.transpose() * *noise.rows * Hc;
+    B = 0.5 * Z * M - Pr_cols * J;
+    A = std::move(Z);
+  } else {
+    // Fewer rows than columns: in the rows' space, with K = S⁻¹PHᵀ solved and T = H P_r Hᵀ + σ²I:
+    // P_r⁺ = P_r + K Bᵀ + B Kᵀ with B = ½ K T − (H P_r)ᵀ, and Z G Zᵀ on top.
+    llt.matrixU().solveInPlace(Wt);                         // Kᵀ = S⁻¹ PHᵀᵀ = L⁻ᵀ Wᵀ
+    const Eigen::MatrixXd HPr_t = Pr_cols * Hc.transpose(); // (H P_r)ᵀ, n × m
+    Eigen::MatrixXd HPr_t_c(nc, m);
+    for (Eigen::Index j = 0; j < nc; ++j)
+      HPr_t_c.row(j) = HPr_t.row(cols[j]);
+    Eigen::MatrixXd T = Hc * HPr_t_c;
+    T.diagonal().array() += sigma2;
+    if (noise.rows)
+      T += *noise.rows;
+    A = Wt.transpose();
+    B = 0.5 * A * T - HPr_t;
+    if (noise.cols) {
+      const Eigen::MatrixXd ZG = Z * *noise.cols;
+      s.P_report.triangularView<Eigen::Lower>() += ZG * Z.transpose();
+    }
+  }
+  s.P_report.triangularView<Eigen::Lower>() += A * B.transpose();
+  s.P_report.triangularView<Eigen::Lower>() += B * A.transpose();
+  mirror_lower(s.P_report);
+}
+
 /// The update once PHᵀ (n × m) and S = H P Hᵀ + σ²I (m × m) are known. P − K S Kᵀ = P − W Wᵀ with W = PHᵀ L⁻ᵀ
 /// (S = L Lᵀ): one symmetric rank-m downdate of the lower triangle, mirrored, so P stays exactly symmetric
 /// without forming K or a second n × n temporary. The reported covariance, where kept, takes the Joseph form of the
 /// same gain K under the noise σ²I + ΔR: (I − KH)P_r(I − KH)ᵀ + K(σ²I + ΔR)Kᵀ, with G = HᵀΔRH (ekf_update).
 double apply_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, const Eigen::MatrixXd &PHt,
-                    const Eigen::MatrixXd &S, const Eigen::VectorXd &r, double sigma2,
-                    const Eigen::MatrixXd *cov_noise_cols) {
+                    const Eigen::MatrixXd &S, const Eigen::VectorXd &r, double sigma2, const ReportNoise &noise) {
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success)
     throw ov_core::UsageError("innovation covariance is not positive definite");
@@ -118,34 +168,8 @@ double apply_update(State &s, const std::vector<int> &cols, const Eigen::MatrixX
   llt.matrixL().solveInPlace(Wt);
   s.P.selfadjointView<Eigen::Lower>().rankUpdate(Wt.transpose(), -1.0);
   mirror_lower(s.P);
-  if (s.separate_report()) {
-    llt.matrixU().solveInPlace(Wt); // Kᵀ = S⁻¹ PHᵀᵀ = L⁻ᵀ Wᵀ
-    const Eigen::Index n = s.P.rows(), m = Hc.rows(), nc = static_cast<Eigen::Index>(cols.size());
-    Eigen::MatrixXd Pr_cols(n, nc); // P_r's columns at the compact columns
-    for (Eigen::Index j = 0; j < nc; ++j)
-      Pr_cols.col(j) = s.P_report.col(cols[j]);
-    const Eigen::MatrixXd HPr_t = Pr_cols * Hc.transpose(); // (H P_r)ᵀ, n × m
-    Eigen::MatrixXd HPr_t_c(nc, m);
-    for (Eigen::Index j = 0; j < nc; ++j)
-      HPr_t_c.row(j) = HPr_t.row(cols[j]);
-    Eigen::MatrixXd T = Hc * HPr_t_c; // H P_r Hᵀ + σ²I
-    T.diagonal().array() += sigma2;
-    // P_r − K(H P_r) − (H P_r)ᵀKᵀ + K T Kᵀ = P_r + K Yᵀ + Y Kᵀ with Y = ½K T − (H P_r)ᵀ (n × m): both products on
-    // the lower triangle only, mirrored.
-    const Eigen::MatrixXd K = Wt.transpose();
-    const Eigen::MatrixXd Y = 0.5 * K * T - HPr_t;
-    s.P_report.triangularView<Eigen::Lower>() += K * Y.transpose();
-    s.P_report.triangularView<Eigen::Lower>() += Y * K.transpose();
-    if (cov_noise_cols) {
-      // K ΔR Kᵀ = P⁺Hᵀ ΔR H P⁺/σ⁴ (K = P⁺Hᵀ/σ² for the σ²I weight): P⁺'s columns at cols, G = HᵀΔRH.
-      Eigen::MatrixXd Z(n, nc);
-      for (Eigen::Index j = 0; j < nc; ++j)
-        Z.col(j) = s.P.col(cols[j]) / sigma2;
-      const Eigen::MatrixXd ZG = Z * *cov_noise_cols;
-      s.P_report.triangularView<Eigen::Lower>() += ZG * Z.transpose();
-    }
-    mirror_lower(s.P_report);
-  }
+  if (s.separate_report())
+    joseph_report(s, cols, Hc, Wt, llt, sigma2, noise);
   s.boxplus(dx);
   return r.dot(Sinv_r);
 }
@@ -160,17 +184,17 @@ double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, 
   if (s.separate_report())
     for (int j = 0; j < s.dim(); ++j)
       cols.push_back(j);
-  return apply_update(s, cols, H, PHt, S, r, sigma2, nullptr);
+  return apply_update(s, cols, H, PHt, S, r, sigma2, ReportNoise{});
 }
 
 double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, const Eigen::VectorXd &r,
-                  double sigma2, const Eigen::MatrixXd *cov_noise_cols) {
-  if (cov_noise_cols && (cov_noise_cols->rows() != static_cast<Eigen::Index>(cols.size()) ||
-                         cov_noise_cols->cols() != static_cast<Eigen::Index>(cols.size())))
-    throw ov_core::UsageError("ekf_update: the covariance's extra noise differs in size from the columns");
-  if (cov_noise_cols && !s.separate_report())
-    throw ov_core::UsageError("ekf_update: extra noise for the covariance needs a separately reported covariance");
+                  double sigma2, const ReportNoise &noise) {
   const int n = s.dim(), nc = static_cast<int>(cols.size());
+  if ((noise.cols && (noise.cols->rows() != nc || noise.cols->cols() != nc)) ||
+      (noise.rows && (noise.rows->rows() != r.size() || noise.rows->cols() != r.size())))
+    throw ov_core::UsageError("ekf_update: the covariance's extra noise differs in size from the rows or columns");
+  if (noise.any() && !s.separate_report())
+    throw ov_core::UsageError("ekf_update: extra noise for the covariance needs a separately reported covariance");
   if (Hc.cols() != nc || Hc.rows() != r.size())
     throw ov_core::UsageError("ekf_update: Jacobian, columns and residual differ in size");
   Eigen::MatrixXd Pc(n, nc);
@@ -196,7 +220,7 @@ double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd 
   else
     S.noalias() = Hc * PHt_c;
   S.diagonal().array() += sigma2;
-  return apply_update(s, cols, Hc, PHt, S, r, sigma2, cov_noise_cols);
+  return apply_update(s, cols, Hc, PHt, S, r, sigma2, noise);
 }
 
 Eigen::MatrixXd sub_covariance(const State &s, const std::vector<int> &cols) {

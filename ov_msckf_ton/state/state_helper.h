@@ -33,14 +33,21 @@ double ekf_update(State &s, const Eigen::MatrixXd &H, const Eigen::VectorXd &r, 
 /// O(n·|cols|·m + n²·m) instead of O(n³): the MSCKF and SLAM Jacobians involve the clones but not the landmarks
 /// (or the reverse), so most of the state's columns are zero.
 ///
+/// The extra noise ΔR of an update's rows under the reported covariance's track model (ekf_update): in the rows' own
+/// basis (m × m), or seen through the Jacobian, G = HcᵀΔRHc (|cols| × |cols|) — what a caller has when it compressed
+/// the rows after ΔR was known (K ΔR Kᵀ = P⁺GP⁺/σ⁴ since K = P⁺Hᵀ/σ² for the σ²I weight). Null: none.
+struct ReportNoise {
+  const Eigen::MatrixXd *rows = nullptr;
+  const Eigen::MatrixXd *cols = nullptr;
+  bool any() const { return rows || cols; }
+};
+
 /// Where the state keeps a separately reported covariance (State::P_report), it becomes the Joseph form of this
 /// update's gain K (computed from P with the σ²I weight) under the noise the track-error model gives the rows,
 /// σ²I + ΔR: P_r⁺ = (I − KH)P_r(I − KH)ᵀ + K(σ²I + ΔR)Kᵀ — the error covariance the weights that measured best
-/// really leave. ΔR comes as G = Hcᵀ ΔR Hc (|cols| × |cols|, symmetric; null: ΔR = 0), so that it may be given in any
-/// row basis (before or after a compression): K = P⁺Hᵀ/σ² makes K ΔR Kᵀ = P⁺_c G P⁺_cᵀ/σ⁴. A G without a reported
-/// covariance is refused.
+/// really leave. A ΔR without a reported covariance is refused.
 double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, const Eigen::VectorXd &r,
-                  double sigma2, const Eigen::MatrixXd *cov_noise_cols = nullptr);
+                  double sigma2, const ReportNoise &noise = {});
 
 /// P restricted to the rows and columns `cols`, in that order.
 Eigen::MatrixXd sub_covariance(const State &s, const std::vector<int> &cols);

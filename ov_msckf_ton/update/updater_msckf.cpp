@@ -544,7 +544,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
   }
   compress(H, r);
   st.rows_update = static_cast<int>(r.size());
-  st.mahalanobis = state_helper::ekf_update(state, cols_, H, r, sigma2, G.size() ? &G : nullptr);
+  st.mahalanobis = state_helper::ekf_update(state, cols_, H, r, sigma2, {nullptr, G.size() ? &G : nullptr});
   st.td_debias_s = remove_td_bias(state, td_bias);
   st.td_after = state.td;
   return st;

@@ -34,7 +34,7 @@ struct UpdaterMSCKFOptions {
   /// rows are whitened before the nullspace projection. 0: independent errors (σ²I).
   double track_correlation = 0.0;
   /// ρ of the AR(1) model of a track's errors under which the reported covariance (State::P_report) is updated,
-  /// while the gain keeps the independent σ_px weight (state_helper::ekf_update's cov_noise_cols: the Joseph form of
+  /// while the gain keeps the independent σ_px weight (state_helper::ekf_update's ReportNoise: the Joseph form of
   /// that gain's error). KLT's errors are correlated from image to image; whitening them in the gain
   /// (track_correlation) costs accuracy on long flights (docs/consistency_images.md), ignoring them leaves the
   /// covariance overconfident. 0: off. Only with track_correlation 0. Needs a state with a reported covariance

@@ -91,15 +91,15 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
     l.index = state.add_variable(P_ff);
     state.P.block(0, l.index, n, 3) = P_xf;
     state.P.block(l.index, 0, 3, n) = P_xf.transpose();
-    Eigen::MatrixXd G2; // the rest's extra noise under the reported covariance's track model, H₂ᵀΔR₂H₂
+    Eigen::MatrixXd dR2; // the rest's extra noise under the reported covariance's track model
     if (state.separate_report())
-      G2 = H2.transpose() * report_initialization(state, l.index, lin_.cols, H1, R1inv, qr, sigma2) * H2;
+      dR2 = report_initialization(state, l.index, lin_.cols, H1, R1inv, qr, sigma2);
     state.landmarks[l.id] = l;
     // The rest of the window's information, now that the landmark is in the state.
     if (r2.size() > 0) {
       // Its t_d column is the window's tracked velocities, as in an MSCKF update: the same errors-in-variables bias.
       const double bias = msckf_.td_bias_to_remove(lin_, *f, velocities, qr);
-      state_helper::ekf_update(state, lin_.cols, H2, r2, sigma2, G2.size() ? &G2 : nullptr);
+      state_helper::ekf_update(state, lin_.cols, H2, r2, sigma2, {dR2.size() ? &dR2 : nullptr, nullptr});
       UpdaterMSCKF::remove_td_bias(state, bias);
     }
     ++stats.initialised;
@@ -321,9 +321,10 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
   }
   UpdaterMSCKF::compress(H, r);
   if (state.separate_report() && opt_.covariance_sigma_px > opt_.sigma_px) {
-    // Independent rows of σ_c² under the σ² gain: G = Hᵀ (σ_c² − σ²) H.
-    const Eigen::MatrixXd G = (opt_.covariance_sigma_px * opt_.covariance_sigma_px - sigma2) * (H.transpose() * H);
-    state_helper::ekf_update(state, cols, H, r, sigma2, &G);
+    // Independent rows of σ_c² under the σ² gain (the compression keeps a multiple of I as it is).
+    const Eigen::MatrixXd dR =
+        Eigen::MatrixXd::Identity(r.size(), r.size()) * (opt_.covariance_sigma_px * opt_.covariance_sigma_px - sigma2);
+    state_helper::ekf_update(state, cols, H, r, sigma2, {&dR, nullptr});
   } else {
     state_helper::ekf_update(state, cols, H, r, sigma2);
   }

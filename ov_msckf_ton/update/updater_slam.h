@@ -23,7 +23,7 @@ struct UpdaterSlamOptions {
   /// initialisation, each later observation differenced against the one before. 0: independent errors.
   double track_correlation = 0.0;
   /// Pixel noise [px] under which a landmark's re-observations update the covariance, while the gain keeps sigma_px
-  /// (state_helper::ekf_update's cov_noise_cols): the long-run σ of a wandering track error that each image's
+  /// (state_helper::ekf_update's ReportNoise): the long-run σ of a wandering track error that each image's
   /// observation repeats. 0: sigma_px (off).
   double covariance_sigma_px = 0.0;
   /// Image-plane modes: a landmark's row takes the image velocity its state predicts (landmark, camera pose,
@@ -77,7 +77,7 @@ public:
 
   /// With a separately reported covariance (State::P_report): the new landmark's (at `index`) reported covariance and
   /// cross-covariance from the window's rows (H1 its top three, R1inv, qr of H_f) under the track model; returns the
-  /// extra noise ΔR₂ of the remaining rows (their update takes G = H₂ᵀΔR₂H₂, ekf_update's cov_noise_cols).
+  /// extra noise ΔR₂ of the remaining rows (for their update, ekf_update's ReportNoise::rows).
   Eigen::MatrixXd report_initialization(State &state, int index, const std::vector<int> &cols,
                                         const Eigen::MatrixXd &H1, const Eigen::Matrix3d &R1inv,
                                         const UpdaterMSCKF::FeatureQR &qr, double sigma2) const;
