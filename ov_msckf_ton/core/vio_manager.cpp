@@ -581,7 +581,7 @@ ov_core::StateSample VioManager::snapshot() const {
   o.td_s = s.td;
   // The sigmas a user sees are the reported covariance's (the filter's own P unless a track-error model is set).
   const Eigen::MatrixXd &P = s.reported_P();
-  o.td_sigma_s = s.estimates_td() ? std::sqrt(std::max(0.0, P(s.td_index, s.td_index))) : 0.0;
+  o.td_sigma_s = s.td_sigma_in(P);
   o.has_velocity = true;
   o.has_td = true;
   o.P_pose.topLeftCorner<3, 3>() = P.block<3, 3>(ImuState::kTheta, ImuState::kTheta);

@@ -140,7 +140,10 @@ public:
       f(P_report);
   }
   bool estimates_td() const { return td_index >= 0; }
-  double td_sigma() const { return estimates_td() ? std::sqrt(std::max(0.0, P(td_index, td_index))) : 0.0; }
+  double td_sigma() const { return td_sigma_in(P); }
+  double td_sigma_in(const Eigen::MatrixXd &C) const {
+    return estimates_td() ? std::sqrt(std::max(0.0, C(td_index, td_index))) : 0.0;
+  }
   double td_variance() const { return estimates_td() ? P(td_index, td_index) : 0.0; }
   /// t_d at clone c's image minus the t̂_d the clone was placed with (td_ref): an image-plane observation is shifted
   /// by V times this. Where a model drives t_d at td_rate without a state for the rate (TPN with

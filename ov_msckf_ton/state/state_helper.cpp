@@ -108,11 +108,15 @@ void mirror_lower(Eigen::MatrixXd &P) {
 void joseph_report(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, Eigen::MatrixXd &Wt,
                    const Eigen::LLT<Eigen::MatrixXd> &llt, double sigma2, const ReportNoise &noise) {
   const Eigen::Index n = s.P.rows(), m = Hc.rows(), nc = static_cast<Eigen::Index>(cols.size());
-  Eigen::MatrixXd Pr_cols(n, nc), Z(n, nc); // P_r's and P⁺/σ²'s columns at the compact columns
-  for (Eigen::Index j = 0; j < nc; ++j) {
+  Eigen::MatrixXd Pr_cols(n, nc); // P_r's columns at the compact columns
+  for (Eigen::Index j = 0; j < nc; ++j)
     Pr_cols.col(j) = s.P_report.col(cols[j]);
-    Z.col(j) = s.P.col(cols[j]) / sigma2;
-  }
+  const auto p_plus_cols = [&] { // Z = P⁺'s columns at the compact columns / σ²
+    Eigen::MatrixXd Z(n, nc);
+    for (Eigen::Index j = 0; j < nc; ++j)
+      Z.col(j) = s.P.col(cols[j]) / sigma2;
+    return Z;
+  };
   Eigen::MatrixXd A, B;
   if (m == nc) {
     // Square (the MSCKF's compressed rows): in the columns' space, K = Z Hᵀ, J = HᵀH:
@@ -127,8 +131,8 @@ void joseph_report(State &s, const std::vector<int> &cols, const Eigen::MatrixXd
       M += *noise.cols;
     if (noise.rows)
       M += Hc.transpose() * *noise.rows * Hc;
-    B = 0.5 * Z * M - Pr_cols * J;
-    A = std::move(Z);
+    A = p_plus_cols();
+    B = 0.5 * A * M - Pr_cols * J;
   } else {
     // Fewer rows than columns: in the rows' space, with K = S⁻¹PHᵀ solved and T = H P_r Hᵀ + σ²I:
     // P_r⁺ = P_r + K Bᵀ + B Kᵀ with B = ½ K T − (H P_r)ᵀ, and Z G Zᵀ on top.
@@ -144,6 +148,7 @@ void joseph_report(State &s, const std::vector<int> &cols, const Eigen::MatrixXd
     A = Wt.transpose();
     B = 0.5 * A * T - HPr_t;
     if (noise.cols) {
+      const Eigen::MatrixXd Z = p_plus_cols();
       const Eigen::MatrixXd ZG = Z * *noise.cols;
       s.P_report.triangularView<Eigen::Lower>() += ZG * Z.transpose();
     }

@@ -489,8 +489,12 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
       ++st.gated_chi2;
       continue;
     }
-    if (opt_.covariance_track_correlation != 0.0)
-      a.B = projected_track_noise_factor(qr_, opt_.covariance_track_correlation);
+    if (opt_.covariance_track_correlation != 0.0) {
+      // The projected rows' extra noise under the reported covariance's track model: σ²(B Bᵀ − I).
+      const Eigen::MatrixXd B = projected_track_noise_factor(qr_, opt_.covariance_track_correlation);
+      a.dR = sigma2 * (B * B.transpose());
+      a.dR.diagonal().array() -= sigma2;
+    }
     ++n_acc;
     ++st.features_used;
     td_bias += td_bias_to_remove(lin_, f, velocities, qr_);
@@ -528,15 +532,13 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
     row += rows;
   }
   // The reported covariance's extra noise (covariance_track_correlation), seen through each feature's projected rows:
-  // G = Σ_f H_fᵀ ΔR_f H_f with ΔR_f = σ²(B_f B_fᵀ − I) — independent of the compression below.
+  // G = Σ_f H_fᵀ ΔR_f H_f — independent of the compression below.
   Eigen::MatrixXd G;
   if (opt_.covariance_track_correlation != 0.0) {
     G.setZero(static_cast<Eigen::Index>(cols_.size()), static_cast<Eigen::Index>(cols_.size()));
     for (size_t k = 0; k < n_acc; ++k) {
       const Accepted &a = accepted_[k];
-      Eigen::MatrixXd dR = sigma2 * (a.B * a.B.transpose());
-      dR.diagonal().array() -= sigma2;
-      const Eigen::MatrixXd Gf = a.H.transpose() * dR * a.H;
+      const Eigen::MatrixXd Gf = a.H.transpose() * a.dR * a.H;
       for (size_t j = 0; j < a.cols.size(); ++j)
         for (size_t i = 0; i < a.cols.size(); ++i)
           G(where_[a.cols[i]], where_[a.cols[j]]) += Gf(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));

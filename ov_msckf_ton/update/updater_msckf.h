@@ -227,7 +227,7 @@ private:
     std::vector<int> cols;
     Eigen::MatrixXd H;
     Eigen::VectorXd r;
-    Eigen::MatrixXd B; ///< projected_track_noise_factor (covariance_track_correlation only)
+    Eigen::MatrixXd dR; ///< the projected rows' extra noise for the reported covariance (covariance_track_correlation)
   };
   std::vector<Accepted> accepted_;
   std::vector<int> cols_, where_; ///< the stacked system's state columns, and each state column's place in it

@@ -55,7 +55,6 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
       continue;
     }
     // Both row blocks involve only the feature's columns (lin_.cols): the window's clones, t_d, the calibration.
-    const int n = state.dim();
     const Eigen::MatrixXd H1 = Hx.topRows(3);
     const Eigen::MatrixXd H2 = Hx.bottomRows(rows - 3);
     const Eigen::Vector3d r1 = r.head<3>();
@@ -72,13 +71,6 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
 
     // The invertible part initialises the landmark with its cross-covariance to the state.
     const Eigen::Matrix3d R1inv = R1.inverse();
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, 3); // P H1ᵀ, n x 3
-    for (size_t j = 0; j < lin_.cols.size(); ++j)
-      M.noalias() += state.P.col(lin_.cols[j]) * H1.col(static_cast<Eigen::Index>(j)).transpose();
-    Eigen::Matrix3d S1 = Eigen::Matrix3d::Zero();
-    for (size_t j = 0; j < lin_.cols.size(); ++j)
-      S1.noalias() += H1.col(static_cast<Eigen::Index>(j)) * M.row(lin_.cols[j]);
-    S1.diagonal().array() += sigma2;
     LandmarkState l;
     l.id = f->id;
     l.p_W = tri.p_W + R1inv * r1;
@@ -86,14 +78,15 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
     const CloneState &anchor = *lin_.obs.back().clone;
     l.p_fej = anchor.R_lin() * (anchor.R.transpose() * (l.p_W - anchor.p)) + anchor.p_lin();
     l.t_init_ns = t_cam_ns;
-    const Eigen::Matrix3d P_ff = R1inv * S1 * R1inv.transpose();
-    const Eigen::MatrixXd P_xf = -M * R1inv.transpose();
-    l.index = state.add_variable(P_ff);
-    state.P.block(0, l.index, n, 3) = P_xf;
-    state.P.block(l.index, 0, 3, n) = P_xf.transpose();
+    const LandmarkBlock block = landmark_block(state.P, lin_.cols, H1, R1inv, sigma2 * Eigen::Matrix3d::Identity());
+    LandmarkBlock reported;
     Eigen::MatrixXd dR2; // the rest's extra noise under the reported covariance's track model
     if (state.separate_report())
-      dR2 = report_initialization(state, l.index, lin_.cols, H1, R1inv, qr, sigma2);
+      reported = report_initialization(state, lin_.cols, H1, R1inv, qr, sigma2, dR2);
+    l.index = state.add_variable(block.P_ff);
+    write_landmark_block(state.P, l.index, block);
+    if (state.separate_report())
+      write_landmark_block(state.P_report, l.index, reported);
     state.landmarks[l.id] = l;
     // The rest of the window's information, now that the landmark is in the state.
     if (r2.size() > 0) {
@@ -106,30 +99,40 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
   }
 }
 
-Eigen::MatrixXd UpdaterSLAM::report_initialization(State &state, int index, const std::vector<int> &cols,
-                                                   const Eigen::MatrixXd &H1, const Eigen::Matrix3d &R1inv,
-                                                   const UpdaterMSCKF::FeatureQR &qr, double sigma2) const {
-  // The window's rows under the MSCKF's track model (AR(1) ρ_c; independent when 0): noise σ²·(QᵀL)(QᵀL)ᵀ split
-  // like the rows. The landmark's error −R₁⁻¹(H₁δx + n₁) then has the reported cross-covariance −P_r H₁ᵀR₁⁻ᵀ and
-  // covariance R₁⁻¹(H₁P_rH₁ᵀ + σ²B₁B₁ᵀ)R₁⁻ᵀ. (n₁'s correlation with the rest's noise n₂ is left out.)
-  const double rho = msckf_.options().covariance_track_correlation;
-  const Eigen::Index rows = qr.rows();
-  Eigen::MatrixXd B = UpdaterMSCKF::track_noise_factor(rows, rho);
-  B.applyOnTheLeft(qr.householderQ().adjoint());
-  const int n = state.dim() - 3;
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, 3); // P_r H₁ᵀ over the state before the landmark
+UpdaterSLAM::LandmarkBlock UpdaterSLAM::landmark_block(const Eigen::MatrixXd &C, const std::vector<int> &cols,
+                                                       const Eigen::MatrixXd &H1, const Eigen::Matrix3d &R1inv,
+                                                       const Eigen::Matrix3d &N1) {
+  const Eigen::Index n = C.rows();
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, 3); // C H₁ᵀ, n × 3
   for (size_t j = 0; j < cols.size(); ++j)
-    M.noalias() += state.P_report.col(cols[j]).head(n) * H1.col(static_cast<Eigen::Index>(j)).transpose();
-  Eigen::Matrix3d S1 = sigma2 * B.topRows(3) * B.topRows(3).transpose();
+    M.noalias() += C.col(cols[j]) * H1.col(static_cast<Eigen::Index>(j)).transpose();
+  Eigen::Matrix3d S1 = Eigen::Matrix3d::Zero();
   for (size_t j = 0; j < cols.size(); ++j)
     S1.noalias() += H1.col(static_cast<Eigen::Index>(j)) * M.row(cols[j]);
-  const Eigen::MatrixXd P_xf = -M * R1inv.transpose();
-  state.P_report.block(0, index, n, 3) = P_xf;
-  state.P_report.block(index, 0, 3, n) = P_xf.transpose();
-  state.P_report.block<3, 3>(index, index) = R1inv * S1 * R1inv.transpose();
-  Eigen::MatrixXd dR2 = sigma2 * B.bottomRows(rows - 3) * B.bottomRows(rows - 3).transpose();
+  S1 += N1;
+  return {-M * R1inv.transpose(), R1inv * S1 * R1inv.transpose()};
+}
+
+void UpdaterSLAM::write_landmark_block(Eigen::MatrixXd &C, int index, const LandmarkBlock &b) {
+  const Eigen::Index n = b.P_xf.rows();
+  C.block(0, index, n, 3) = b.P_xf;
+  C.block(index, 0, 3, n) = b.P_xf.transpose();
+  C.block<3, 3>(index, index) = b.P_ff;
+}
+
+UpdaterSLAM::LandmarkBlock UpdaterSLAM::report_initialization(const State &state, const std::vector<int> &cols,
+                                                              const Eigen::MatrixXd &H1, const Eigen::Matrix3d &R1inv,
+                                                              const UpdaterMSCKF::FeatureQR &qr, double sigma2,
+                                                              Eigen::MatrixXd &dR2) const {
+  // The window's rows under the MSCKF's track model (AR(1) ρ_c; independent when 0): noise σ²·(QᵀL)(QᵀL)ᵀ split
+  // like the rows, σ²B₁B₁ᵀ for the three that fix the landmark. (n₁'s correlation with the rest's noise n₂ is left
+  // out.)
+  const Eigen::Index rows = qr.rows();
+  Eigen::MatrixXd B = UpdaterMSCKF::track_noise_factor(rows, msckf_.options().covariance_track_correlation);
+  B.applyOnTheLeft(qr.householderQ().adjoint());
+  dR2 = sigma2 * B.bottomRows(rows - 3) * B.bottomRows(rows - 3).transpose();
   dR2.diagonal().array() -= sigma2;
-  return dR2;
+  return landmark_block(state.P_report, cols, H1, R1inv, sigma2 * B.topRows(3) * B.topRows(3).transpose());
 }
 
 bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,

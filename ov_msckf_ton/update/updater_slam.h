@@ -75,12 +75,24 @@ public:
               const VelocityProvider &velocities, SlamStats &stats, std::vector<size_t> &drop,
               const BodyMotion *motion = nullptr);
 
-  /// With a separately reported covariance (State::P_report): the new landmark's (at `index`) reported covariance and
-  /// cross-covariance from the window's rows (H1 its top three, R1inv, qr of H_f) under the track model; returns the
-  /// extra noise ΔR₂ of the remaining rows (for their update, ekf_update's ReportNoise::rows).
-  Eigen::MatrixXd report_initialization(State &state, int index, const std::vector<int> &cols,
-                                        const Eigen::MatrixXd &H1, const Eigen::Matrix3d &R1inv,
-                                        const UpdaterMSCKF::FeatureQR &qr, double sigma2) const;
+  /// A new landmark's covariance blocks in covariance C (the state before it), from the top three rows of its window
+  /// (H1 over `cols`, R1inv, N1 their noise covariance): its error −R₁⁻¹(H₁δx + n₁) has cross-covariance
+  /// P_xf = −C H₁ᵀR₁⁻ᵀ and covariance P_ff = R₁⁻¹(H₁CH₁ᵀ + N₁)R₁⁻ᵀ.
+  struct LandmarkBlock {
+    Eigen::MatrixXd P_xf;
+    Eigen::Matrix3d P_ff = Eigen::Matrix3d::Zero();
+  };
+  static LandmarkBlock landmark_block(const Eigen::MatrixXd &C, const std::vector<int> &cols, const Eigen::MatrixXd &H1,
+                                      const Eigen::Matrix3d &R1inv, const Eigen::Matrix3d &N1);
+  /// Writes it into C once the landmark is the variable at `index`.
+  static void write_landmark_block(Eigen::MatrixXd &C, int index, const LandmarkBlock &b);
+
+  /// With a separately reported covariance (State::P_report): the new landmark's reported blocks from the window's
+  /// rows (H1 its top three, R1inv, qr of H_f) under the track model, and in dR2 the extra noise ΔR₂ of the remaining
+  /// rows (for their update, ekf_update's ReportNoise::rows).
+  LandmarkBlock report_initialization(const State &state, const std::vector<int> &cols, const Eigen::MatrixXd &H1,
+                                      const Eigen::Matrix3d &R1inv, const UpdaterMSCKF::FeatureQR &qr, double sigma2,
+                                      Eigen::MatrixXd &dR2) const;
 
   /// Residual and Jacobians of landmark `l` seen at observation `obs_index` of `feature` in `clone`; false when
   /// the landmark is behind the camera or outside the depth range.
