@@ -91,7 +91,7 @@ double landmark_nees_with_correlated_errors(double rho_true, double rho_model, d
     SlamScene sc(n);
     sc.state.P *= 1e-8; // the clones are the truth: only the pixel noise is uncertain
     if (rho_report > 0)
-      sc.state.P_report = sc.state.P;
+      sc.state.start_report();
     ov_core::CameraModel cam(sc.calib);
     const std::vector<Eigen::Vector2d> e = ar1_errors(n, 1.0, rho_true, rng);
     std::vector<std::pair<int64_t, Eigen::Vector2d>> uv;
@@ -123,7 +123,7 @@ double landmark_nees_with_correlated_errors(double rho_true, double rho_model, d
     }
     const LandmarkState &l = sc.state.landmarks.at(7);
     const Eigen::Vector3d err = p_true - l.p_W;
-    nees += err.dot(sc.state.reported_P().block<3, 3>(l.index, l.index).ldlt().solve(err));
+    nees += err.dot(sc.state.reported_block(l.index, l.index, 3, 3).ldlt().solve(err));
     ++trials;
   }
   EXPECT_GT(trials, 150);

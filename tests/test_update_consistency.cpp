@@ -67,7 +67,7 @@ UpdateMonteCarlo update_monte_carlo(double noise_px, int trials, double lin_nois
     State s = truth;
     s.boxplus(-e0);
     if (report)
-      s.P_report = s.P;
+      s.start_report();
     for (auto &[t, c] : s.clones) {
       c.has_fej = lin_noise_m >= 0;
       c.R_fej = truth.clones.at(t).R;
@@ -102,7 +102,7 @@ UpdateMonteCarlo update_monte_carlo(double noise_px, int trials, double lin_nois
       for (int b = 0; b < nc; ++b) {
         Pc(a, b) = s.P(idx[a], idx[b]);
         Pc0(a, b) = truth.P(idx[a], idx[b]);
-        Pr(a, b) = s.reported_P()(idx[a], idx[b]);
+        Pr(a, b) = s.reported_block(idx[a], idx[b], 1, 1)(0, 0);
       }
     mc.nees_ratio += e.dot(Pc.ldlt().solve(e)) / nc;
     mc.nees_ratio_report += e.dot(Pr.ldlt().solve(e)) / nc;

@@ -292,7 +292,7 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
   add_calibration_variables();
   // A track-error model for the reported covariance: from here on P_report follows P's gains (State::P_report).
   if (opt_.update.covariance_track_correlation > 0 || opt_.slam.covariance_sigma_px > 0)
-    s.P_report = s.P;
+    s.start_report();
   initialized_ = true;
   init_imu_.clear();
   return true;
@@ -580,14 +580,14 @@ ov_core::StateSample VioManager::snapshot() const {
   o.ba = s.imu.ba;
   o.td_s = s.td;
   // The sigmas a user sees are the reported covariance's (the filter's own P unless a track-error model is set).
-  const Eigen::MatrixXd &P = s.reported_P();
-  o.td_sigma_s = s.td_sigma_in(P);
+  o.td_sigma_s = s.reported_td_sigma();
   o.has_velocity = true;
   o.has_td = true;
-  o.P_pose.topLeftCorner<3, 3>() = P.block<3, 3>(ImuState::kTheta, ImuState::kTheta);
-  o.P_pose.topRightCorner<3, 3>() = P.block<3, 3>(ImuState::kTheta, ImuState::kPos);
-  o.P_pose.bottomLeftCorner<3, 3>() = P.block<3, 3>(ImuState::kPos, ImuState::kTheta);
-  o.P_pose.bottomRightCorner<3, 3>() = P.block<3, 3>(ImuState::kPos, ImuState::kPos);
+  const auto block = [&](int r, int c) { return s.reported_block(r, c, 3, 3); };
+  o.P_pose.topLeftCorner<3, 3>() = block(ImuState::kTheta, ImuState::kTheta);
+  o.P_pose.topRightCorner<3, 3>() = block(ImuState::kTheta, ImuState::kPos);
+  o.P_pose.bottomLeftCorner<3, 3>() = block(ImuState::kPos, ImuState::kTheta);
+  o.P_pose.bottomRightCorner<3, 3>() = block(ImuState::kPos, ImuState::kPos);
   o.has_pose_cov = true;
   return o;
 }

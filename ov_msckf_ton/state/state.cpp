@@ -12,10 +12,11 @@ State::State(bool estimate_td) {
 
 int State::add_variable(const Eigen::MatrixXd &prior) {
   const int n = dim(), k = static_cast<int>(prior.rows());
-  for_each_covariance([&](Eigen::MatrixXd &C) {
-    Eigen::MatrixXd Pn = Eigen::MatrixXd::Zero(n + k, n + k);
+  for_each_covariance([&](auto &C) {
+    using Mat = std::decay_t<decltype(C)>;
+    Mat Pn = Mat::Zero(n + k, n + k);
     Pn.topLeftCorner(n, n) = C;
-    Pn.bottomRightCorner(k, k) = prior;
+    Pn.bottomRightCorner(k, k) = prior.cast<covariance_scalar<decltype(C)>>();
     C = std::move(Pn);
   });
   return n;
@@ -25,8 +26,8 @@ void State::remove_block(int idx, int size) {
   const int n = dim(), m = n - size;
   // Keep [0, idx) and [idx + size, n): four contiguous blocks, no index lists.
   const int tail = n - idx - size;
-  for_each_covariance([&](Eigen::MatrixXd &C) {
-    Eigen::MatrixXd Pn(m, m);
+  for_each_covariance([&](auto &C) {
+    std::decay_t<decltype(C)> Pn(m, m);
     Pn.topLeftCorner(idx, idx) = C.topLeftCorner(idx, idx);
     Pn.topRightCorner(idx, tail) = C.topRightCorner(idx, tail);
     Pn.bottomLeftCorner(tail, idx) = C.bottomLeftCorner(tail, idx);

@@ -25,6 +25,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <type_traits>
 
 namespace ov_msckf_ton {
 
@@ -108,6 +109,9 @@ struct LandmarkState {
   int updates = 0;       ///< observations that updated it
 };
 
+/// The scalar of the covariance a State::for_each_covariance function receives: double for P, float for P_report.
+template <class M> using covariance_scalar = typename std::decay_t<M>::Scalar;
+
 class State {
 public:
   /// estimate_td: t_d gets a covariance entry (modes sr, sir, fvon, tpn, ton); otherwise it is a fixed parameter.
@@ -128,21 +132,34 @@ public:
   /// covariance_track_correlation, slam.covariance_sigma_px). The gains and gates use P; every operation on P
   /// applies to P_report alike (the same Φ, Q, cloning, marginalisation), the updates with the Joseph form of P's
   /// gain under the model's noise (state_helper::ekf_update). Empty: P is both.
-  Eigen::MatrixXd P_report;
+  /// Single precision: nothing the filter decides reads it, and in double its updates (the Joseph form's rank-2m
+  /// products over the whole state) cost a quarter of a run's CPU; in float they cost about half as much, and the
+  /// reported sigmas move by ~1e-6 of themselves (docs/benchmarks.md, "The reported covariance in single precision").
+  Eigen::MatrixXf P_report;
 
   int dim() const { return static_cast<int>(P.rows()); }
   bool separate_report() const { return P_report.size() != 0; }
-  const Eigen::MatrixXd &reported_P() const { return separate_report() ? P_report : P; }
-  /// P, then P_report when it is kept: for the operations that act on both alike.
+  /// Starts the reported covariance at the filter's P.
+  void start_report() { P_report = P.cast<float>(); }
+  /// A block of the covariance the run reports (P_report where kept, else P), in double.
+  Eigen::MatrixXd reported_block(int row, int col, int rows, int cols) const {
+    return separate_report() ? Eigen::MatrixXd(P_report.block(row, col, rows, cols).cast<double>())
+                             : Eigen::MatrixXd(P.block(row, col, rows, cols));
+  }
+  /// P, then P_report when it is kept: for the operations that act on both alike (`f` takes either matrix type;
+  /// covariance_scalar names the one it got).
   template <class F> void for_each_covariance(F &&f) {
     f(P);
     if (separate_report())
       f(P_report);
   }
   bool estimates_td() const { return td_index >= 0; }
-  double td_sigma() const { return td_sigma_in(P); }
-  double td_sigma_in(const Eigen::MatrixXd &C) const {
-    return estimates_td() ? std::sqrt(std::max(0.0, C(td_index, td_index))) : 0.0;
+  double td_sigma() const { return estimates_td() ? std::sqrt(std::max(0.0, P(td_index, td_index))) : 0.0; }
+  /// t_d's sigma in the covariance the run reports.
+  double reported_td_sigma() const {
+    if (!estimates_td() || !separate_report())
+      return td_sigma();
+    return std::sqrt(std::max(0.0, static_cast<double>(P_report(td_index, td_index))));
   }
   double td_variance() const { return estimates_td() ? P(td_index, td_index) : 0.0; }
   /// t_d at clone c's image minus the t̂_d the clone was placed with (td_ref): an image-plane observation is shifted

@@ -12,12 +12,14 @@ namespace state_helper {
 void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q) {
   const int n = s.dim();
   constexpr int I = ImuState::kSize;
-  s.for_each_covariance([&](Eigen::MatrixXd &P) {
-    const Eigen::Matrix<double, 15, 15> Pii = Phi * P.topLeftCorner<I, I>() * Phi.transpose() + Q;
+  s.for_each_covariance([&](auto &P) {
+    using T = covariance_scalar<decltype(P)>;
+    const Eigen::Matrix<T, 15, 15> Phi_t = Phi.cast<T>();
+    const Eigen::Matrix<T, 15, 15> Pii = Phi_t * P.template topLeftCorner<I, I>() * Phi_t.transpose() + Q.cast<T>();
     // Only the IMU block is recomputed; the rest of P keeps its exact symmetry (its cross terms are mirrored).
-    P.topLeftCorner<I, I>() = 0.5 * (Pii + Pii.transpose());
+    P.template topLeftCorner<I, I>() = T(0.5) * (Pii + Pii.transpose());
     if (n > I) {
-      const Eigen::MatrixXd Pix = Phi * P.topRightCorner(I, n - I);
+      const Eigen::Matrix<T, I, Eigen::Dynamic> Pix = Phi_t * P.topRightCorner(I, n - I);
       P.topRightCorner(I, n - I) = Pix;
       P.bottomLeftCorner(n - I, I) = Pix.transpose();
     }
@@ -27,13 +29,17 @@ void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, co
 void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q,
                           const Eigen::Matrix<double, 15, 12> &Gamma, int cal_index) {
   constexpr int I = ImuState::kSize;
-  s.for_each_covariance([&](Eigen::MatrixXd &P) {
-    const Eigen::MatrixXd rows = Phi * P.topRows(I) + Gamma * P.middleRows(cal_index, 12); // A·P, 15 x n
-    const Eigen::Matrix<double, 15, 15> Pii =
-        rows.leftCols(I) * Phi.transpose() + rows.middleCols(cal_index, 12) * Gamma.transpose() + Q;
+  s.for_each_covariance([&](auto &P) {
+    using T = covariance_scalar<decltype(P)>;
+    const Eigen::Matrix<T, 15, 15> Phi_t = Phi.cast<T>();
+    const Eigen::Matrix<T, 15, 12> Gamma_t = Gamma.cast<T>();
+    // A·P, 15 x n
+    const Eigen::Matrix<T, I, Eigen::Dynamic> rows = Phi_t * P.topRows(I) + Gamma_t * P.middleRows(cal_index, 12);
+    const Eigen::Matrix<T, 15, 15> Pii =
+        rows.leftCols(I) * Phi_t.transpose() + rows.middleCols(cal_index, 12) * Gamma_t.transpose() + Q.cast<T>();
     P.topRows(I) = rows;
     P.leftCols(I) = rows.transpose();
-    P.topLeftCorner<I, I>() = 0.5 * (Pii + Pii.transpose());
+    P.template topLeftCorner<I, I>() = T(0.5) * (Pii + Pii.transpose());
   });
 }
 
@@ -49,14 +55,18 @@ void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w
     J.block<3, 1>(0, s.td_index) = s.imu.R * w_B; // world-frame rotation error: R(t+δ) = Exp(R ω δ) R(t)
     J.block<3, 1>(3, s.td_index) = v_W;
   }
-  s.for_each_covariance([&](Eigen::MatrixXd &P) {
-    const Eigen::MatrixXd PJt = P * J.transpose();
-    Eigen::MatrixXd Pn(n + 6, n + 6);
+  s.for_each_covariance([&](auto &P) {
+    using T = covariance_scalar<decltype(P)>;
+    const Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic> J_t = J.cast<T>();
+    const Eigen::Matrix<T, Eigen::Dynamic, 6> PJt = P * J_t.transpose();
+    const Eigen::Matrix<T, 6, 6> JPJt = J_t * PJt;
+    // P is exactly symmetric (every update mirrors its lower triangle), so only the new corner needs symmetrising.
+    std::decay_t<decltype(P)> Pn(n + 6, n + 6);
     Pn.topLeftCorner(n, n) = P;
     Pn.topRightCorner(n, 6) = PJt;
     Pn.bottomLeftCorner(6, n) = PJt.transpose();
-    Pn.bottomRightCorner(6, 6) = J * PJt;
-    P = 0.5 * (Pn + Pn.transpose());
+    Pn.bottomRightCorner(6, 6) = T(0.5) * (JPJt + JPJt.transpose());
+    P = std::move(Pn);
   });
 
   CloneState c;
@@ -95,7 +105,7 @@ void marginalize_landmark(State &s, size_t id) {
 namespace {
 
 /// Copies the lower triangle onto the upper: the updates write the lower one only.
-void mirror_lower(Eigen::MatrixXd &P) {
+template <class Mat> void mirror_lower(Mat &P) {
   const Eigen::Index n = P.rows();
   for (Eigen::Index j = 1; j < n; ++j)
     for (Eigen::Index i = 0; i < j; ++i)
@@ -105,51 +115,55 @@ void mirror_lower(Eigen::MatrixXd &P) {
 /// The reported covariance's Joseph form for the gain K of P (apply_update): P_r⁺ = P_r − K H P_r − P_r Hᵀ Kᵀ +
 /// K (H P_r Hᵀ + σ²I) Kᵀ + K ΔR Kᵀ, where K ΔR Kᵀ = Z G Zᵀ with Z = P⁺_c/σ² (P⁺'s columns at cols; K = P⁺Hᵀ/σ²
 /// for the σ²I weight) and G = HᵀΔRH. Both forms below write P_r + A Bᵀ + B Aᵀ on the lower triangle, mirrored.
+/// In single precision, as P_r is kept (State::P_report); K comes from the filter's double P.
 void joseph_report(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, Eigen::MatrixXd &Wt,
                    const Eigen::LLT<Eigen::MatrixXd> &llt, double sigma2, const ReportNoise &noise) {
+  using Mf = Eigen::MatrixXf;
   const Eigen::Index n = s.P.rows(), m = Hc.rows(), nc = static_cast<Eigen::Index>(cols.size());
-  Eigen::MatrixXd Pr_cols(n, nc); // P_r's columns at the compact columns
+  const float s2 = static_cast<float>(sigma2);
+  Mf Pr_cols(n, nc); // P_r's columns at the compact columns
   for (Eigen::Index j = 0; j < nc; ++j)
     Pr_cols.col(j) = s.P_report.col(cols[j]);
   const auto p_plus_cols = [&] { // Z = P⁺'s columns at the compact columns / σ²
-    Eigen::MatrixXd Z(n, nc);
+    Mf Z(n, nc);
     for (Eigen::Index j = 0; j < nc; ++j)
-      Z.col(j) = s.P.col(cols[j]) / sigma2;
+      Z.col(j) = (s.P.col(cols[j]) / sigma2).cast<float>();
     return Z;
   };
-  Eigen::MatrixXd A, B;
+  const Mf H = Hc.cast<float>();
+  Mf A, B;
   if (m == nc) {
     // Square (the MSCKF's compressed rows): in the columns' space, K = Z Hᵀ, J = HᵀH:
     // P_r⁺ = P_r + Z Bᵀ + B Zᵀ with B = ½ Z M − P_r,c J and M = J P_r,cc J + σ²J + G — no Kᵀ solve.
-    const Eigen::MatrixXd J = Hc.transpose() * Hc;
-    Eigen::MatrixXd Pcc(nc, nc);
+    const Mf J = H.transpose() * H;
+    Mf Pcc(nc, nc);
     for (Eigen::Index j = 0; j < nc; ++j)
       for (Eigen::Index i = 0; i < nc; ++i)
         Pcc(i, j) = Pr_cols(cols[i], j);
-    Eigen::MatrixXd M = J * Pcc * J + sigma2 * J;
+    Mf M = J * Pcc * J + s2 * J;
     if (noise.cols)
-      M += *noise.cols;
+      M += noise.cols->cast<float>();
     if (noise.rows)
-      M += Hc.transpose() * *noise.rows * Hc;
+      M += (Hc.transpose() * *noise.rows * Hc).cast<float>();
     A = p_plus_cols();
-    B = 0.5 * A * M - Pr_cols * J;
+    B = 0.5f * A * M - Pr_cols * J;
   } else {
     // Fewer rows than columns: in the rows' space, with K = S⁻¹PHᵀ solved and T = H P_r Hᵀ + σ²I:
     // P_r⁺ = P_r + K Bᵀ + B Kᵀ with B = ½ K T − (H P_r)ᵀ, and Z G Zᵀ on top.
-    llt.matrixU().solveInPlace(Wt);                         // Kᵀ = S⁻¹ PHᵀᵀ = L⁻ᵀ Wᵀ
-    const Eigen::MatrixXd HPr_t = Pr_cols * Hc.transpose(); // (H P_r)ᵀ, n × m
-    Eigen::MatrixXd HPr_t_c(nc, m);
+    llt.matrixU().solveInPlace(Wt);           // Kᵀ = S⁻¹ PHᵀᵀ = L⁻ᵀ Wᵀ
+    const Mf HPr_t = Pr_cols * H.transpose(); // (H P_r)ᵀ, n × m
+    Mf HPr_t_c(nc, m);
     for (Eigen::Index j = 0; j < nc; ++j)
       HPr_t_c.row(j) = HPr_t.row(cols[j]);
-    Eigen::MatrixXd T = Hc * HPr_t_c;
-    T.diagonal().array() += sigma2;
+    Mf T = H * HPr_t_c;
+    T.diagonal().array() += s2;
     if (noise.rows)
-      T += *noise.rows;
-    A = Wt.transpose();
-    B = 0.5 * A * T - HPr_t;
+      T += noise.rows->cast<float>();
+    A = Wt.transpose().cast<float>();
+    B = 0.5f * A * T - HPr_t;
     if (noise.cols) {
-      const Eigen::MatrixXd Z = p_plus_cols();
-      const Eigen::MatrixXd ZG = Z * *noise.cols;
+      const Mf Z = p_plus_cols();
+      const Mf ZG = Z * noise.cols->cast<float>();
       s.P_report.triangularView<Eigen::Lower>() += ZG * Z.transpose();
     }
   }

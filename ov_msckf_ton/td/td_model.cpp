@@ -27,18 +27,19 @@ void propagate_td_covariance(State &s, double q_td, double q_rate, double dt_s) 
   if (!s.estimates_td() || !(dt_s > 0))
     return;
   const int d = s.td_index, r = s.td_rate_index;
-  s.for_each_covariance([&](Eigen::MatrixXd &P) {
+  s.for_each_covariance([&](auto &P) {
+    using T = covariance_scalar<decltype(P)>;
     if (r >= 0) {
       // Φ P Φᵀ with Φ = I + dt·e_d e_rᵀ: row d += dt·row r, then column d += dt·column r.
-      P.row(d) += dt_s * P.row(r);
-      P.col(d) += dt_s * P.col(r);
+      P.row(d) += T(dt_s) * P.row(r);
+      P.col(d) += T(dt_s) * P.col(r);
       const double qr = q_rate * q_rate;
-      P(d, d) += qr * dt_s * dt_s * dt_s / 3.0;
-      P(d, r) += qr * dt_s * dt_s / 2.0;
-      P(r, d) += qr * dt_s * dt_s / 2.0;
-      P(r, r) += qr * dt_s;
+      P(d, d) += T(qr * dt_s * dt_s * dt_s / 3.0);
+      P(d, r) += T(qr * dt_s * dt_s / 2.0);
+      P(r, d) += T(qr * dt_s * dt_s / 2.0);
+      P(r, r) += T(qr * dt_s);
     }
-    P(d, d) += q_td * q_td * dt_s;
+    P(d, d) += T(q_td * q_td * dt_s);
   });
 }
 

@@ -99,13 +99,14 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feat
   }
 }
 
-UpdaterSLAM::LandmarkBlock UpdaterSLAM::landmark_block(const Eigen::MatrixXd &C, const std::vector<int> &cols,
+template <class Mat>
+UpdaterSLAM::LandmarkBlock UpdaterSLAM::landmark_block(const Mat &C, const std::vector<int> &cols,
                                                        const Eigen::MatrixXd &H1, const Eigen::Matrix3d &R1inv,
                                                        const Eigen::Matrix3d &N1) {
   const Eigen::Index n = C.rows();
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, 3); // C H₁ᵀ, n × 3
   for (size_t j = 0; j < cols.size(); ++j)
-    M.noalias() += C.col(cols[j]) * H1.col(static_cast<Eigen::Index>(j)).transpose();
+    M.noalias() += C.col(cols[j]).template cast<double>() * H1.col(static_cast<Eigen::Index>(j)).transpose();
   Eigen::Matrix3d S1 = Eigen::Matrix3d::Zero();
   for (size_t j = 0; j < cols.size(); ++j)
     S1.noalias() += H1.col(static_cast<Eigen::Index>(j)) * M.row(cols[j]);
@@ -113,11 +114,12 @@ UpdaterSLAM::LandmarkBlock UpdaterSLAM::landmark_block(const Eigen::MatrixXd &C,
   return {-M * R1inv.transpose(), R1inv * S1 * R1inv.transpose()};
 }
 
-void UpdaterSLAM::write_landmark_block(Eigen::MatrixXd &C, int index, const LandmarkBlock &b) {
+template <class Mat> void UpdaterSLAM::write_landmark_block(Mat &C, int index, const LandmarkBlock &b) {
+  using T = typename Mat::Scalar;
   const Eigen::Index n = b.P_xf.rows();
-  C.block(0, index, n, 3) = b.P_xf;
-  C.block(index, 0, 3, n) = b.P_xf.transpose();
-  C.block<3, 3>(index, index) = b.P_ff;
+  C.block(0, index, n, 3) = b.P_xf.cast<T>();
+  C.block(index, 0, 3, n) = b.P_xf.transpose().cast<T>();
+  C.template block<3, 3>(index, index) = b.P_ff.cast<T>();
 }
 
 UpdaterSLAM::LandmarkBlock UpdaterSLAM::report_initialization(const State &state, const std::vector<int> &cols,

@@ -82,10 +82,12 @@ public:
     Eigen::MatrixXd P_xf;
     Eigen::Matrix3d P_ff = Eigen::Matrix3d::Zero();
   };
-  static LandmarkBlock landmark_block(const Eigen::MatrixXd &C, const std::vector<int> &cols, const Eigen::MatrixXd &H1,
+  /// (C: the filter's P or the reported P_report; computed in double either way.)
+  template <class Mat>
+  static LandmarkBlock landmark_block(const Mat &C, const std::vector<int> &cols, const Eigen::MatrixXd &H1,
                                       const Eigen::Matrix3d &R1inv, const Eigen::Matrix3d &N1);
   /// Writes it into C once the landmark is the variable at `index`.
-  static void write_landmark_block(Eigen::MatrixXd &C, int index, const LandmarkBlock &b);
+  template <class Mat> static void write_landmark_block(Mat &C, int index, const LandmarkBlock &b);
 
   /// With a separately reported covariance (State::P_report): the new landmark's reported blocks from the window's
   /// rows (H1 its top three, R1inv, qr of H_f) under the track model, and in dR2 the extra noise ΔR₂ of the remaining
