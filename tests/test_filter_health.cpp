@@ -148,6 +148,20 @@ TEST(FilterHealth, NonFiniteStateOrCovarianceFails) {
   EXPECT_NE(broken([&](State &s) { s.P(4, 4) = std::numeric_limits<double>::infinity(); }).find("covariance"),
             std::string::npos);
   EXPECT_NE(broken([&](State &s) { s.P(2, 2) = -1; }).find("negative variance"), std::string::npos);
+  // Off the diagonal too, and infinities of either sign.
+  EXPECT_NE(broken([&](State &s) { s.P(3, 7) = s.P(7, 3) = nan; }).find("covariance"), std::string::npos);
+  EXPECT_NE(broken([&](State &s) {
+              s.P(0, 5) = std::numeric_limits<double>::infinity();
+              s.P(5, 0) = -std::numeric_limits<double>::infinity();
+            }).find("covariance"),
+            std::string::npos);
+  // The reported covariance (single precision) is checked too.
+  EXPECT_EQ(broken([&](State &s) { s.start_report(); }), "");
+  EXPECT_NE(broken([&](State &s) {
+              s.start_report();
+              s.P_report(2, 9) = std::numeric_limits<float>::quiet_NaN();
+            }).find("reported covariance"),
+            std::string::npos);
 }
 
 // A feature-level flight with one accelerometer reading of 4000 m/s^2 (inside the reader's range, 5000) after

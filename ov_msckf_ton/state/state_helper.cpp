@@ -244,10 +244,19 @@ double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd 
 
 Eigen::MatrixXd sub_covariance(const State &s, const std::vector<int> &cols) {
   const int nc = static_cast<int>(cols.size());
+  // The columns come in runs of consecutive indices (a clone's six, a landmark's three): each column is gathered
+  // run by run as contiguous segments rather than element by element (it runs once per feature and update).
+  std::vector<std::pair<int, int>> runs; // (position in cols, length)
+  for (int i = 0; i < nc; ++i) {
+    if (i > 0 && cols[i] == cols[i - 1] + 1)
+      ++runs.back().second;
+    else
+      runs.emplace_back(i, 1);
+  }
   Eigen::MatrixXd P(nc, nc);
   for (int j = 0; j < nc; ++j)
-    for (int i = 0; i < nc; ++i)
-      P(i, j) = s.P(cols[i], cols[j]);
+    for (const auto &[i, len] : runs)
+      P.col(j).segment(i, len) = s.P.col(cols[j]).segment(cols[i], len);
   return P;
 }
 
