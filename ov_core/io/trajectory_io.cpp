@@ -68,11 +68,13 @@ TrajectoryWriter::TrajectoryWriter(const std::string &file, TrajectoryFormat fmt
 
 void TrajectoryWriter::write(const StateSample &s) {
   const auto &q = s.q_WB;
+  // t_d to 12 significant digits; its sigma to 7, the precision of the single-precision covariance the estimator
+  // reports it from, rather than that float's decimal expansion (0.00999999987 for 0.01).
   if (fmt_ == TrajectoryFormat::Csv) {
     out_ << s.t_ns << ',' << s.p.x() << ',' << s.p.y() << ',' << s.p.z() << ',' << q.w() << ',' << q.x() << ',' << q.y()
          << ',' << q.z() << ',' << s.v.x() << ',' << s.v.y() << ',' << s.v.z() << ',' << s.bg.x() << ',' << s.bg.y()
          << ',' << s.bg.z() << ',' << s.ba.x() << ',' << s.ba.y() << ',' << s.ba.z() << ',' << std::setprecision(12)
-         << s.td_s << ',' << s.td_sigma_s << std::setprecision(9) << "\n";
+         << s.td_s << ',' << std::setprecision(7) << s.td_sigma_s << std::setprecision(9) << "\n";
   } else {
     // Sign and magnitude apart: -1.5 s is "-1.500000000", not "-1.-500000000".
     const unsigned long long mag =
