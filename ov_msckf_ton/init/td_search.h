@@ -44,13 +44,13 @@ struct TdSearchOptions {
 };
 
 struct TdSearchResult {
-  bool found = false;                          ///< true when td_s is trustworthy enough to seed the filter
-  double prior_s = 0.0;                        ///< the centre of the search
-  double range_s = 0.0;                        ///< its half width
-  double td_s = 0.0;                           ///< best candidate (also when not found, if one was computed)
-  double sigma_s = 0.0;                        ///< its standard error from the cost's curvature
-  std::string why;                             ///< when not found: why the prior is kept
-  int pairs = 0;                               ///< image pairs in the fit
+  bool found = false;   ///< true when td_s is trustworthy enough to seed the filter
+  double prior_s = 0.0; ///< the centre of the search
+  double range_s = 0.0; ///< its half width
+  double td_s = 0.0;    ///< best candidate (also when not found, if one was computed)
+  double sigma_s = 0.0; ///< its standard error: the cost's curvature, or larger for correlated rows
+  std::string why;      ///< when not found: why the prior is kept
+  int pairs = 0;        ///< image pairs in the fit
   double window_begin_s = 0, window_end_s = 0; ///< seconds after the first image
   double rms_alpha = 0.0;                      ///< rad/s^2 over the window
   /// The window's rotation rate barely changes (rms_alpha below TdSearchOptions::min_rms_alpha): t_d is weakly
