@@ -154,6 +154,27 @@ double correlated_sigma(const std::vector<PairRate> &pairs, const std::vector<st
   return V > 0 ? std::sqrt(V) / curvature : 0.0;
 }
 
+/// The gyro averaged over a window of one image interval (the median of the pairs'), centred on each reading.
+std::vector<ov_core::ImuData> box_filtered(const std::vector<ov_core::ImuData> &imu,
+                                           const std::vector<PairRate> &pairs) {
+  std::vector<double> spans;
+  for (const auto &p : pairs)
+    spans.push_back(p.t1 - p.t0);
+  std::nth_element(spans.begin(), spans.begin() + spans.size() / 2, spans.end());
+  const int64_t half_ns = ov_core::s_to_ns(0.5 * spans[spans.size() / 2]);
+  std::vector<ov_core::ImuData> out = imu;
+  size_t a = 0, b = 0;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < imu.size(); ++i) {
+    while (b < imu.size() && imu[b].t_imu_ns <= imu[i].t_imu_ns + half_ns)
+      sum += imu[b++].wm;
+    while (imu[a].t_imu_ns < imu[i].t_imu_ns - half_ns)
+      sum -= imu[a++].wm;
+    out[i].wm = sum / static_cast<double>(b - a);
+  }
+  return out;
+}
+
 double median(std::vector<double> v) {
   if (v.empty())
     return 0.0;
@@ -367,20 +388,32 @@ TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const s
   res.td_s = td2;
 
   // Standard error from the curvature of the weighted least-squares cost at the minimum (weights fixed there):
-  // σ² = 2·s²/J'', s² the residual variance per row.
+  // σ² = 2·s²/J'', s² the residual variance per row; or, where larger, from the rows' correlated scores
+  // (correlated_sigma). Both again with the gyro averaged over one image interval: the images cannot follow faster
+  // rotation, and the gyro's vibration (10-40 Hz on the EuRoC IMU) sharpens the cost's curvature around its minimum
+  // without saying where the images' rates line up (docs/robustness.md, "The coarse search's sigma").
+  const int lags = static_cast<int>(std::ceil(mean_hood));
+  struct Sigmas {
+    double curvature, correlated, s2;
+  };
+  const auto sigmas_with = [&](const GyroIntegral &g) {
+    const CostEval at = evaluate(pairs, hood, g, td2, c);
+    const double h = 0.002;
+    const double Jp = evaluate(pairs, hood, g, td2 + h, c, &at.w).cost,
+                 Jm = evaluate(pairs, hood, g, td2 - h, c, &at.w).cost;
+    const double curvature = (Jp - 2 * at.cost + Jm) / (h * h);
+    double sw = 0;
+    for (double w : at.w)
+      sw += w;
+    // Per row and axis; the high-pass takes away 1/m of white noise's variance (m rows per neighbourhood).
+    const double s2_g = at.cost / std::max(1.0, 3 * sw * (1 - 1 / mean_hood) - 1);
+    return Sigmas{curvature > 0 ? std::sqrt(2 * s2_g / curvature) : inf,
+                  correlated_sigma(pairs, hood, g, td2, c, at.w, curvature, lags), s2_g};
+  };
+  const Sigmas raw = sigmas_with(gyro), slow = sigmas_with(GyroIntegral(box_filtered(imu, pairs), t0));
+  res.sigma_s = std::max({raw.curvature, raw.correlated, slow.curvature, slow.correlated});
+  const double s2 = raw.s2;
   const CostEval at = evaluate(pairs, hood, gyro, td2, c);
-  const double h = 0.002;
-  const double Jp = evaluate(pairs, hood, gyro, td2 + h, c, &at.w).cost,
-               Jm = evaluate(pairs, hood, gyro, td2 - h, c, &at.w).cost;
-  const double curvature = (Jp - 2 * at.cost + Jm) / (h * h);
-  double sw = 0;
-  for (double w : at.w)
-    sw += w;
-  // Per row and axis; the high-pass takes away 1/m of white noise's variance (m rows per neighbourhood).
-  const double s2 = at.cost / std::max(1.0, 3 * sw * (1 - 1 / mean_hood) - 1);
-  const double sigma_curvature = curvature > 0 ? std::sqrt(2 * s2 / curvature) : inf;
-  res.sigma_s = std::max(sigma_curvature, correlated_sigma(pairs, hood, gyro, td2, c, at.w, curvature,
-                                                           static_cast<int>(std::ceil(mean_hood))));
   res.residual_sigma = std::sqrt(s2);
   res.cost_profile = profile;
 
