@@ -133,8 +133,9 @@ public:
   /// applies to P_report alike (the same Φ, Q, cloning, marginalisation), the updates with the Joseph form of P's
   /// gain under the model's noise (state_helper::ekf_update). Empty: P is both.
   /// Single precision: nothing the filter decides reads it, and in double its updates (the Joseph form's rank-2m
-  /// products over the whole state) cost a quarter of a run's CPU; in float they cost about half as much, and the
-  /// reported sigmas move by ~1e-6 of themselves (docs/benchmarks.md, "The reported covariance in single precision").
+  /// products over the whole state) cost a quarter of a run's CPU; in float about 60 % of that, and the reported
+  /// sigmas move by ≤ 1e-3 of themselves in the first second, ~1e-5 after (docs/benchmarks.md, "The reported
+  /// covariance in single precision").
   Eigen::MatrixXf P_report;
 
   int dim() const { return static_cast<int>(P.rows()); }
