@@ -278,10 +278,12 @@ TEST(DiagnoseTruePoses, RollingShutterSizedWithAVibratingGyro) {
     }
 }
 
+// The focal column is the secant of the rates' response from the data back to no error (the response is not linear):
+// 1.03 % here; with the +1 % step alone it read 0.90 % (docs/diagnose.md, "What the focal reading is made of").
 TEST(DiagnoseTruePoses, FocalErrorRankedFirstAndSized) {
   Plant p;
   p.focal_error = 0.01;
-  expect_top(true_pose_case(p, p.td0_s), "focal", "relative focal error ε", 1.0, 0.2);
+  expect_top(true_pose_case(p, p.td0_s), "focal", "relative focal error ε", 1.0, 0.08);
 }
 
 // The rate model's own bias on agile motion: with true poses, noise-free tracks and no IMU noise, ω̄_gyro turned the
