@@ -566,6 +566,7 @@ bool build_rate_design(const UsedData &data, const DiagnoseOptions &opt, const D
   // The focal response is not linear in the error (docs/diagnose.md, "What the focal reading is made of"): first a 1 %
   // step, then, where the rows show a focal error ε̂ of 0.2 % or more, the secant from the data back to no error
   // (a step of −ε̂), twice.
+  const FlowFitter data_fit = fitter; // the data's depth corrections: add_focal_response leaves the perturbed ones
   add_focal_response(flow.frames, cam, fitter, fits, fits_psi, omega_bar, omega_bar0, 0.01);
   std::vector<FrameRate> fr = frame_rates();
   if (fr.size() < 50) {
@@ -577,7 +578,7 @@ bool build_rate_design(const UsedData &data, const DiagnoseOptions &opt, const D
     const double eps = focal_alone(dr);
     if (!(std::abs(eps) >= 0.002))
       break;
-    fitter.solve(flow.frames, fits, fits_psi); // the data's own depth corrections again
+    fitter = data_fit;
     add_focal_response(flow.frames, cam, fitter, fits, fits_psi, omega_bar, omega_bar0, -eps);
     fr = frame_rates();
     fill_rate_rows(fr, rep, dr);

@@ -394,7 +394,7 @@ TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const s
   // without saying where the images' rates line up (docs/robustness.md, "The coarse search's sigma").
   const int lags = static_cast<int>(std::ceil(mean_hood));
   struct Sigmas {
-    double curvature, correlated, s2;
+    double curvature, correlated, s2, huber_loss;
   };
   const auto sigmas_with = [&](const GyroIntegral &g) {
     const CostEval at = evaluate(pairs, hood, g, td2, c);
@@ -408,12 +408,11 @@ TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const s
     // Per row and axis; the high-pass takes away 1/m of white noise's variance (m rows per neighbourhood).
     const double s2_g = at.cost / std::max(1.0, 3 * sw * (1 - 1 / mean_hood) - 1);
     return Sigmas{curvature > 0 ? std::sqrt(2 * s2_g / curvature) : inf,
-                  correlated_sigma(pairs, hood, g, td2, c, at.w, curvature, lags), s2_g};
+                  correlated_sigma(pairs, hood, g, td2, c, at.w, curvature, lags), s2_g, at.huber_loss};
   };
   const Sigmas raw = sigmas_with(gyro), slow = sigmas_with(GyroIntegral(box_filtered(imu, pairs), t0));
   res.sigma_s = std::max({raw.curvature, raw.correlated, slow.curvature, slow.correlated});
   const double s2 = raw.s2;
-  const CostEval at = evaluate(pairs, hood, gyro, td2, c);
   res.residual_sigma = std::sqrt(s2);
   res.cost_profile = profile;
 
@@ -427,7 +426,7 @@ TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const s
     if (local_min && std::abs(prior_td_s + (i - n_steps) * opt.step_s - td2) > sep)
       rival = std::min(rival, profile[i]);
   }
-  const double best_loss = at.huber_loss;
+  const double best_loss = raw.huber_loss;
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   char why[200];
   if (std::abs(td2 - prior_td_s) > opt.range_s - 2 * opt.step_s) {
