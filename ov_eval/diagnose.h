@@ -42,6 +42,7 @@ struct DiagnoseOptions {
   /// residual_log_schema.h). When given, the rates compare the images with the IMU through it: the camera-body
   /// rotation, the IMU intrinsics, the readout time and the focal the filter held at each image (docs/diagnose.md).
   std::vector<ov_core::CalibrationLogRow> calibration;
+  double gravity_mag = 9.81;   ///< |g| [m/s²] the accelerometer is compared with (the filter's gravity_mag)
   double min_sigma = 5.0;      ///< significance a candidate needs (Gaussian-equivalent σ)
   double min_explained = 0.02; ///< share of the residual loss it must remove
   double huber_k = 3.0;        ///< Huber threshold in robust σ of the residual components

@@ -244,8 +244,8 @@ TEST(Diagnose, CalibrationLogRoundTripAndLookup) {
   a.D_w[8] = 0.97087, a.b_a[1] = -0.0123456789, a.intrinsics[0] = 458.654;
   b = a;
   b.update_id = 4, b.t_cam_ns = 1'050'000'000, b.readout_s = 0.02, b.R_BC[1] = 0.01;
-  const std::string file = dir / "res_calib.csv";
-  ovtest::write_text(file, calibration_log_header() + "\n" + format_calibration_row(a) + "\n" +
+  const std::string file = dir / "res_calib.csv"; // rows without the IMU state (test_diagnose_accel.cpp has them)
+  ovtest::write_text(file, calibration_log_header(false) + "\n" + format_calibration_row(a) + "\n" +
                                format_calibration_row(b) + "\n");
   const auto rows = load_calibration_log(file);
   ASSERT_EQ(rows.size(), 2u);
@@ -260,10 +260,10 @@ TEST(Diagnose, CalibrationLogRoundTripAndLookup) {
   EXPECT_EQ(diag::calibration_at(rows, 1'000'000'001)->update_id, 4u);
   EXPECT_EQ(diag::calibration_at(rows, 2'000'000'000)->update_id, 4u);
   // Time going back, a short row, a residual log's header.
-  ovtest::write_text(dir / "back.csv", calibration_log_header() + "\n" + format_calibration_row(b) + "\n" +
+  ovtest::write_text(dir / "back.csv", calibration_log_header(false) + "\n" + format_calibration_row(b) + "\n" +
                                            format_calibration_row(a) + "\n");
   ovtest::expect_data_error([&] { load_calibration_log(dir / "back.csv"); }, "back.csv", 3, "goes back");
-  ovtest::write_text(dir / "short.csv", calibration_log_header() + "\n1,2,3\n");
+  ovtest::write_text(dir / "short.csv", calibration_log_header(false) + "\n1,2,3\n");
   ovtest::expect_data_error([&] { load_calibration_log(dir / "short.csv"); }, "short.csv", 2, "short row");
   ovtest::write_text(dir / "res.csv", ov_msckf_ton::ResidualLogWriter::header() + "\n");
   EXPECT_THROW(load_calibration_log(dir / "res.csv"), DataError);

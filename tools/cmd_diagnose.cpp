@@ -42,7 +42,9 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
      "share of the residual loss a candidate must remove (0..1)")
     ("logged-velocity", po::bool_switch(&opt.use_logged_velocity),
      "use the log's velocity column (shares each row's pixel noise: biased) instead of the track's central difference")
-    ("time-bins", po::value(&opt.time_bins)->default_value(opt.time_bins), "bins of the per-time offset estimate");
+    ("time-bins", po::value(&opt.time_bins)->default_value(opt.time_bins), "bins of the per-time offset estimate")
+    ("gravity", po::value(&opt.gravity_mag)->default_value(opt.gravity_mag, "9.81"),
+     "|g| [m/s^2] the accelerometer scale is tested against (the run's estimator gravity_mag)");
   // clang-format on
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
@@ -51,6 +53,8 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
     throw ov_core::UsageError("--log is required (see ovton diagnose --help)");
   if (!(opt.min_sigma > 0) || !(opt.min_explained >= 0 && opt.min_explained < 1) || opt.time_bins < 1)
     throw ov_core::UsageError("--min-sigma must be > 0, --min-explained in [0, 1), --time-bins >= 1");
+  if (!(opt.gravity_mag > 9.7 && opt.gravity_mag < 9.9))
+    throw ov_core::UsageError("--gravity must be between 9.7 and 9.9 m/s^2 (Earth's surface)");
   if (!dataset_dir.empty()) {
     ov_core::LoadOptions lo;
     lo.check_images_exist = false;

@@ -255,6 +255,10 @@ std::vector<std::string> calib_real_names() {
   return names;
 }
 
+/// The IMU state's columns after the calibration's (added in session 35; older logs end before them).
+const char *const kStateColumns = ",t_imu_ns,q_WB_w,q_WB_x,q_WB_y,q_WB_z,v_W_0,v_W_1,v_W_2";
+constexpr size_t kStateCount = 8;
+
 } // namespace
 
 std::string calibration_log_path(const std::string &residual_log) {
@@ -264,11 +268,11 @@ std::string calibration_log_path(const std::string &residual_log) {
   return (has_ext ? residual_log.substr(0, dot) : residual_log) + "_calib.csv";
 }
 
-std::string calibration_log_header() {
+std::string calibration_log_header(bool with_state) {
   std::string s = "update_id,t_cam_ns,estimated";
   for (const std::string &n : calib_real_names())
     s += "," + n;
-  return s;
+  return with_state ? s + kStateColumns : s;
 }
 
 std::string format_calibration_row(const CalibrationLogRow &r) {
@@ -280,6 +284,13 @@ std::string format_calibration_row(const CalibrationLogRow &r) {
       s += ',';
       put_double(s, a.at(copy)[i]);
     }
+  if (!r.has_state)
+    return s;
+  s += ',' + std::to_string(static_cast<long long>(r.t_imu_ns));
+  for (double v : {r.q_WB[0], r.q_WB[1], r.q_WB[2], r.q_WB[3], r.v_W[0], r.v_W[1], r.v_W[2]}) {
+    s += ',';
+    put_double(s, v);
+  }
   return s;
 }
 
@@ -290,9 +301,10 @@ std::vector<CalibrationLogRow> load_calibration_log(const std::string &file) {
   std::string header = header_line(rd);
   while (!header.empty() && (header.back() == '\r' || header.back() == ' '))
     header.pop_back();
-  if (header != calibration_log_header())
+  const bool with_state = header == calibration_log_header(true);
+  if (!with_state && header != calibration_log_header(false))
     throw DataError(file, 1, "header is not the calibration log's (ovton run --residual-log writes it beside the log)");
-  const size_t n_cols = 3 + calib_real_names().size();
+  const size_t n_cols = 3 + calib_real_names().size() + (with_state ? kStateCount : 0);
   std::vector<CalibrationLogRow> rows;
   while (have_row) {
     if (f.size() != n_cols)
@@ -310,6 +322,19 @@ std::vector<CalibrationLogRow> load_calibration_log(const std::string &file) {
           rd.fail(std::string("NaN ") + a.name);
         a.at(r)[i] = v;
       }
+    if (with_state) {
+      r.has_state = true;
+      r.t_imu_ns = rd.to_int64(f[k++], "t_imu_ns");
+      double *dst[7] = {&r.q_WB[0], &r.q_WB[1], &r.q_WB[2], &r.q_WB[3], &r.v_W[0], &r.v_W[1], &r.v_W[2]};
+      for (double *d : dst) {
+        *d = parse_number(rd, f[k++], "IMU state");
+        if (!std::isfinite(*d))
+          rd.fail("NaN in the IMU state");
+      }
+      const double qn = std::hypot(std::hypot(r.q_WB[0], r.q_WB[1]), std::hypot(r.q_WB[2], r.q_WB[3]));
+      if (std::abs(qn - 1.0) > 1e-6)
+        rd.fail("q_WB is not a unit quaternion (norm " + std::to_string(qn) + ")");
+    }
     if (!rows.empty() && r.t_cam_ns < rows.back().t_cam_ns)
       rd.fail("camera time goes back (rows must be in update order)");
     rows.push_back(r);

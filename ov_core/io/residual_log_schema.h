@@ -69,7 +69,9 @@ ResidualLog load_residual_log(const std::string &file);
 /// held at each image), so that an effect the filter has estimated is no longer named. Fixed values when a block is
 /// not estimated (`estimated` says which are). Conventions as in the state (ov_msckf_ton/state/state.h):
 /// R_BC camera -> body, row-major; intrinsics fu fv cu cv d0..d3; a row v is seen at t + t_d + (v/H − ½)·readout_s;
-/// ω = D_w·(ω_m − b_g), a = D_a·(a_m − b_a) (D_w, D_a row-major).
+/// ω = D_w·(ω_m − b_g), a = D_a·(a_m − b_a) (D_w, D_a row-major). The IMU state after the update (its time, q_WB and
+/// v_W) follows: with it `diagnose` tests the accelerometer against gravity (docs/diagnose.md, "Accelerometer scale
+/// against gravity"). Logs written before those columns existed are still read, without them (has_state false).
 struct CalibrationLogRow {
   enum Estimated : int { kExtrinsics = 1, kIntrinsics = 2, kReadout = 4, kImuIntrinsics = 8 };
   long line = 0; ///< 1-based line in the file it was read from
@@ -85,15 +87,20 @@ struct CalibrationLogRow {
   double D_a[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   double b_g[3] = {0, 0, 0};
   double b_a[3] = {0, 0, 0};
+  bool has_state = false;        ///< the row carries the IMU state below
+  int64_t t_imu_ns = 0;          ///< the time the IMU state refers to (IMU clock)
+  double q_WB[4] = {1, 0, 0, 0}; ///< orientation, w x y z (Hamilton, body -> world)
+  double v_W[3] = {0, 0, 0};     ///< velocity in the world frame [m/s]
 };
 
 /// "dir/res.csv" -> "dir/res_calib.csv" (any extension: "res" -> "res_calib.csv").
 std::string calibration_log_path(const std::string &residual_log);
-/// The header line (without newline) and one row as a CSV line (reals with 10 significant digits).
-std::string calibration_log_header();
+/// The header line (without newline) and one row as a CSV line (reals with 10 significant digits; the IMU state's
+/// columns when the row has_state, which every row of one file must agree on).
+std::string calibration_log_header(bool with_state = true);
 std::string format_calibration_row(const CalibrationLogRow &r);
-/// Reads a calibration log (every column required, all finite, rows in update order). Throws DataError with
-/// file:line like load_residual_log.
+/// Reads a calibration log (every column required, all finite, rows in update order; the header with or without the
+/// IMU state's columns). Throws DataError with file:line like load_residual_log.
 std::vector<CalibrationLogRow> load_calibration_log(const std::string &file);
 
 } // namespace ov_core

@@ -16,7 +16,20 @@ namespace ov_eval::diag {
 /// so the bias no longer follows a scale error alone (on the gyro-scale flight with `imu_intrinsics` on, seeds 1-4 and
 /// 7, the regression read 2-8 % on a perfect accelerometer at up to 11σ: docs/diagnose.md); the filter's D_a and its
 /// σ are the answer there.
+/// With the IMU state in the calibration log (has_state on every row), the design is build_accel_gravity_design's
+/// instead.
 bool build_accel_design(const UsedData &data, const DiagnoseOptions &opt, const DiagnoseReport &rep, Design &db,
                         std::string &why);
+
+/// The accelerometer against gravity (docs/diagnose.md, "Accelerometer scale against gravity"): over windows of 0.5 s
+/// between the filter's states, Δv = Σ_j κ_j·∫R·e_j·a_j dt − ∫R dt·b + g·T with κ_j = 1/(1 + s_j). The images fix
+/// the trajectory's shape but not its size, so the estimate's own scale μ is free (Δv/μ); gravity, a known
+/// acceleration turned in the body frame by the attitude, fixes κ. Three rows per window (world axes): the data
+/// Σ_j A_j + g·T − Δv, the candidate's columns A_j (coefficients β_j = 1 − κ_j), a body-frame bias per 5-s bin and
+/// Δv (μ) projected out. Needs the IMU state on every calibration-log row (`ovton run` writes it since session 35),
+/// opt.imu, 10 windows; the filter's D_a and D_w at each reading are applied (an estimated D_a is then read as no
+/// error).
+bool build_accel_gravity_design(const UsedData &data, const DiagnoseOptions &opt, const DiagnoseReport &rep, Design &db,
+                                std::string &why);
 
 } // namespace ov_eval::diag

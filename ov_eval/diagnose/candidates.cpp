@@ -73,22 +73,26 @@ std::vector<EffectEstimate> gyro_axes(const Coefs &c, const DiagnoseReport &, co
   return out;
 }
 
-/// Per-axis accelerometer scale: the filter's bias follows s_j·f_j (accel_design.h).
-std::vector<EffectEstimate> accel_axes(const Coefs &c, const DiagnoseReport &, const Design &) {
+/// The accelerometer's scale from a coefficient of its columns: against gravity β = 1 − 1/(1 + s), so s = β/(1 − β)
+/// with the delta-method σ; on the filter's bias (which follows s·f) β is s (accel_design.h).
+EffectEstimate accel_scale_from(double beta, double se, const std::string &name, const Design &d) {
+  const double k = d.accel_against_gravity ? 1.0 - beta : 1.0;
+  return {name, "%", 100 * beta / k, 100 * se / (k * k)};
+}
+
+std::vector<EffectEstimate> accel_scale(const Coefs &c, const DiagnoseReport &, const Design &d) {
+  return {accel_scale_from(c.b(0), c.s(0), "accel scale error s", d)};
+}
+
+/// Per-axis accelerometer scale: kAccScale's coefficient is the x axis's, kAccAxY's and kAccAxZ's add to it.
+std::vector<EffectEstimate> accel_axes(const Coefs &c, const DiagnoseReport &, const Design &d) {
   std::vector<EffectEstimate> out;
   const char *names[3] = {"accel scale error s_x", "accel scale error s_y", "accel scale error s_z"};
-  Eigen::Matrix3d C;
   for (int a = 0; a < 3; ++a) {
-    out.push_back({names[a], "%", 100 * c.b(a), 100 * c.s(a)});
-    for (int b = 0; b < 3; ++b)
-      C(a, b) = c.cov(a, b);
+    const double v = a == 0 ? c.b(0) : c.b(0) + c.b(a);
+    const double var = a == 0 ? c.cov(0, 0) : c.cov(0, 0) + c.cov(a, a) + 2 * c.cov(0, a);
+    out.push_back(accel_scale_from(v, std::sqrt(std::max(0.0, var)), names[a], d));
   }
-  // One common scale, the axes weighted by their information (an axis with little specific-force variation is weak).
-  const Eigen::Vector3d w = C.ldlt().solve(Eigen::Vector3d::Ones());
-  const double W = w.sum();
-  if (W > 0)
-    out.push_back({"accel scale error, axes combined", "%", 100 * w.dot(Eigen::Vector3d(c.b(0), c.b(1), c.b(2))) / W,
-                   100 / std::sqrt(W)});
   return out;
 }
 
@@ -256,11 +260,17 @@ const std::vector<CandidateDef> &candidate_table() {
        "gyro axis misalignment (rates only)",
        "gyro axis misalignment, from rates: ω_vis − ω̄_gyro = −M·ω̄_gyro − b, M symmetric with a zero diagonal",
        "", "", "fitted gyro_misalignment effect, / SE"},
-      // The accelerometer's scale: no image shows it; the filter's accelerometer bias follows it (accel_design.h).
-      {"accel_scale_axes", span(kAccAx0, 3), {}, Needs::AccelBias, accel_axes,
-       "per-axis accelerometer scale error, from the filter's accelerometer bias: b̂_a,j = s_j·f_j + c_j (body axes; "
-       "needs the calibration log and --dataset)",
-       "", "", "specific force along the axis, bin means removed [m/s^2]", ""},
+      // The accelerometer's scale: no image shows it. Against gravity through the filter's attitude and velocity
+      // when the calibration log carries them; otherwise the filter's accelerometer bias follows it (accel_design.h).
+      {"accel_scale", {kAccScale}, {}, Needs::AccelBias, accel_scale,
+       "accelerometer scale error (needs the calibration log and --dataset): against gravity, Δv = ∫R·a dt/(1 + s) − "
+       "∫R dt·b + g·T over 0.5-s windows of the filter's states, the trajectory's own scale free; from logs without "
+       "the IMU state, the filter's accelerometer bias b̂_a,j = s·f_j + c_j",
+       "", "", "specific force along the row's axis, bin means removed [m/s^2]", ""},
+      // Contains accel_scale: selected only when the axes differ beyond one common scale.
+      {"accel_scale_axes", {kAccScale, kAccAxY, kAccAxZ}, {}, Needs::AccelBias, accel_axes,
+       "per-axis accelerometer scale error (body axes), as accel_scale with s_j per axis",
+       "", "", "fitted accel_scale_axes effect", ""},
       {"extrinsic_translation", span(kExtTrans0, 3), {}, Needs::Nothing, extrinsic_translation,
        "camera-IMU translation error: r = −f·J_π(x)·δp_C/z (what the rotation along a track leaves of it)",
        "", "",

@@ -39,10 +39,12 @@ enum Col : int {
   /// α·1[time bin b] (rates) or V·1[bin b] (residual) for bins b = 1 .. kTdBins − 2; with kV and kVt, a piecewise
   /// offset.
   kTdBin0 = kExtTrans0 + 3,
-  /// The filter's accelerometer bias only (accel_design.h): 3 columns, the specific force along body axis j on the
-  /// rows of axis j.
-  kAccAx0 = kTdBin0 + kTdBins - 2,
-  kNumCols = kAccAx0 + 3
+  /// The accelerometer only (accel_design.h), as the gyro's scale: one scale for all axes (against gravity Σ_j A_j,
+  /// on the filter's bias the specific force along the row's axis), and the y and z axes' own beyond it.
+  kAccScale = kTdBin0 + kTdBins - 2,
+  kAccAxY,
+  kAccAxZ,
+  kNumCols
 };
 
 /// The piecewise offset's bin of a row at t seconds into a log of `duration_s`.

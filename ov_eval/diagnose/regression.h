@@ -37,6 +37,9 @@ struct Design {
   std::vector<int> pooled_cols, pooled_short;
   double t_mid = 0; ///< centre of the drift term
   bool have_velocity = false, have_rate = false;
+  /// The accelerometer columns' coefficients are β_j = 1 − 1/(1 + s_j) (the design against gravity, accel_design.h),
+  /// not s_j (the design on the filter's bias).
+  bool accel_against_gravity = false;
   /// Where each row lies, for the test of structure no candidate explains (unexplained.h); empty: not tested.
   std::vector<int> region;    ///< image region 0..8 (3 × 3 grid, row-major), −1 unknown
   std::vector<double> motion; ///< image speed [px/s]

@@ -48,8 +48,13 @@ std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &fami
       cr.curve.xlabel = def.xlabel;
       cr.curve.ylabel = "residual, other selected effects removed [px] (bin mean +- SE)";
     }
-    if (on_bias)
+    if (on_bias && d.accel_against_gravity) {
+      cr.curve.xlabel = "fitted accel_scale_axes effect [m/s]";
+      cr.curve.ylabel = "IMU's velocity change less the filter's, bias and trajectory scale removed [m/s] (bin mean "
+                        "+- SE)";
+    } else if (on_bias) {
       cr.curve.ylabel = "filter's accel bias, bin means removed [m/s^2] (bin mean +- SE)";
+    }
     if (on_rates) {
       cr.curve.xlabel = def.rate_xlabel;
       cr.curve.ylabel = "w_vis - w_gyro (bias removed) and psi_vis, / SE (bin mean +- SE)";

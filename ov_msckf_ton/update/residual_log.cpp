@@ -1,6 +1,8 @@
 #include "ov_msckf_ton/update/residual_log.h"
 #include "ov_core/types/errors.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 
 namespace ov_msckf_ton {
@@ -28,6 +30,14 @@ ov_core::CalibrationLogRow calibration_row(const State &state, const std::vector
   for (int i = 0; i < 8; ++i)
     c.intrinsics[i] = k.intrinsics(i);
   c.readout_s = k.readout_s;
+  c.has_state = true;
+  c.t_imu_ns = state.t_imu_ns;
+  const Eigen::Quaterniond q(state.imu.R);
+  const double qs[4] = {q.w(), q.x(), q.y(), q.z()};
+  for (int i = 0; i < 4; ++i)
+    c.q_WB[i] = qs[i];
+  for (int i = 0; i < 3; ++i)
+    c.v_W[i] = state.imu.v(i);
   return c;
 }
 
@@ -39,7 +49,7 @@ ResidualLogWriter::ResidualLogWriter(const std::string &path)
   if (!calib_out_)
     throw ov_core::DataError(calib_path_, "cannot open the calibration log for writing");
   out_ << header() << '\n';
-  calib_out_ << ov_core::calibration_log_header() << '\n';
+  calib_out_ << ov_core::calibration_log_header(true) << '\n';
   out_.flush();
   calib_out_.flush();
   if (!out_ || !calib_out_)

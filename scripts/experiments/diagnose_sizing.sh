@@ -40,7 +40,7 @@ expect() {
   gyro_scale_z) echo "gyro_scale_axes|gyro scale error s_z=3" ;;
   # The planted (5, -4, 3) mrad plus the euroc IMU model's own symmetric off-diagonal (0.14, 0.85, 0.14 mrad).
   gyro_misalignment) echo "gyro_misalignment|gyro misalignment |m|=6.80" ;;
-  accel_scale) echo "accel_scale_axes|accel scale error, axes combined=3" ;;
+  accel_scale) echo "accel_scale|accel scale error s=3" ;;
   wander_td) echo "td_piecewise|offset error spread (RMS over bins)=TRUTH" ;;
   clean | clean_plain) echo "-|" ;;
   esac
