@@ -24,7 +24,7 @@ namespace {
 /// The shortest window of the gravity design [s]: over 0.25-1 s the sizing flights' scale read within 0.4 % (docs/
 /// diagnose.md, "Accelerometer scale against gravity"); a longer window averages the attitude's turns, a shorter one
 /// has the filter's velocity noise.
-constexpr double kWindowS = 0.5;
+constexpr double kWindowS = 0.5; // the message below names it
 
 /// Time constant [s] with which the design's attitude follows the filter's; faster, it follows the gyro. The filter
 /// explains part of an accelerometer scale error by tilting (the gravity its bias cannot follow as the body turns), so
@@ -141,7 +141,7 @@ bool build_accel_gravity_design(const UsedData &data, const DiagnoseOptions &opt
   }
   const int nb = std::max(1, static_cast<int>(std::lround(rep.duration_s / kBinS)));
   if (win.size() < 10 || static_cast<int>(win.size()) < 3 * nb) {
-    why = "fewer than 10 windows of " + std::to_string(kWindowS) + " s (or 3 per bias bin) in the used span";
+    why = "fewer than 10 windows of 0.5 s (or 3 per 5-s bias bin) of the filter's states in the used span";
     return false;
   }
   // r = Σ_j A_j + g·T − Δv = Σ_j β_j·A_j + B·b_bin + λ'·Δv (docs/diagnose.md): β_j = 1 − 1/(1 + s_j) the candidate's,

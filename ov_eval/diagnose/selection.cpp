@@ -22,7 +22,7 @@ std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &fami
       sc.skip = "skipped: fewer than " + std::to_string(int(100 * opt.min_velocity_share)) +
                 "% of rows carry an image velocity";
     if (def.needs == Needs::AccelBias && !on_bias)
-      sc.skip = "skipped: tested on the filter's accelerometer bias only (" + bias_why + ")";
+      sc.skip = "skipped: tested on the accelerometer only (" + bias_why + ")";
     if (!on_rates && def.needs == Needs::Rates)
       sc.skip = "skipped: tested on rates only (needs --dataset: the raw gyro and the camera)";
     if (!on_rates && def.needs == Needs::BodyRates && !d.have_rate)
