@@ -3,6 +3,7 @@
 #include "ov_core/types/errors.h"
 #include "ov_eval/diagnose/accel_design.h"
 #include "ov_eval/diagnose/candidates.h"
+#include "ov_eval/diagnose/focal_two_view.h"
 #include "ov_eval/diagnose/rate_design.h"
 #include "ov_eval/diagnose/residual_design.h"
 #include "ov_eval/diagnose/selection.h"
@@ -44,6 +45,12 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   const auto results = diag::test_candidates(d, rep.time_from_rates ? &dr : nullptr, rate_why,
                                              have_bias ? &db : nullptr, bias_why, opt, rep, selected);
   rep.candidates = diag::rank_candidates(results, selected);
+
+  // 4b. A focal error the rates name is sized from two views and the gyro, with the focal in the model while the
+  // depths are fitted (focal_two_view.h): the rates' column reads it low.
+  for (CandidateResult &c : rep.candidates)
+    if (c.key == "focal" && c.explained && rep.time_from_rates)
+      diag::size_focal_from_two_views(data, opt, rep, c);
 
   // 5. What the residual keeps beyond its noise that no selected candidate explains, and where it shows.
   {

@@ -368,10 +368,17 @@ TEST(DiagnoseFilterLog, RollingShutterRankedFirstAndSized) {
   expect_top(filter_case(p, "off", p.td0_s + 0.5 * p.readout_s), "rolling_shutter", "readout time t_r", 25.0, 5.0);
 }
 
+// Named by the rates' focal column, sized from two views and the gyro (focal_two_view.h): 1.09 ± 0.07 % here, the
+// rates' column 0.92 %; on the sizing flights the column read 0.58-1.01 %, the two views 0.96-1.13 % (seeds 1-7).
 TEST(DiagnoseFilterLog, FocalErrorRankedFirstAndSized) {
   Plant p;
   p.focal_error = 0.01;
-  expect_top(filter_case(p, "off", p.td0_s), "focal", "relative focal error ε", 1.0, 0.2);
+  const auto r = filter_case(p, "off", p.td0_s);
+  expect_top(r, "focal", "relative focal error ε", 1.0, 0.2);
+  if (!r.candidates.empty() && top(r).key == "focal") {
+    EXPECT_NE(top(r).note.find("sized from two views"), std::string::npos) << top(r).note;
+    EXPECT_GT(estimate(top(r), "relative focal error ε (rates)"), 0.0) << format_ranking(r);
+  }
 }
 
 // A gyro scale error: the filter's poses follow the images, its residual does not show it (on the residual it was not

@@ -1,6 +1,9 @@
 #include "ov_eval/diagnose/filter_calibration.h"
 
+#include "ov_core/math/so3.h"
+
 #include <algorithm>
+#include <cmath>
 
 namespace ov_eval::diag {
 
@@ -31,6 +34,29 @@ std::vector<ov_core::ImuData> imu_through_calibration(const std::vector<ov_core:
     m.am = mat3(c->D_a) * m.am;
   }
   return out;
+}
+
+Eigen::Vector3d gyro_at(const std::vector<ov_core::ImuData> &imu, double t_ns) {
+  const auto it = std::lower_bound(imu.begin(), imu.end(), t_ns,
+                                   [](const ov_core::ImuData &m, double t) { return double(m.t_imu_ns) < t; });
+  if (it == imu.begin())
+    return imu.front().wm;
+  if (it == imu.end())
+    return imu.back().wm;
+  const auto &a = *(it - 1), &b = *it;
+  const double u = (t_ns - double(a.t_imu_ns)) / double(b.t_imu_ns - a.t_imu_ns);
+  return a.wm + u * (b.wm - a.wm);
+}
+
+Eigen::Matrix3d body_rotation(const std::vector<ov_core::ImuData> &imu, double t0_ns, double t1_ns,
+                              const Eigen::Vector3d &bias) {
+  const double span = 1e-9 * (t1_ns - t0_ns);
+  const int steps = std::max(1, static_cast<int>(std::abs(span) / 1e-3));
+  const double dt = span / steps;
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  for (int k = 0; k < steps; ++k)
+    R = R * ov_core::so3_exp((gyro_at(imu, t0_ns + 1e9 * (k + 0.5) * dt) - bias) * dt);
+  return R;
 }
 
 double focal_estimate(const CalibrationLogRow &row, double fu, double fv) {

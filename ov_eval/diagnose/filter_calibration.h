@@ -26,6 +26,13 @@ Eigen::Matrix3d mat3(const double *a);
 std::vector<ov_core::ImuData> imu_through_calibration(const std::vector<ov_core::ImuData> &imu,
                                                       const std::vector<CalibrationLogRow> &rows);
 
+/// Gyro reading at IMU time t_ns (linear interpolation; clamped at the ends).
+Eigen::Vector3d gyro_at(const std::vector<ov_core::ImuData> &imu, double t_ns);
+
+/// The body's rotation R_{B0 B1} from IMU time t0_ns to t1_ns: the gyro less `bias`, midpoint rule in ~1 ms steps.
+Eigen::Matrix3d body_rotation(const std::vector<ov_core::ImuData> &imu, double t0_ns, double t1_ns,
+                              const Eigen::Vector3d &bias = Eigen::Vector3d::Zero());
+
 /// The filter's relative focal error ε̂ = ½·(f̂u/fu + f̂v/fv) − 1 against the nominal fu, fv, when it estimated the
 /// intrinsics (0 otherwise).
 double focal_estimate(const CalibrationLogRow &row, double fu, double fv);

@@ -252,19 +252,6 @@ void add_focal_response(const FrameMap &frames, const ov_core::CameraModel &cam,
   }
 }
 
-/// Gyro reading at t (linear interpolation; clamped at the ends).
-Eigen::Vector3d gyro_at(const std::vector<ov_core::ImuData> &imu, double t_ns) {
-  const auto it = std::lower_bound(imu.begin(), imu.end(), t_ns,
-                                   [](const ov_core::ImuData &m, double t) { return double(m.t_imu_ns) < t; });
-  if (it == imu.begin())
-    return imu.front().wm;
-  if (it == imu.end())
-    return imu.back().wm;
-  const auto &a = *(it - 1), &b = *it;
-  const double u = (t_ns - double(a.t_imu_ns)) / double(b.t_imu_ns - a.t_imu_ns);
-  return a.wm + u * (b.wm - a.wm);
-}
-
 /// ω̄_gyro: the gyro put through the images' whole estimator — every feature of an image, at its corrected depth,
 /// moved by the gyro's rotation and the image's fitted velocity to each image of its slope window (perspective
 /// included), the same slope, the same per-image fit with the same weights. The translation is there because the
@@ -311,13 +298,7 @@ private:
     auto it = cache_.find({t0, t1});
     if (it != cache_.end())
       return it->second;
-    const double span = 1e-9 * (t1 - t0);
-    const int steps = std::max(1, static_cast<int>(std::abs(span) / 1e-3)); // midpoint rule, ~1 ms steps
-    const double dt = span / steps;
-    Eigen::Matrix3d R = Eigen::Matrix3d::Identity(); // R_{B0 B1}
-    for (int k = 0; k < steps; ++k)
-      R = R * ov_core::so3_exp(gyro_at(imu_, t0 + 1e9 * (k + 0.5) * dt) * dt);
-    return cache_.emplace(std::make_pair(t0, t1), R).first->second;
+    return cache_.emplace(std::make_pair(t0, t1), body_rotation(imu_, t0, t1)).first->second;
   }
 
   const std::vector<ov_core::ImuData> &imu_;
