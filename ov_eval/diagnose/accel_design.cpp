@@ -1,4 +1,5 @@
 #include "ov_eval/diagnose/accel_design.h"
+#include "ov_core/math/so3.h"
 #include "ov_eval/diagnose/candidates.h"
 #include "ov_eval/diagnose/filter_calibration.h"
 
@@ -41,11 +42,6 @@ struct Interval {
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero(), B = Eigen::Matrix3d::Zero();
 };
 
-Eigen::Matrix3d exp_so3(const Eigen::Vector3d &w) {
-  const double th = w.norm();
-  return th < 1e-12 ? Eigen::Matrix3d::Identity() : Eigen::AngleAxisd(th, w / th).toRotationMatrix();
-}
-
 /// Integrates the IMU (through the filter's calibration) between the states of consecutive rows (midpoint rule per
 /// reading). The attitude is the gyro's (less the filter's bias), pulled towards the filter's at each row with the time
 /// constant kAttitudeTauS (a complementary filter; docs/diagnose.md, "Accelerometer scale against gravity").
@@ -87,10 +83,10 @@ std::vector<Interval> intervals(const std::vector<const CalibrationLogRow *> &ro
         const ov_core::ImuData &n = last ? imu[i] : imu[i + 1];
         const Eigen::Vector3d w = (1 - u) * imu[i].wm + u * n.wm - bg;
         const Eigen::Vector3d am = (1 - u) * imu[i].am + u * n.am;
-        const Eigen::Matrix3d Rm = R * exp_so3(0.5 * h * w);
+        const Eigen::Matrix3d Rm = R * ov_core::so3_exp(0.5 * h * w);
         iv.A += Rm * am.asDiagonal() * h;
         iv.B += Rm * h;
-        R = R * exp_so3(h * w);
+        R = R * ov_core::so3_exp(h * w);
         t = t_next;
       }
       if (t_next >= b.t_imu_ns)
