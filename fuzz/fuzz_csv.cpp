@@ -9,7 +9,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   const std::string file =
       ovfuzz::write_file("table.csv", std::string(reinterpret_cast<const char *>(data + 1), size - 1));
   ovfuzz::expect_clean([&] {
-    ov_core::TextTableReader r(file, sep);
+    ovton::core::TextTableReader r(file, sep);
     std::vector<std::string> f;
     while (r.next(f))
       for (size_t i = 0; i < f.size(); ++i)

@@ -6,11 +6,11 @@
 
 namespace {
 
-class Sink : public ov_core::ReplayConsumer {
+class Sink : public ovton::core::ReplayConsumer {
 public:
   explicit Sink(double td) : td_(td) {}
-  void on_imu(const ov_core::ImuData &) override {}
-  void on_image(const ov_core::ImageEntry &) override {}
+  void on_imu(const ovton::core::ImuData &) override {}
+  void on_image(const ovton::core::ImageEntry &) override {}
   double td_for_image_s(int64_t) const override { return td_; }
 
 private:
@@ -27,12 +27,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   for (size_t i = 0; i < parts.size(); ++i)
     ovfuzz::write_file(files[i], parts[i]);
   ovfuzz::expect_clean([&] {
-    ov_core::LoadOptions lo;
+    ovton::core::LoadOptions lo;
     lo.check_images_exist = false;
-    const ov_core::Dataset d = ov_core::load_euroc(ovfuzz::scratch().string(), lo);
+    const ovton::core::Dataset d = ovton::core::load_euroc(ovfuzz::scratch().string(), lo);
     for (double td : {0.0, 0.2, -0.2}) {
       Sink sink(td);
-      ov_core::Replay(d).run(sink);
+      ovton::core::Replay(d).run(sink);
     }
   });
   return 0;

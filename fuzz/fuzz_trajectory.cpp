@@ -6,11 +6,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   const std::string file = ovfuzz::write_file("traj.txt", std::string(reinterpret_cast<const char *>(data), size));
   ovfuzz::expect_clean([&] {
     // Whatever is read must be writable again: the writer formats stamps and numbers the reader accepted.
-    const auto traj = ov_core::read_trajectory(file);
-    ov_core::TrajectoryWriter w((ovfuzz::scratch() / "out.txt").string(), ov_core::TrajectoryFormat::Tum);
+    const auto traj = ovton::core::read_trajectory(file);
+    ovton::core::TrajectoryWriter w((ovfuzz::scratch() / "out.txt").string(), ovton::core::TrajectoryFormat::Tum);
     for (const auto &s : traj)
       w.write(s);
   });
-  ovfuzz::expect_clean([&] { ov_core::read_td_truth(file); });
+  ovfuzz::expect_clean([&] { ovton::core::read_td_truth(file); });
   return 0;
 }

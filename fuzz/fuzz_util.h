@@ -57,8 +57,8 @@ inline std::vector<std::string> split_parts(const uint8_t *data, size_t size, si
 template <typename F> void expect_clean(F &&f) {
   try {
     f();
-  } catch (const ov_core::DataError &) {
-  } catch (const ov_core::UsageError &) {
+  } catch (const ovton::core::DataError &) {
+  } catch (const ovton::core::UsageError &) {
   }
 }
 

@@ -5,8 +5,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   const std::string file = ovfuzz::write_file("config.yaml", std::string(reinterpret_cast<const char *>(data), size));
-  ovfuzz::expect_clean([&] { ov_core::load_euroc_camera_yaml(file); });
-  ovfuzz::expect_clean([&] { ov_core::load_euroc_imu_yaml(file); });
-  ovfuzz::expect_clean([&] { ov_msckf_ton::load_vio_options(file); });
+  ovfuzz::expect_clean([&] { ovton::core::load_euroc_camera_yaml(file); });
+  ovfuzz::expect_clean([&] { ovton::core::load_euroc_imu_yaml(file); });
+  ovfuzz::expect_clean([&] { ovton::msckf::load_vio_options(file); });
   return 0;
 }

@@ -11,11 +11,11 @@
 #include "ov_eval/diagnose/unexplained.h"
 #include <algorithm>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   if (!(opt.min_sigma > 0) || !(opt.min_explained >= 0) || !(opt.huber_k > 0) || opt.time_bins < 1 || opt.plot_bins < 2)
-    throw ov_core::UsageError("diagnose: thresholds must be positive and bins at least 1 (time) / 2 (plots)");
+    throw ovton::core::UsageError("diagnose: thresholds must be positive and bins at least 1 (time) / 2 (plots)");
   DiagnoseReport rep;
   rep.log_file = log.file;
   rep.options = opt;
@@ -69,4 +69,4 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   return rep;
 }
 
-} // namespace ov_eval
+} // namespace ovton::eval

@@ -17,13 +17,13 @@
 #include <string>
 #include <vector>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 /// The residual log as `ovton run --residual-log` writes it: its schema is shared with the writer
 /// (ov_core/io/residual_log_schema.h), read by header name, with file:line errors.
-using ov_core::load_residual_log;
-using ov_core::ResidualLog;
-using ov_core::ResidualLogRow;
+using ovton::core::load_residual_log;
+using ovton::core::ResidualLog;
+using ovton::core::ResidualLogRow;
 
 struct DiagnoseOptions {
   int image_height = 0;                  ///< rows of the image; 0: the largest v_px in the log
@@ -32,16 +32,16 @@ struct DiagnoseOptions {
   /// (focal and k1 effects are mapped through it exactly) and the camera-body rotation, with which the camera's
   /// rotation along a track is integrated from the logged body rates for the point projection (docs/diagnose.md);
   /// without it the distortion is ignored and the camera is taken as not rotating along a track.
-  ov_core::CameraCalib camera;
+  ovton::core::CameraCalib camera;
   bool have_camera = false;
   /// The dataset's raw IMU readings (IMU clock). With them and the camera, the time candidates are tested on the
   /// camera's angular rate seen in the images against the gyro's (docs/diagnose.md), not on the residual, where a
   /// filter's poses absorb a time offset.
-  std::vector<ov_core::ImuData> imu;
+  std::vector<ovton::core::ImuData> imu;
   /// The filter's calibration per update (the calibration log beside the residual log, ov_core/io/
   /// residual_log_schema.h). When given, the rates compare the images with the IMU through it: the camera-body
   /// rotation, the IMU intrinsics, the readout time and the focal the filter held at each image (docs/diagnose.md).
-  std::vector<ov_core::CalibrationLogRow> calibration;
+  std::vector<ovton::core::CalibrationLogRow> calibration;
   double gravity_mag = 9.81;   ///< |g| [m/s²] the accelerometer is compared with (the filter's gravity_mag)
   double min_sigma = 5.0;      ///< significance a candidate needs (Gaussian-equivalent σ)
   double min_explained = 0.02; ///< share of the residual loss it must remove
@@ -126,4 +126,4 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &report, con
 /// The ranking as a fixed-width text table (what the CLI prints).
 std::string format_ranking(const DiagnoseReport &report);
 
-} // namespace ov_eval
+} // namespace ovton::eval

@@ -4,14 +4,14 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ov_eval {
+namespace ovton::eval {
 
-InitCheck check_initialisation(const ov_core::StateSample &first, const std::vector<ov_core::StateSample> &gt,
+InitCheck check_initialisation(const ovton::core::StateSample &first, const std::vector<ovton::core::StateSample> &gt,
                                int64_t first_image_ns) {
   InitCheck c;
-  ov_core::StateSample g;
+  ovton::core::StateSample g;
   if (gt.empty() || !gt.front().has_orientation || !gt.front().has_velocity ||
-      !ov_core::interpolate_state(gt, first.t_ns, g))
+      !ovton::core::interpolate_state(gt, first.t_ns, g))
     return c;
   const Eigen::Matrix3d Re = first.q_WB.toRotationMatrix(), Rg = g.q_WB.toRotationMatrix();
   const Eigen::Vector3d ze = Re.transpose() * Eigen::Vector3d::UnitZ(), zg = Rg.transpose() * Eigen::Vector3d::UnitZ();
@@ -23,4 +23,4 @@ InitCheck check_initialisation(const ov_core::StateSample &first, const std::vec
   return c;
 }
 
-} // namespace ov_eval
+} // namespace ovton::eval

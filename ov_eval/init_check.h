@@ -5,7 +5,7 @@
 
 #include <vector>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 struct InitCheck {
   bool ok = false;           ///< false when the truth has no full state at that time
@@ -15,7 +15,7 @@ struct InitCheck {
   double speed_m_s = 0.0;    ///< true speed at that time
 };
 
-InitCheck check_initialisation(const ov_core::StateSample &first, const std::vector<ov_core::StateSample> &gt,
+InitCheck check_initialisation(const ovton::core::StateSample &first, const std::vector<ovton::core::StateSample> &gt,
                                int64_t first_image_ns);
 
-} // namespace ov_eval
+} // namespace ovton::eval

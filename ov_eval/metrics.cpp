@@ -8,17 +8,17 @@
 #include <limits>
 #include <sstream>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kRadToDeg = 180.0 / M_PI;
 
-std::string span_str(const std::vector<ov_core::StateSample> &v) {
+std::string span_str(const std::vector<ovton::core::StateSample> &v) {
   std::ostringstream os;
   os.precision(15);
-  os << "[" << ov_core::ns_to_s(v.front().t_ns) << ", " << ov_core::ns_to_s(v.back().t_ns) << "] s";
+  os << "[" << ovton::core::ns_to_s(v.front().t_ns) << ", " << ovton::core::ns_to_s(v.back().t_ns) << "] s";
   return os.str();
 }
 
@@ -31,10 +31,11 @@ double angle_of(const Eigen::Matrix3d &R) {
   return angle_of(Eigen::Quaterniond(R));
 }
 
-ov_core::StateSample interpolate(const ov_core::StateSample &a, const ov_core::StateSample &b, int64_t t_ns) {
+ovton::core::StateSample interpolate(const ovton::core::StateSample &a, const ovton::core::StateSample &b,
+                                     int64_t t_ns) {
   // Differences in int64 first: absolute stamps (~1.4e18 ns) do not fit a double's mantissa.
   const double alpha = static_cast<double>(t_ns - a.t_ns) / static_cast<double>(b.t_ns - a.t_ns);
-  ov_core::StateSample s;
+  ovton::core::StateSample s;
   s.t_ns = t_ns;
   s.p = (1.0 - alpha) * a.p + alpha * b.p;
   s.has_orientation = a.has_orientation && b.has_orientation;
@@ -57,14 +58,14 @@ double rmse(double sum_sq, int n) {
 
 /// Velocity of estimate row k: its own if it has one, else a finite difference of the estimated positions
 /// (central inside, one-sided at the ends).
-Eigen::Vector3d est_velocity(const std::vector<ov_core::StateSample> &est, size_t k) {
+Eigen::Vector3d est_velocity(const std::vector<ovton::core::StateSample> &est, size_t k) {
   if (est[k].has_velocity)
     return est[k].v;
   if (est.size() < 2)
     return Eigen::Vector3d::Zero();
   const size_t i0 = k == 0 ? 0 : k - 1;
   const size_t i1 = k + 1 < est.size() ? k + 1 : k;
-  return (est[i1].p - est[i0].p) / ov_core::ns_to_s(est[i1].t_ns - est[i0].t_ns);
+  return (est[i1].p - est[i0].p) / ovton::core::ns_to_s(est[i1].t_ns - est[i0].t_ns);
 }
 
 } // namespace
@@ -78,7 +79,7 @@ AlignMode parse_align_mode(const std::string &s) {
     return AlignMode::SE3;
   if (s == "sim3")
     return AlignMode::Sim3;
-  throw ov_core::UsageError("unknown alignment '" + s + "' (expected posyaw, se3, sim3 or none)");
+  throw ovton::core::UsageError("unknown alignment '" + s + "' (expected posyaw, se3, sim3 or none)");
 }
 
 const char *to_string(AlignMode m) {
@@ -95,42 +96,42 @@ const char *to_string(AlignMode m) {
   return "?";
 }
 
-Association associate(const std::vector<ov_core::StateSample> &est, const std::vector<ov_core::StateSample> &gt,
+Association associate(const std::vector<ovton::core::StateSample> &est, const std::vector<ovton::core::StateSample> &gt,
                       double max_gap_s) {
   if (est.empty())
-    throw ov_core::UsageError("associate: the estimated trajectory is empty");
+    throw ovton::core::UsageError("associate: the estimated trajectory is empty");
   if (gt.empty())
-    throw ov_core::UsageError("associate: the ground-truth trajectory is empty");
+    throw ovton::core::UsageError("associate: the ground-truth trajectory is empty");
   for (size_t i = 1; i < gt.size(); ++i)
     if (gt[i].t_ns <= gt[i - 1].t_ns)
-      throw ov_core::UsageError("associate: ground-truth stamps must be strictly increasing (sample " +
-                                std::to_string(i) + " is not after sample " + std::to_string(i - 1) + ")");
-  const int64_t max_gap_ns = ov_core::s_to_ns(max_gap_s);
+      throw ovton::core::UsageError("associate: ground-truth stamps must be strictly increasing (sample " +
+                                    std::to_string(i) + " is not after sample " + std::to_string(i - 1) + ")");
+  const int64_t max_gap_ns = ovton::core::s_to_ns(max_gap_s);
 
   Association a;
   a.est.reserve(est.size());
   a.gt.reserve(est.size());
-  for (const ov_core::StateSample &e : est) {
+  for (const ovton::core::StateSample &e : est) {
     if (e.t_ns < gt.front().t_ns || e.t_ns > gt.back().t_ns)
       continue;
     auto it = std::lower_bound(gt.begin(), gt.end(), e.t_ns,
-                               [](const ov_core::StateSample &s, int64_t t) { return s.t_ns < t; });
+                               [](const ovton::core::StateSample &s, int64_t t) { return s.t_ns < t; });
     if (it->t_ns == e.t_ns) {
       a.est.push_back(e);
       a.gt.push_back(*it);
       continue;
     }
-    const ov_core::StateSample &b = *it;
-    const ov_core::StateSample &prev = *(it - 1); // exists: e.t_ns > gt.front().t_ns here
+    const ovton::core::StateSample &b = *it;
+    const ovton::core::StateSample &prev = *(it - 1); // exists: e.t_ns > gt.front().t_ns here
     if (b.t_ns - prev.t_ns > max_gap_ns)
       continue;
     a.est.push_back(e);
     a.gt.push_back(interpolate(prev, b, e.t_ns));
   }
   if (a.est.empty())
-    throw ov_core::UsageError("associate: no estimate stamp falls inside the ground truth (estimate spans " +
-                              span_str(est) + ", ground truth spans " + span_str(gt) + ", max gap " +
-                              std::to_string(max_gap_s) + " s); are both in the same clock and in nanoseconds?");
+    throw ovton::core::UsageError("associate: no estimate stamp falls inside the ground truth (estimate spans " +
+                                  span_str(est) + ", ground truth spans " + span_str(gt) + ", max gap " +
+                                  std::to_string(max_gap_s) + " s); are both in the same clock and in nanoseconds?");
   return a;
 }
 
@@ -139,7 +140,7 @@ constexpr double kMinYawSpreadM2 = 0.01;
 
 Alignment align(const Association &a, AlignMode mode) {
   if (a.est.empty() || a.est.size() != a.gt.size())
-    throw ov_core::UsageError("align: empty or inconsistent association");
+    throw ovton::core::UsageError("align: empty or inconsistent association");
   Alignment out;
   if (mode == AlignMode::None)
     return out;
@@ -204,16 +205,16 @@ Alignment align(const Association &a, AlignMode mode) {
   return out;
 }
 
-EvalResult evaluate(const std::vector<ov_core::StateSample> &est, const std::vector<ov_core::StateSample> &gt,
-                    const std::vector<ov_core::TdSample> &td_truth, const EvalOptions &opt) {
+EvalResult evaluate(const std::vector<ovton::core::StateSample> &est, const std::vector<ovton::core::StateSample> &gt,
+                    const std::vector<ovton::core::TdSample> &td_truth, const EvalOptions &opt) {
   for (size_t i = 1; i < est.size(); ++i)
     if (est[i].t_ns <= est[i - 1].t_ns)
-      throw ov_core::UsageError("evaluate: estimate stamps must be strictly increasing (row " + std::to_string(i) +
-                                " is not after row " + std::to_string(i - 1) + ")");
+      throw ovton::core::UsageError("evaluate: estimate stamps must be strictly increasing (row " + std::to_string(i) +
+                                    " is not after row " + std::to_string(i - 1) + ")");
   for (size_t i = 1; i < td_truth.size(); ++i)
     if (td_truth[i].t_cam_ns <= td_truth[i - 1].t_cam_ns)
-      throw ov_core::UsageError("evaluate: time-offset truth stamps must be strictly increasing (sample " +
-                                std::to_string(i) + ")");
+      throw ovton::core::UsageError("evaluate: time-offset truth stamps must be strictly increasing (sample " +
+                                    std::to_string(i) + ")");
 
   EvalResult r;
   r.n_est = static_cast<int>(est.size());
@@ -260,7 +261,7 @@ EvalResult evaluate(const std::vector<ov_core::StateSample> &est, const std::vec
         ++j;
       if (j >= n)
         break; // dist is non-decreasing: no later start can complete this segment either
-      const ov_core::StateSample &gi = a.gt[i], &gj = a.gt[j], &ei = a.est[i], &ej = a.est[j];
+      const ovton::core::StateSample &gi = a.gt[i], &gj = a.gt[j], &ei = a.est[i], &ej = a.est[j];
       if (full_pose) {
         // E = (T_gi^-1 T_gj)^-1 (T_ei^-1 T_ej): invariant to any rigid alignment of the estimate.
         const Eigen::Matrix3d Rgi = gi.q_WB.normalized().toRotationMatrix();
@@ -300,7 +301,7 @@ EvalResult evaluate(const std::vector<ov_core::StateSample> &est, const std::vec
     const size_t half = td_rows.size() / 2;
     for (size_t m = 0; m < td_rows.size(); ++m) {
       const size_t k = td_rows[m];
-      const double td_gt = td_truth_at(td_truth, est[k].t_ns - ov_core::s_to_ns(est[k].td_s));
+      const double td_gt = td_truth_at(td_truth, est[k].t_ns - ovton::core::s_to_ns(est[k].td_s));
       const double e = est[k].td_s - td_gt;
       const double tpe_m = e * est_velocity(est, k).norm();
       sq += tpe_m * tpe_m;
@@ -323,8 +324,9 @@ EvalResult evaluate(const std::vector<ov_core::StateSample> &est, const std::vec
   if (!truth_target || !td_truth.empty()) {
     r.has_cit = true;
     for (size_t m = 1; m < td_rows.size(); ++m) {
-      const ov_core::StateSample &s = est[td_rows[m]];
-      const double target = truth_target ? td_truth_at(td_truth, s.t_ns - ov_core::s_to_ns(s.td_s)) : opt.cit.target_s;
+      const ovton::core::StateSample &s = est[td_rows[m]];
+      const double target =
+          truth_target ? td_truth_at(td_truth, s.t_ns - ovton::core::s_to_ns(s.td_s)) : opt.cit.target_s;
       if (std::abs(s.td_s - target) <= opt.cit.eps1_s &&
           std::abs(s.td_s - est[td_rows[m - 1]].td_s) <= opt.cit.eps2_s) {
         r.cit = static_cast<int>(m);
@@ -335,17 +337,17 @@ EvalResult evaluate(const std::vector<ov_core::StateSample> &est, const std::vec
   return r;
 }
 
-double td_truth_at(const std::vector<ov_core::TdSample> &td, int64_t t_cam_ns) {
+double td_truth_at(const std::vector<ovton::core::TdSample> &td, int64_t t_cam_ns) {
   if (t_cam_ns <= td.front().t_cam_ns)
     return td.front().td_s;
   if (t_cam_ns >= td.back().t_cam_ns)
     return td.back().td_s;
   auto it = std::upper_bound(td.begin(), td.end(), t_cam_ns,
-                             [](int64_t t, const ov_core::TdSample &s) { return t < s.t_cam_ns; });
-  const ov_core::TdSample &b = *it;
-  const ov_core::TdSample &a = *(it - 1);
+                             [](int64_t t, const ovton::core::TdSample &s) { return t < s.t_cam_ns; });
+  const ovton::core::TdSample &b = *it;
+  const ovton::core::TdSample &a = *(it - 1);
   const double alpha = static_cast<double>(t_cam_ns - a.t_cam_ns) / static_cast<double>(b.t_cam_ns - a.t_cam_ns);
   return (1.0 - alpha) * a.td_s + alpha * b.td_s;
 }
 
-} // namespace ov_eval
+} // namespace ovton::eval

@@ -4,11 +4,12 @@
 #include <string>
 #include <vector>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 enum class AlignMode { None, PosYaw, SE3, Sim3 };
-AlignMode parse_align_mode(const std::string &s); ///< "none" | "posyaw" | "se3" | "sim3"; throws ov_core::UsageError
-const char *to_string(AlignMode m);               ///< the same strings parse_align_mode accepts
+AlignMode
+parse_align_mode(const std::string &s); ///< "none" | "posyaw" | "se3" | "sim3"; throws ovton::core::UsageError
+const char *to_string(AlignMode m);     ///< the same strings parse_align_mode accepts
 
 /// Transform (rigid, yaw-only, or with scale for sim3) mapping the estimate frame into the ground-truth frame.
 struct Alignment {
@@ -24,15 +25,15 @@ struct Alignment {
 /// neighbours do. Throws UsageError when either input is empty, the truth is not strictly increasing in time,
 /// or no estimate survives (which names both time spans, the usual cause being a clock or unit mismatch).
 struct Association {
-  std::vector<ov_core::StateSample> est;
-  std::vector<ov_core::StateSample> gt;
+  std::vector<ovton::core::StateSample> est;
+  std::vector<ovton::core::StateSample> gt;
 };
-Association associate(const std::vector<ov_core::StateSample> &est, const std::vector<ov_core::StateSample> &gt,
+Association associate(const std::vector<ovton::core::StateSample> &est, const std::vector<ovton::core::StateSample> &gt,
                       double max_gap_s = 0.1);
 
 /// True offset at camera-clock time t_cam_ns: linear between truth samples, held constant beyond the ends.
 /// `td` must not be empty.
-double td_truth_at(const std::vector<ov_core::TdSample> &td, int64_t t_cam_ns);
+double td_truth_at(const std::vector<ovton::core::TdSample> &td, int64_t t_cam_ns);
 
 /// Transform with gt.p ~= s R est.p + t, fitted on positions only (so it works with position-only truth).
 /// SE3: Umeyama without scale, reflection fixed. Sim3: Umeyama with scale (s < 1: the estimate is too large). PosYaw:
@@ -86,7 +87,7 @@ struct EvalOptions {
 /// that carry a time offset (has_td), in their order; CIT is the index into that sequence. td_truth is keyed by
 /// camera-clock stamp, estimates by the IMU clock, so the truth is looked up at t_cam = t_imu - td_hat (linear
 /// interpolation, clamped at the ends). The estimate must be strictly increasing in time (UsageError otherwise).
-EvalResult evaluate(const std::vector<ov_core::StateSample> &est, const std::vector<ov_core::StateSample> &gt,
-                    const std::vector<ov_core::TdSample> &td_truth, const EvalOptions &opt);
+EvalResult evaluate(const std::vector<ovton::core::StateSample> &est, const std::vector<ovton::core::StateSample> &gt,
+                    const std::vector<ovton::core::TdSample> &td_truth, const EvalOptions &opt);
 
-} // namespace ov_eval
+} // namespace ovton::eval

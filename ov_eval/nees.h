@@ -6,7 +6,7 @@
 
 #include <vector>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 struct NeesStats {
   double ori_sum = 0, pos_sum = 0, td_sum = 0;
@@ -26,16 +26,17 @@ struct NeesStats {
 /// R_true = Exp(δθ)·R̂, p_true = p̂ + δp, t_d,true = t̂_d + δt_d.
 class NeesAccumulator {
 public:
-  NeesAccumulator(const std::vector<ov_core::StateSample> &groundtruth, const std::vector<ov_core::TdSample> &td_truth)
+  NeesAccumulator(const std::vector<ovton::core::StateSample> &groundtruth,
+                  const std::vector<ovton::core::TdSample> &td_truth)
       : gt_(groundtruth), td_truth_(td_truth) {}
   /// Samples without a pose covariance, or outside the ground truth's span, are skipped.
-  void add(const ov_core::StateSample &est);
+  void add(const ovton::core::StateSample &est);
   const NeesStats &stats() const { return stats_; }
 
 private:
-  const std::vector<ov_core::StateSample> &gt_;
-  const std::vector<ov_core::TdSample> &td_truth_;
+  const std::vector<ovton::core::StateSample> &gt_;
+  const std::vector<ovton::core::TdSample> &td_truth_;
   NeesStats stats_;
 };
 
-} // namespace ov_eval
+} // namespace ovton::eval

@@ -11,7 +11,7 @@
 #include <fstream>
 #include <utility>
 
-namespace ov_eval {
+namespace ovton::eval {
 namespace {
 
 const cv::Scalar kWhite(255, 255, 255), kInk(30, 30, 30), kGrid(228, 228, 228), kBorder(150, 150, 150);
@@ -112,14 +112,14 @@ int thickness(double width) {
 
 void check_range(const std::optional<AxisRange> &r, const char *axis) {
   if (r && !(std::isfinite(r->lo) && std::isfinite(r->hi) && r->lo < r->hi))
-    throw ov_core::UsageError(std::string("plot: the fixed ") + axis + " range must be finite with lo < hi");
+    throw ovton::core::UsageError(std::string("plot: the fixed ") + axis + " range must be finite with lo < hi");
 }
 
 } // namespace
 
 std::vector<double> nice_ticks(double lo, double hi, int max_ticks) {
   if (!(std::isfinite(lo) && std::isfinite(hi) && lo < hi) || max_ticks < 2)
-    throw ov_core::UsageError("nice_ticks: need finite lo < hi and max_ticks >= 2");
+    throw ovton::core::UsageError("nice_ticks: need finite lo < hi and max_ticks >= 2");
   // The smallest nice step that leaves at most max_ticks ticks, preferring at least two; steps from a decade below
   // span / (max_ticks - 1) up, since a span whose ends sit on multiples fits one more tick than the rough count says.
   const double mag = std::pow(10.0, std::floor(std::log10((hi - lo) / (max_ticks - 1))));
@@ -148,7 +148,7 @@ cv::Scalar palette_color(size_t i) {
 
 Plot::Plot(PlotOptions options) : options_(std::move(options)) {
   if (options_.width < 200 || options_.height < 150)
-    throw ov_core::UsageError("plot: image must be at least 200 x 150 px");
+    throw ovton::core::UsageError("plot: image must be at least 200 x 150 px");
   check_range(options_.x_range, "x");
   check_range(options_.y_range, "y");
 }
@@ -159,8 +159,8 @@ cv::Scalar Plot::next_auto_color() {
 
 Plot &Plot::add(Series series) {
   if (series.x.size() != series.y.size())
-    throw ov_core::UsageError("plot: series '" + series.name + "' has " + std::to_string(series.x.size()) + " x but " +
-                              std::to_string(series.y.size()) + " y values");
+    throw ovton::core::UsageError("plot: series '" + series.name + "' has " + std::to_string(series.x.size()) +
+                                  " x but " + std::to_string(series.y.size()) + " y values");
   if (!series.color)
     series.color = next_auto_color();
   series_.push_back(std::move(series));
@@ -373,15 +373,15 @@ cv::Mat Plot::render() const {
 
 void Plot::save_png(const std::string &file) const {
   std::vector<uchar> bytes;
-  if (!ov_core::encode_image(".png", render(), bytes))
-    throw ov_core::DataError(file, "cannot encode the chart as PNG");
+  if (!ovton::core::encode_image(".png", render(), bytes))
+    throw ovton::core::DataError(file, "cannot encode the chart as PNG");
   std::ofstream out(file, std::ios::binary);
   if (!out)
-    throw ov_core::DataError(file, "cannot open for writing");
+    throw ovton::core::DataError(file, "cannot open for writing");
   out.write(reinterpret_cast<const char *>(bytes.data()), std::streamsize(bytes.size()));
   out.close();
   if (!out)
-    throw ov_core::DataError(file, "write failed");
+    throw ovton::core::DataError(file, "write failed");
 }
 
-} // namespace ov_eval
+} // namespace ovton::eval

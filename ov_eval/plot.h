@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 /// One data set on a chart. Points with a NaN or infinite coordinate are skipped, and a line breaks at them.
 struct Series {
@@ -86,4 +86,4 @@ private:
   size_t auto_colors_ = 0;
 };
 
-} // namespace ov_eval
+} // namespace ovton::eval

@@ -18,7 +18,7 @@
 
 namespace fs = std::filesystem;
 
-namespace ov_eval {
+namespace ovton::eval {
 
 namespace {
 
@@ -48,7 +48,7 @@ std::string md_cell(const std::string &s) {
 }
 
 /// Plots share one time origin (the first image) so that the three figures line up.
-int64_t time_origin_ns(const std::vector<RunRecord> &runs, const ov_core::Dataset &data) {
+int64_t time_origin_ns(const std::vector<RunRecord> &runs, const ovton::core::Dataset &data) {
   if (!data.images.empty())
     return data.images.front().t_cam_ns;
   for (const auto &r : runs)
@@ -89,23 +89,23 @@ void write_file_atomically(const std::string &file, const std::string &text) {
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out)
-      throw ov_core::DataError(file, "cannot open for writing");
+      throw ovton::core::DataError(file, "cannot open for writing");
     out << text;
     out.flush();
     if (!out)
-      throw ov_core::DataError(file, "write failed");
+      throw ovton::core::DataError(file, "write failed");
   }
   std::error_code ec;
   fs::rename(tmp, file, ec);
   if (ec)
-    throw ov_core::DataError(file, "cannot move " + tmp + " into place: " + ec.message());
+    throw ovton::core::DataError(file, "cannot move " + tmp + " into place: " + ec.message());
 }
 
 ReportRow::ReportRow()
     : ape_rmse_m(kNaN), are_deg(kNaN), tpe_rmse_mm(kNaN), final_td_ms(kNaN), td_sigma_ms(kNaN), runtime_s(kNaN),
       realtime_factor(kNaN), ms_per_frame(kNaN), td_err_rmse_ms(kNaN), td_err_late_ms(kNaN), td_nees(kNaN) {}
 
-std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const ov_core::Dataset &data,
+std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const ovton::core::Dataset &data,
                                      const ReportOptions &opt) {
   std::vector<ReportRow> rows;
   rows.reserve(runs.size());
@@ -144,7 +144,7 @@ std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const o
         }
         row.has_cit = row.eval.has_cit;
         row.cit = row.eval.cit;
-      } catch (const ov_core::UsageError &e) {
+      } catch (const ovton::core::UsageError &e) {
         // A run too short or off the truth's span is a result to report, not a reason to lose the others.
         row.eval_note = e.what();
       }
@@ -159,13 +159,13 @@ void write_results_csv(const std::string &file, const std::vector<ReportRow> &ro
   os << "mode,status,ape_rmse_m,are_deg,tpe_rmse_mm,cit_frames,final_td_ms,td_sigma_ms,runtime_s,realtime_factor,"
         "ms_per_frame,td_err_rmse_ms,td_err_late_ms,td_nees\n";
   for (const auto &r : rows)
-    os << csv_field(r.name) << ',' << csv_field(r.status) << ',' << ov_core::csv_number(r.ape_rmse_m) << ','
-       << ov_core::csv_number(r.are_deg) << ',' << ov_core::csv_number(r.tpe_rmse_mm) << ','
-       << (r.has_cit ? std::to_string(r.cit) : "") << ',' << ov_core::csv_number(r.final_td_ms) << ','
-       << ov_core::csv_number(r.td_sigma_ms) << ',' << ov_core::csv_number(r.runtime_s) << ','
-       << ov_core::csv_number(r.realtime_factor) << ',' << ov_core::csv_number(r.ms_per_frame) << ','
-       << ov_core::csv_number(r.td_err_rmse_ms) << ',' << ov_core::csv_number(r.td_err_late_ms) << ','
-       << ov_core::csv_number(r.td_nees) << '\n';
+    os << csv_field(r.name) << ',' << csv_field(r.status) << ',' << ovton::core::csv_number(r.ape_rmse_m) << ','
+       << ovton::core::csv_number(r.are_deg) << ',' << ovton::core::csv_number(r.tpe_rmse_mm) << ','
+       << (r.has_cit ? std::to_string(r.cit) : "") << ',' << ovton::core::csv_number(r.final_td_ms) << ','
+       << ovton::core::csv_number(r.td_sigma_ms) << ',' << ovton::core::csv_number(r.runtime_s) << ','
+       << ovton::core::csv_number(r.realtime_factor) << ',' << ovton::core::csv_number(r.ms_per_frame) << ','
+       << ovton::core::csv_number(r.td_err_rmse_ms) << ',' << ovton::core::csv_number(r.td_err_late_ms) << ','
+       << ovton::core::csv_number(r.td_nees) << '\n';
   write_file_atomically(file, os.str());
 }
 
@@ -176,17 +176,18 @@ std::string results_markdown_table(const std::vector<ReportRow> &rows) {
   os << "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   for (const auto &r : rows) {
     const std::string cit = !r.has_cit ? "n/a" : r.cit < 0 ? "never" : std::to_string(r.cit);
-    os << "| " << md_cell(r.name) << " | " << md_cell(r.status) << " | " << ov_core::format_fixed(r.ape_rmse_m, 4)
-       << " | " << ov_core::format_fixed(r.are_deg, 3) << " | " << ov_core::format_fixed(r.tpe_rmse_mm, 3) << " | "
-       << cit << " | " << ov_core::format_fixed(r.final_td_ms, 3) << " | " << ov_core::format_fixed(r.td_sigma_ms, 4)
-       << " | " << ov_core::format_fixed(r.td_err_rmse_ms, 3) << " (" << ov_core::format_fixed(r.td_err_late_ms, 3)
-       << ") | " << ov_core::format_fixed(r.td_nees, 2) << " | " << ov_core::format_fixed(r.runtime_s, 2) << " | "
-       << ov_core::format_fixed(r.realtime_factor, 2) << " | " << ov_core::format_fixed(r.ms_per_frame, 2) << " |\n";
+    os << "| " << md_cell(r.name) << " | " << md_cell(r.status) << " | " << ovton::core::format_fixed(r.ape_rmse_m, 4)
+       << " | " << ovton::core::format_fixed(r.are_deg, 3) << " | " << ovton::core::format_fixed(r.tpe_rmse_mm, 3)
+       << " | " << cit << " | " << ovton::core::format_fixed(r.final_td_ms, 3) << " | "
+       << ovton::core::format_fixed(r.td_sigma_ms, 4) << " | " << ovton::core::format_fixed(r.td_err_rmse_ms, 3) << " ("
+       << ovton::core::format_fixed(r.td_err_late_ms, 3) << ") | " << ovton::core::format_fixed(r.td_nees, 2) << " | "
+       << ovton::core::format_fixed(r.runtime_s, 2) << " | " << ovton::core::format_fixed(r.realtime_factor, 2) << " | "
+       << ovton::core::format_fixed(r.ms_per_frame, 2) << " |\n";
   }
   return os.str();
 }
 
-void write_results_md(const std::string &file, const std::vector<ReportRow> &rows, const ov_core::Dataset &data,
+void write_results_md(const std::string &file, const std::vector<ReportRow> &rows, const ovton::core::Dataset &data,
                       const ReportInfo &info, const ReportFiles &files, const ReportOptions &opt) {
   std::ostringstream os;
   os << "# Time-offset modes compared on " << data.root << "\n\n";
@@ -194,11 +195,11 @@ void write_results_md(const std::string &file, const std::vector<ReportRow> &row
      << info.command_line << "\n```\n\n";
   os << "Written " << utc_now() << ".\n\n";
 
-  os << "## ov_core::Dataset\n\n";
+  os << "## ovton::core::Dataset\n\n";
   os << "- folder: `" << data.root << "` (" << data.kind << "), " << data.images.size() << " images";
   if (data.images.size() > 1)
     os << " over "
-       << ov_core::format_fixed(ov_core::ns_to_s(data.images.back().t_cam_ns - data.images.front().t_cam_ns), 1)
+       << ovton::core::format_fixed(ovton::core::ns_to_s(data.images.back().t_cam_ns - data.images.front().t_cam_ns), 1)
        << " s";
   os << ", " << data.imu.size() << " IMU readings\n";
   if (data.has_groundtruth())
@@ -210,14 +211,14 @@ void write_results_md(const std::string &file, const std::vector<ReportRow> &row
     double lo = data.td_truth.front().td_s, hi = lo;
     for (const auto &s : data.td_truth)
       lo = std::min(lo, s.td_s), hi = std::max(hi, s.td_s);
-    os << "- time-offset truth: " << data.td_truth.size() << " samples, from " << ov_core::format_fixed(lo * 1e3, 3)
-       << " to " << ov_core::format_fixed(hi * 1e3, 3) << " ms (first "
-       << ov_core::format_fixed(data.td_truth.front().td_s * 1e3, 3) << ", last "
-       << ov_core::format_fixed(data.td_truth.back().td_s * 1e3, 3) << ")\n";
+    os << "- time-offset truth: " << data.td_truth.size() << " samples, from " << ovton::core::format_fixed(lo * 1e3, 3)
+       << " to " << ovton::core::format_fixed(hi * 1e3, 3) << " ms (first "
+       << ovton::core::format_fixed(data.td_truth.front().td_s * 1e3, 3) << ", last "
+       << ovton::core::format_fixed(data.td_truth.back().td_s * 1e3, 3) << ")\n";
   } else
     os << "- time-offset truth: none (no TPE, no CIT against the truth, no `oracle`)\n";
   if (data.td_prior_s != 0.0)
-    os << "- calibration t_d prior: " << ov_core::format_fixed(data.td_prior_s * 1e3, 3) << " ms\n";
+    os << "- calibration t_d prior: " << ovton::core::format_fixed(data.td_prior_s * 1e3, 3) << " ms\n";
   os << "- estimator config: " << (info.config.empty() ? "built-in defaults" : "`" + info.config + "`") << "\n\n";
 
   os << "## Results\n\n" << results_markdown_table(rows) << "\n";
@@ -225,8 +226,8 @@ void write_results_md(const std::string &file, const std::vector<ReportRow> &row
   os << "APE and ARE are RMSEs after " << to_string(opt.eval.align)
      << " alignment of the whole estimate to the ground truth. TPE is the RMSE of (t_d estimate - t_d truth) x |v "
         "estimate| (paper eq. 16). CIT is the first frame with |t_d - t_d truth| <= "
-     << ov_core::format_fixed(cit.eps1_s * 1e3, 2)
-     << " ms and |t_d(k) - t_d(k-1)| <= " << ov_core::format_fixed(cit.eps2_s * 1e3, 2)
+     << ovton::core::format_fixed(cit.eps1_s * 1e3, 2)
+     << " ms and |t_d(k) - t_d(k-1)| <= " << ovton::core::format_fixed(cit.eps2_s * 1e3, 2)
      << " ms (paper eq. 15), \"never\" if that does not happen. final t_d and its sigma are the filter's values at the "
         "last frame. Runtime is the wall-clock time of the replay with "
      << info.jobs << (info.jobs == 1 ? " run" : " runs")
@@ -270,13 +271,13 @@ PlotOptions report_plot(const std::string &title, const char *xlabel, const char
 
 void check_rows(const char *what, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows) {
   if (rows.size() != runs.size())
-    throw ov_core::UsageError(std::string(what) + ": " + std::to_string(rows.size()) + " rows for " +
-                              std::to_string(runs.size()) + " runs");
+    throw ovton::core::UsageError(std::string(what) + ": " + std::to_string(rows.size()) + " rows for " +
+                                  std::to_string(runs.size()) + " runs");
 }
 
 } // namespace
 
-bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const ov_core::Dataset &data,
+bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const ovton::core::Dataset &data,
              const ReportOptions &opt) {
   const int64_t t0 = time_origin_ns(runs, data);
   Plot plot(report_plot("time offset t_d (t_imu = t_cam + t_d)", "time since the first image [s]", "t_d [ms]", opt));
@@ -287,7 +288,7 @@ bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const 
     s.color = run_color(i);
     for (const auto &e : runs[i].traj)
       if (e.has_td) {
-        s.x.push_back(ov_core::ns_to_s(e.t_ns - t0));
+        s.x.push_back(ovton::core::ns_to_s(e.t_ns - t0));
         s.y.push_back(e.td_s * 1e3);
       }
     if (s.x.empty())
@@ -301,7 +302,7 @@ bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const 
     // Truth is keyed by camera stamp; drawn at the IMU-clock instant it refers to, like the estimates.
     Series s = truth_series("truth");
     for (const auto &t : data.td_truth) {
-      s.x.push_back(ov_core::ns_to_s(t.t_cam_ns - t0) + t.td_s);
+      s.x.push_back(ovton::core::ns_to_s(t.t_cam_ns - t0) + t.td_s);
       s.y.push_back(t.td_s * 1e3);
     }
     plot.add(std::move(s));
@@ -311,7 +312,7 @@ bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const 
 }
 
 bool plot_ape(const std::string &file, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows,
-              const ov_core::Dataset &data, const ReportOptions &opt) {
+              const ovton::core::Dataset &data, const ReportOptions &opt) {
   check_rows("plot_ape", runs, rows);
   const int64_t t0 = time_origin_ns(runs, data);
   Plot plot(report_plot(std::string("position error after ") + to_string(opt.eval.align) + " alignment",
@@ -329,7 +330,7 @@ bool plot_ape(const std::string &file, const std::vector<RunRecord> &runs, const
     s.name = runs[i].name;
     s.color = run_color(i);
     for (size_t k = 0; k < err.size(); ++k) {
-      s.x.push_back(ov_core::ns_to_s(a.est[k].t_ns - t0));
+      s.x.push_back(ovton::core::ns_to_s(a.est[k].t_ns - t0));
       s.y.push_back(err[k]);
     }
     any = true;
@@ -342,7 +343,7 @@ bool plot_ape(const std::string &file, const std::vector<RunRecord> &runs, const
 }
 
 bool plot_top(const std::string &file, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows,
-              const ov_core::Dataset &data, const ReportOptions &opt) {
+              const ovton::core::Dataset &data, const ReportOptions &opt) {
   check_rows("plot_top", runs, rows);
   PlotOptions po = report_plot(std::string("top view (estimates after ") + to_string(opt.eval.align) + " alignment)",
                                "x [m]", "y [m]", opt);
@@ -382,12 +383,12 @@ bool plot_top(const std::string &file, const std::vector<RunRecord> &runs, const
 }
 
 ReportFiles write_report(const std::string &out_dir, const std::vector<RunRecord> &runs,
-                         const std::vector<ReportRow> &rows, const ov_core::Dataset &data, const ReportInfo &info,
+                         const std::vector<ReportRow> &rows, const ovton::core::Dataset &data, const ReportInfo &info,
                          const ReportOptions &opt) {
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec)
-    throw ov_core::DataError(out_dir, "cannot create the output folder: " + ec.message());
+    throw ovton::core::DataError(out_dir, "cannot create the output folder: " + ec.message());
   const fs::path dir(out_dir);
   ReportFiles f;
   f.csv = (dir / "results.csv").string();
@@ -416,15 +417,15 @@ std::vector<std::string> parse_name_list(const std::string &list, const std::vec
     const size_t b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
     const std::string name = b == std::string::npos ? "" : item.substr(b, e - b + 1);
     if (name.empty())
-      throw ov_core::UsageError("empty " + what + " name in the list '" + list + "'");
+      throw ovton::core::UsageError("empty " + what + " name in the list '" + list + "'");
     if (std::find(valid.begin(), valid.end(), name) == valid.end())
-      throw ov_core::UsageError("unknown " + what + " '" + name + "' (expected one of: " + valid_text + ")");
+      throw ovton::core::UsageError("unknown " + what + " '" + name + "' (expected one of: " + valid_text + ")");
     if (std::find(out.begin(), out.end(), name) != out.end())
-      throw ov_core::UsageError(what + " '" + name + "' is listed twice in '" + list + "'");
+      throw ovton::core::UsageError(what + " '" + name + "' is listed twice in '" + list + "'");
     out.push_back(name);
   }
   if (out.empty())
-    throw ov_core::UsageError("no " + what + " given (expected a comma-separated list of: " + valid_text + ")");
+    throw ovton::core::UsageError("no " + what + " given (expected a comma-separated list of: " + valid_text + ")");
   return out;
 }
 
@@ -490,4 +491,4 @@ std::vector<RunRecord> run_parallel(const std::vector<std::string> &names, int j
   return records;
 }
 
-} // namespace ov_eval
+} // namespace ovton::eval

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 /// Writes `text` beside `file` and renames it into place, so that a reader (or an interrupted run) never sees half a
 /// file. Throws DataError when it cannot be written.
@@ -22,11 +22,11 @@ struct RunRecord {
   std::string name;
   /// "ok"; otherwise why there is no (full) result: "failed: ...", "skipped: ...", "interrupted", "not run ...".
   std::string status = "ok";
-  std::vector<ov_core::StateSample> traj; ///< estimates, IMU clock, strictly increasing in time
-  std::string traj_file;                  ///< where the trajectory was written ("" = nowhere)
-  double wall_s = 0.0;                    ///< wall-clock time of the replay
-  double data_span_s = 0.0;               ///< sensor time the replay covered
-  long frames = 0;                        ///< images processed
+  std::vector<ovton::core::StateSample> traj; ///< estimates, IMU clock, strictly increasing in time
+  std::string traj_file;                      ///< where the trajectory was written ("" = nowhere)
+  double wall_s = 0.0;                        ///< wall-clock time of the replay
+  double data_span_s = 0.0;                   ///< sensor time the replay covered
+  long frames = 0;                            ///< images processed
   bool ok() const { return status == "ok"; }
 };
 
@@ -64,7 +64,7 @@ struct ReportFiles {
 
 /// Evaluates each run against the dataset's ground truth and time-offset truth. Never throws for a bad run:
 /// a run that cannot be evaluated gets evaluated = false and the reason in eval_note.
-std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const ov_core::Dataset &data,
+std::vector<ReportRow> evaluate_runs(const std::vector<RunRecord> &runs, const ovton::core::Dataset &data,
                                      const ReportOptions &opt = {});
 
 /// results.csv: header `mode,status,ape_rmse_m,are_deg,tpe_rmse_mm,cit_frames,final_td_ms,td_sigma_ms,runtime_s,
@@ -76,25 +76,25 @@ void write_results_csv(const std::string &file, const std::vector<ReportRow> &ro
 std::string results_markdown_table(const std::vector<ReportRow> &rows);
 
 /// results.md: the command line, the dataset, the table, the figures and notes on what the columns mean.
-void write_results_md(const std::string &file, const std::vector<ReportRow> &rows, const ov_core::Dataset &data,
+void write_results_md(const std::string &file, const std::vector<ReportRow> &rows, const ovton::core::Dataset &data,
                       const ReportInfo &info, const ReportFiles &files, const ReportOptions &opt = {});
 
 /// t_d estimate of each run [ms] over time, and the truth when the dataset has one. Returns false (and writes
 /// nothing) when no run carries a time offset.
-bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const ov_core::Dataset &data,
+bool plot_td(const std::string &file, const std::vector<RunRecord> &runs, const ovton::core::Dataset &data,
              const ReportOptions &opt = {});
 /// Aligned position error of each evaluated run over time. Returns false when no run was evaluated.
 bool plot_ape(const std::string &file, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows,
-              const ov_core::Dataset &data, const ReportOptions &opt = {});
+              const ovton::core::Dataset &data, const ReportOptions &opt = {});
 /// x-y top view, equal aspect: ground truth and each run after its alignment (raw when it was not evaluated).
 /// Returns false when there is nothing to draw.
 bool plot_top(const std::string &file, const std::vector<RunRecord> &runs, const std::vector<ReportRow> &rows,
-              const ov_core::Dataset &data, const ReportOptions &opt = {});
+              const ovton::core::Dataset &data, const ReportOptions &opt = {});
 
 /// Everything above into out_dir (created if needed): results.md, results.csv, td.png, ape.png, top.png.
 /// Throws DataError naming a file that cannot be written.
 ReportFiles write_report(const std::string &out_dir, const std::vector<RunRecord> &runs,
-                         const std::vector<ReportRow> &rows, const ov_core::Dataset &data, const ReportInfo &info,
+                         const std::vector<ReportRow> &rows, const ovton::core::Dataset &data, const ReportInfo &info,
                          const ReportOptions &opt = {});
 
 /// Splits a comma-separated list ("off,sr, oracle") and checks every name against `valid`. Throws UsageError naming
@@ -113,4 +113,4 @@ using RunDone = std::function<void(const RunRecord &rec, size_t done, size_t tot
 std::vector<RunRecord> run_parallel(const std::vector<std::string> &names, int jobs, const RunOne &run_one,
                                     const RunDone &on_done = nullptr, const std::function<bool()> &stop = nullptr);
 
-} // namespace ov_eval
+} // namespace ovton::eval

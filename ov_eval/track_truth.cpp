@@ -14,7 +14,7 @@
 #include <random>
 #include <sstream>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 namespace {
 
@@ -26,7 +26,7 @@ struct Obs {
 
 /// Point minimising the Huber-weighted pixel errors with the camera poses fixed (rays' intersection, then
 /// Gauss-Newton). Writes the errors uv − π(p); false when it cannot be fitted in front of every camera.
-bool fit_point(const ov_core::CameraModel &cm, const std::vector<Obs> &obs, const TrackTruthOptions &opt,
+bool fit_point(const ovton::core::CameraModel &cm, const std::vector<Obs> &obs, const TrackTruthOptions &opt,
                std::vector<Eigen::Vector2d> &err, Eigen::Vector3d *point = nullptr) {
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
@@ -111,7 +111,7 @@ double quantile(std::vector<double> v, double q) {
 } // namespace
 
 std::vector<TrackPoint> read_track_points(const std::string &csv) {
-  ov_core::TextTableReader r(csv, ',');
+  ovton::core::TextTableReader r(csv, ',');
   std::vector<std::string> f;
   std::vector<TrackPoint> out;
   while (r.next(f)) {
@@ -129,13 +129,13 @@ std::vector<TrackPoint> read_track_points(const std::string &csv) {
   return out;
 }
 
-TrackTruthResult score_tracks(const std::vector<TrackPoint> &points, const ov_core::Dataset &data,
+TrackTruthResult score_tracks(const std::vector<TrackPoint> &points, const ovton::core::Dataset &data,
                               const TrackTruthOptions &opt) {
   if (!data.has_groundtruth() || !data.groundtruth.front().has_orientation || data.groundtruth.size() < 2)
-    throw ov_core::UsageError("scoring tracks needs full-pose ground truth in " + data.root);
+    throw ovton::core::UsageError("scoring tracks needs full-pose ground truth in " + data.root);
   if (opt.min_obs < 3 || opt.max_segment < opt.min_obs)
-    throw ov_core::UsageError("score_tracks: need 3 <= min_obs <= max_segment");
-  const ov_core::CameraModel cm(data.cam);
+    throw ovton::core::UsageError("score_tracks: need 3 <= min_obs <= max_segment");
+  const ovton::core::CameraModel cm(data.cam);
   const TruthCamera truth(data);
   TrackTruthResult r;
   r.observations = static_cast<long>(points.size());
@@ -270,14 +270,14 @@ TrackTruthResult score_tracks(const std::vector<TrackPoint> &points, const ov_co
   return r;
 }
 
-std::vector<TrackPoint> rewrite_tracks(const std::vector<TrackPoint> &points, const ov_core::Dataset &data,
+std::vector<TrackPoint> rewrite_tracks(const std::vector<TrackPoint> &points, const ovton::core::Dataset &data,
                                        TrackRewrite how, double sigma_px, double rho, uint64_t seed,
                                        const TrackTruthOptions &opt) {
   if (!data.has_groundtruth() || !data.groundtruth.front().has_orientation || data.groundtruth.size() < 2)
-    throw ov_core::UsageError("rewriting tracks needs full-pose ground truth in " + data.root);
+    throw ovton::core::UsageError("rewriting tracks needs full-pose ground truth in " + data.root);
   if (!(sigma_px >= 0) || !(rho >= 0 && rho < 1))
-    throw ov_core::UsageError("rewrite_tracks: need sigma_px >= 0 and 0 <= rho < 1");
-  const ov_core::CameraModel cm(data.cam);
+    throw ovton::core::UsageError("rewrite_tracks: need sigma_px >= 0 and 0 <= rho < 1");
+  const ovton::core::CameraModel cm(data.cam);
   const TruthCamera truth(data);
   const auto tracks = group_tracks(points);
   std::mt19937_64 rng(seed);
@@ -311,7 +311,7 @@ std::vector<TrackPoint> rewrite_tracks(const std::vector<TrackPoint> &points, co
       }
     std::shuffle(pool.begin(), pool.end(), rng);
     if (pool.empty())
-      throw ov_core::UsageError("rewrite_tracks: no track could be fitted, nothing to shuffle");
+      throw ovton::core::UsageError("rewrite_tracks: no track could be fitted, nothing to shuffle");
   }
   size_t next = 0;
   std::vector<TrackPoint> out;
@@ -360,7 +360,7 @@ std::vector<TrackPoint> rewrite_tracks(const std::vector<TrackPoint> &points, co
 }
 
 std::string track_truth_table(const TrackTruthResult &r) {
-  using ov_core::format_fixed;
+  using ovton::core::format_fixed;
   std::ostringstream o;
   const auto pct = [](double x) { return format_fixed(100.0 * x, 1) + " %"; };
   o << "| statistic | value |\n|---|---|\n";
@@ -388,4 +388,4 @@ std::string track_truth_table(const TrackTruthResult &r) {
   return o.str();
 }
 
-} // namespace ov_eval
+} // namespace ovton::eval

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 /// One tracked observation, as in cam0/features.csv (distorted pixels, camera clock).
 struct TrackPoint {
@@ -57,8 +57,8 @@ struct TrackTruthResult {
 /// Reads cam0/features.csv rows (timestamp_ns,feature_id,u,v); throws DataError naming file and line.
 std::vector<TrackPoint> read_track_points(const std::string &csv);
 
-/// Throws ov_core::UsageError when the dataset has no full-pose ground truth.
-TrackTruthResult score_tracks(const std::vector<TrackPoint> &points, const ov_core::Dataset &data,
+/// Throws ovton::core::UsageError when the dataset has no full-pose ground truth.
+TrackTruthResult score_tracks(const std::vector<TrackPoint> &points, const ovton::core::Dataset &data,
                               const TrackTruthOptions &opt = {});
 
 /// How rewrite_tracks replaces the observations.
@@ -73,11 +73,11 @@ enum class TrackRewrite {
 /// Experiments on what in the tracker's errors matters to the filter: every track whose point can be fitted (one
 /// point per whole track, ground-truth poses) is rewritten as that point's projections plus the chosen error; tracks
 /// that cannot be fitted are dropped. Same ids and stamps, so `ovton run` on the result sees the same track lengths.
-std::vector<TrackPoint> rewrite_tracks(const std::vector<TrackPoint> &points, const ov_core::Dataset &data,
+std::vector<TrackPoint> rewrite_tracks(const std::vector<TrackPoint> &points, const ovton::core::Dataset &data,
                                        TrackRewrite how, double sigma_px, double rho, uint64_t seed,
                                        const TrackTruthOptions &opt = {});
 
 /// Markdown table (one row per statistic) with a short legend.
 std::string track_truth_table(const TrackTruthResult &r);
 
-} // namespace ov_eval
+} // namespace ovton::eval

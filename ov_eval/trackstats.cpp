@@ -13,7 +13,7 @@
 #include <opencv2/video/tracking.hpp>
 #include <sstream>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 namespace {
 
@@ -28,10 +28,10 @@ template <typename T> double quantile(std::vector<T> v, double q) {
 void check_options(const TrackStatsOptions &o) {
   if (o.max_points < 1 || o.win_size < 3 || o.pyr_levels < 1 || !(o.fb_max_px > 0) || !(o.mask_radius_px >= 0) ||
       !(o.gftt_quality > 0 && o.gftt_quality < 1) || o.gftt_block < 3 || !(o.low_gradient > 0))
-    throw ov_core::UsageError("trackstats: options out of range (points >= 1, window >= 3, levels >= 1, "
-                              "positive thresholds, quality in (0,1), block >= 3)");
+    throw ovton::core::UsageError("trackstats: options out of range (points >= 1, window >= 3, levels >= 1, "
+                                  "positive thresholds, quality in (0,1), block >= 3)");
   if (o.t_end_ns < o.t_begin_ns)
-    throw ov_core::UsageError("trackstats: the span ends before it begins");
+    throw ovton::core::UsageError("trackstats: the span ends before it begins");
 }
 
 /// The tracker loop over n images fetched by `image(i)` (stamp, 8-bit grey).
@@ -112,7 +112,7 @@ TrackStatsResult run(size_t n, const std::function<int64_t(size_t)> &stamp, cons
     prev_pyr = std::move(pyr);
   }
   if (used < 2)
-    throw ov_core::UsageError("trackstats: fewer than 2 images in the span");
+    throw ovton::core::UsageError("trackstats: fewer than 2 images in the span");
   for (int a : age)
     if (a >= 2) {
       res.track_lengths.push_back(a);
@@ -169,7 +169,7 @@ double noise_sigma_estimate(const cv::Mat &gray8) {
 
 GradientStats gradient_stats(const cv::Mat &gray8, double low_gradient) {
   if (gray8.empty() || gray8.type() != CV_8U)
-    throw ov_core::UsageError("gradient statistics need an 8-bit grey image");
+    throw ovton::core::UsageError("gradient statistics need an 8-bit grey image");
   cv::Mat gx, gy, mag;
   cv::Sobel(gray8, gx, CV_32F, 1, 0, 3);
   cv::Sobel(gray8, gy, CV_32F, 0, 1, 3);
@@ -209,9 +209,9 @@ TrackStatsResult track_statistics(const std::vector<std::pair<int64_t, std::stri
   return run(
       images.size(), [&](size_t i) { return images[i].first; },
       [&](size_t i) {
-        cv::Mat img = ov_core::read_gray_image(images[i].second);
+        cv::Mat img = ovton::core::read_gray_image(images[i].second);
         if (img.empty())
-          throw ov_core::DataError(images[i].second, "cannot read image");
+          throw ovton::core::DataError(images[i].second, "cannot read image");
         return img;
       },
       opt);
@@ -223,7 +223,7 @@ TrackStatsResult track_statistics(const std::vector<std::pair<int64_t, cv::Mat>>
       images.size(), [&](size_t i) { return images[i].first; },
       [&](size_t i) {
         if (images[i].second.type() != CV_8U)
-          throw ov_core::UsageError("trackstats: images must be 8-bit grey");
+          throw ovton::core::UsageError("trackstats: images must be 8-bit grey");
         return images[i].second;
       },
       opt);
@@ -318,12 +318,12 @@ void save_trackstats_plot(const TrackStatsResult &r, const std::string &title, c
   cv::hconcat(p3.render(), p4.render(), bottom);
   cv::vconcat(top, bottom, all);
   std::vector<uchar> bytes;
-  if (!ov_core::encode_image(".png", all, bytes))
-    throw ov_core::DataError(png_file, "cannot encode the chart as PNG");
+  if (!ovton::core::encode_image(".png", all, bytes))
+    throw ovton::core::DataError(png_file, "cannot encode the chart as PNG");
   std::ofstream f(png_file, std::ios::binary);
   f.write(reinterpret_cast<const char *>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   if (!f)
-    throw ov_core::DataError(png_file, "cannot write PNG");
+    throw ovton::core::DataError(png_file, "cannot write PNG");
 }
 
-} // namespace ov_eval
+} // namespace ovton::eval

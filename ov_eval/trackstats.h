@@ -11,7 +11,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 struct TrackStatsOptions {
   int max_points = 200;           ///< points kept alive; new ones are detected to refill
@@ -90,4 +90,4 @@ std::string frames_csv(const TrackStatsResult &r);
 /// frame. Throws DataError naming the file when it cannot be written.
 void save_trackstats_plot(const TrackStatsResult &r, const std::string &title, const std::string &png_file);
 
-} // namespace ov_eval
+} // namespace ovton::eval

@@ -3,18 +3,18 @@
 #include "ov_core/types/time.h"
 #include "ov_eval/metrics.h"
 
-namespace ov_eval {
+namespace ovton::eval {
 
-TruthCamera::TruthCamera(const ov_core::Dataset &d)
+TruthCamera::TruthCamera(const ovton::core::Dataset &d)
     : d_(d), R_BC_(d.cam.T_BC.topLeftCorner<3, 3>()), p_BC_(d.cam.T_BC.topRightCorner<3, 1>()) {}
 
 int64_t TruthCamera::t_imu(int64_t t_cam_ns) const {
-  return t_cam_ns + ov_core::s_to_ns(d_.has_td_truth() ? td_truth_at(d_.td_truth, t_cam_ns) : d_.td_prior_s);
+  return t_cam_ns + ovton::core::s_to_ns(d_.has_td_truth() ? td_truth_at(d_.td_truth, t_cam_ns) : d_.td_prior_s);
 }
 
 bool TruthCamera::at_imu(int64_t t_imu_ns, CameraPose &c) const {
-  ov_core::StateSample s;
-  if (!ov_core::interpolate_state(d_.groundtruth, t_imu_ns, s))
+  ovton::core::StateSample s;
+  if (!ovton::core::interpolate_state(d_.groundtruth, t_imu_ns, s))
     return false;
   const Eigen::Matrix3d R_WB = s.q_WB.toRotationMatrix();
   c.R_WC = R_WB * R_BC_;
@@ -22,4 +22,4 @@ bool TruthCamera::at_imu(int64_t t_imu_ns, CameraPose &c) const {
   return true;
 }
 
-} // namespace ov_eval
+} // namespace ovton::eval

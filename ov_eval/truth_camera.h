@@ -6,7 +6,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 struct CameraPose {
   Eigen::Matrix3d R_WC;
@@ -16,7 +16,7 @@ struct CameraPose {
 class TruthCamera {
 public:
   /// `d` must outlive this object and hold a ground truth with orientations.
-  explicit TruthCamera(const ov_core::Dataset &d);
+  explicit TruthCamera(const ovton::core::Dataset &d);
   /// IMU-clock time the image stamped t_cam shows: the dataset's t_d truth, else its prior.
   int64_t t_imu(int64_t t_cam_ns) const;
   /// Camera pose at IMU time t; false outside the ground truth.
@@ -25,9 +25,9 @@ public:
   bool at_image(int64_t t_cam_ns, CameraPose &c) const { return at_imu(t_imu(t_cam_ns), c); }
 
 private:
-  const ov_core::Dataset &d_;
+  const ovton::core::Dataset &d_;
   Eigen::Matrix3d R_BC_;
   Eigen::Vector3d p_BC_;
 };
 
-} // namespace ov_eval
+} // namespace ovton::eval

@@ -10,14 +10,14 @@
 #include <map>
 #include <sstream>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 namespace {
 
 /// The truth camera, and the image-plane motion of a world point it sees.
 class TruthProjection {
 public:
-  explicit TruthProjection(const ov_core::Dataset &d) : cam_(d) {
+  explicit TruthProjection(const ovton::core::Dataset &d) : cam_(d) {
     const auto &gt = d.groundtruth;
     // Central differences over one ground-truth step: the poses are interpolated linearly between samples.
     h_ns_ = std::max<int64_t>(2500000, (gt.back().t_ns - gt.front().t_ns) / static_cast<int64_t>(gt.size() - 1));
@@ -50,7 +50,7 @@ private:
 };
 
 /// Least-squares intersection of the observation rays; false when they do not fix a point in front of the cameras.
-bool triangulate(const TruthCamera &cam, const std::vector<const ov_core::VelocityLogRow *> &obs, double min_depth,
+bool triangulate(const TruthCamera &cam, const std::vector<const ovton::core::VelocityLogRow *> &obs, double min_depth,
                  Eigen::Vector3d &p_W) {
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
@@ -94,15 +94,15 @@ void add(std::map<std::pair<std::string, std::string>, Errors> &acc, const std::
 
 } // namespace
 
-VelocityEvalResult evaluate_velocities(const std::vector<ov_core::VelocityLogRow> &rows, const ov_core::Dataset &data,
-                                       const VelocityEvalOptions &opt) {
+VelocityEvalResult evaluate_velocities(const std::vector<ovton::core::VelocityLogRow> &rows,
+                                       const ovton::core::Dataset &data, const VelocityEvalOptions &opt) {
   if (!data.has_groundtruth() || !data.groundtruth.front().has_orientation || data.groundtruth.size() < 2)
-    throw ov_core::UsageError("scoring velocities needs full-pose ground truth in " + data.root);
+    throw ovton::core::UsageError("scoring velocities needs full-pose ground truth in " + data.root);
   const TruthProjection proj(data);
   const TruthCamera &cam = proj.camera();
   VelocityEvalResult r;
   r.rows = static_cast<long>(rows.size());
-  std::map<uint64_t, std::vector<const ov_core::VelocityLogRow *>> tracks;
+  std::map<uint64_t, std::vector<const ovton::core::VelocityLogRow *>> tracks;
   for (const auto &row : rows)
     tracks[row.feature_id].push_back(&row);
   r.features = static_cast<long>(tracks.size());
@@ -126,7 +126,7 @@ VelocityEvalResult evaluate_velocities(const std::vector<ov_core::VelocityLogRow
     ++r.features_scored;
     // eq. 2 velocities of the track's second and third observations: the rule `next` is the first, a quadratic
     // through the first three positions gives V^k ≈ 1.5·V^{k+1} − 0.5·V^{k+2} (constant acceleration).
-    std::map<int, const ov_core::VelocityLogRow *> by_index;
+    std::map<int, const ovton::core::VelocityLogRow *> by_index;
     for (const auto *o : obs)
       by_index[o->obs_index] = o;
     for (const auto *o : obs) {
@@ -198,10 +198,11 @@ std::string velocity_table(const VelocityEvalResult &r) {
   os << "| observations | velocity | count | RMS error [px/s] | median error [px/s] | within gate | true speed RMS "
         "[px/s] |\n|---|---|---:|---:|---:|---:|---:|\n";
   for (const auto &s : r.scores)
-    os << "| " << s.observations << " | " << s.rule << " | " << s.count << " | " << ov_core::format_fixed(s.rms_px_s, 1)
-       << " | " << ov_core::format_fixed(s.median_px_s, 1) << " | " << ov_core::format_fixed(100.0 * s.within_gate, 1)
-       << " % | " << ov_core::format_fixed(s.true_rms_px_s, 1) << " |\n";
+    os << "| " << s.observations << " | " << s.rule << " | " << s.count << " | "
+       << ovton::core::format_fixed(s.rms_px_s, 1) << " | " << ovton::core::format_fixed(s.median_px_s, 1) << " | "
+       << ovton::core::format_fixed(100.0 * s.within_gate, 1) << " % | "
+       << ovton::core::format_fixed(s.true_rms_px_s, 1) << " |\n";
   return os.str();
 }
 
-} // namespace ov_eval
+} // namespace ovton::eval

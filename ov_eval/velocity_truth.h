@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 struct VelocityScore {
   std::string observations; ///< "first" (a new feature's first observation) or "tracked"
@@ -32,11 +32,11 @@ struct VelocityEvalOptions {
   double min_depth_m = 0.1;
 };
 
-/// Throws ov_core::UsageError when the dataset has no full-pose ground truth.
-VelocityEvalResult evaluate_velocities(const std::vector<ov_core::VelocityLogRow> &rows, const ov_core::Dataset &data,
-                                       const VelocityEvalOptions &opt = {});
+/// Throws ovton::core::UsageError when the dataset has no full-pose ground truth.
+VelocityEvalResult evaluate_velocities(const std::vector<ovton::core::VelocityLogRow> &rows,
+                                       const ovton::core::Dataset &data, const VelocityEvalOptions &opt = {});
 
 /// Markdown table of the scores.
 std::string velocity_table(const VelocityEvalResult &r);
 
-} // namespace ov_eval
+} // namespace ovton::eval

@@ -6,12 +6,12 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 void check(const CameraEffectsOptions &o) {
   const auto need = [](bool ok, const char *what) {
     if (!ok)
-      throw ov_core::UsageError(std::string("camera effects: ") + what);
+      throw ovton::core::UsageError(std::string("camera effects: ") + what);
   };
   need(o.exposure_s > 0 && o.exposure_s <= 0.05, "exposure must lie in (0, 50 ms]");
   need(o.ae_min_exposure_s > 0 && o.ae_max_exposure_s >= o.ae_min_exposure_s && o.ae_max_exposure_s <= 0.05,
@@ -28,7 +28,7 @@ void check(const CameraEffectsOptions &o) {
        "flicker amplitude must lie in [0, 1), frequency > 0");
 }
 
-CameraEffects::CameraEffects(const CameraEffectsOptions &opt, const ov_core::CameraModel &cam, uint64_t noise_seed)
+CameraEffects::CameraEffects(const CameraEffectsOptions &opt, const ovton::core::CameraModel &cam, uint64_t noise_seed)
     : opt_(opt), noise_seed_(noise_seed) {
   check(opt_);
   const int w = cam.width(), h = cam.height();
@@ -69,7 +69,7 @@ double CameraEffects::flicker_factor(int64_t t_ns, double exposure_s) const {
 void CameraEffects::develop(const cv::Mat &radiance, int64_t t_mid_ns, double readout_s, uint64_t frame_index,
                             cv::Mat &out) {
   if (radiance.size() != vignette_.size() || radiance.type() != CV_32F)
-    throw ov_core::UsageError("camera effects: radiance must be CV_32F of the camera's size");
+    throw ovton::core::UsageError("camera effects: radiance must be CV_32F of the camera's size");
   cv::Mat irr;
   if (opt_.psf_sigma_px > 0)
     cv::GaussianBlur(radiance, irr, cv::Size(0, 0), opt_.psf_sigma_px, opt_.psf_sigma_px, cv::BORDER_REFLECT);
@@ -125,7 +125,7 @@ void CameraEffects::settle(const cv::Mat &radiance) {
   if (!opt_.auto_exposure)
     return;
   if (radiance.size() != vignette_.size() || radiance.type() != CV_32F)
-    throw ov_core::UsageError("camera effects: radiance must be CV_32F of the camera's size");
+    throw ovton::core::UsageError("camera effects: radiance must be CV_32F of the camera's size");
   // Undamped steps of the same law converge in a few iterations (saturation makes it slightly non-linear).
   double product = next_.exposure_s * next_.gain;
   for (int i = 0; i < 8; ++i)
@@ -133,4 +133,4 @@ void CameraEffects::settle(const cv::Mat &radiance) {
   set_exposure_product(product);
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

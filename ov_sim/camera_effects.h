@@ -11,7 +11,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 struct CameraEffectsOptions {
   bool enabled = false;
@@ -47,7 +47,7 @@ struct Exposure {
 /// the noise of frame k depends only on (seed, k), the exposure only on the frames before.
 class CameraEffects {
 public:
-  CameraEffects(const CameraEffectsOptions &opt, const ov_core::CameraModel &cam, uint64_t noise_seed);
+  CameraEffects(const CameraEffectsOptions &opt, const ovton::core::CameraModel &cam, uint64_t noise_seed);
 
   /// Exposure of the next frame (auto-exposure decides it from the frames already developed, as a camera does).
   const Exposure &next_exposure() const { return next_; }
@@ -77,4 +77,4 @@ private:
   Exposure next_;
 };
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -2,15 +2,15 @@
 #include <cstdio>
 #include <sstream>
 
-namespace ov_sim {
+namespace ovton::sim {
 
-ov_core::CameraCalib euroc_cam0_calib() {
-  ov_core::CameraCalib c;
+ovton::core::CameraCalib euroc_cam0_calib() {
+  ovton::core::CameraCalib c;
   c.width = 752;
   c.height = 480;
   c.rate_hz = 20.0;
   c.intrinsics << 458.654, 457.296, 367.215, 248.375;
-  c.distortion = ov_core::DistortionModel::RadTan;
+  c.distortion = ovton::core::DistortionModel::RadTan;
   c.dist_coeffs << -0.28340811, 0.07395907, 0.00019359, 1.76187114e-05;
   c.T_BC << 0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975, //
       0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768,           //
@@ -19,8 +19,8 @@ ov_core::CameraCalib euroc_cam0_calib() {
   return c;
 }
 
-ov_core::ImuCalib euroc_imu0_calib() {
-  ov_core::ImuCalib c;
+ovton::core::ImuCalib euroc_imu0_calib() {
+  ovton::core::ImuCalib c;
   c.rate_hz = 200.0;
   c.gyro_noise_density = 1.6968e-04;
   c.gyro_random_walk = 1.9393e-05;
@@ -45,7 +45,7 @@ void write_T(std::ostringstream &os, const Eigen::Matrix4d &T) {
 }
 } // namespace
 
-std::string euroc_camera_yaml(const ov_core::CameraCalib &c, const std::string &comment) {
+std::string euroc_camera_yaml(const ovton::core::CameraCalib &c, const std::string &comment) {
   std::ostringstream os;
   os << "%YAML:1.0\n# General sensor definitions.\nsensor_type: camera\ncomment: " << comment
      << "\n\n# Sensor extrinsics wrt. the body-frame.\n";
@@ -53,13 +53,13 @@ std::string euroc_camera_yaml(const ov_core::CameraCalib &c, const std::string &
   os << "\n# Camera specific definitions.\nrate_hz: " << num(c.rate_hz) << "\nresolution: [" << c.width << ", "
      << c.height << "]\ncamera_model: pinhole\nintrinsics: [" << num(c.intrinsics(0)) << ", " << num(c.intrinsics(1))
      << ", " << num(c.intrinsics(2)) << ", " << num(c.intrinsics(3)) << "] #fu, fv, cu, cv\ndistortion_model: "
-     << (c.distortion == ov_core::DistortionModel::RadTan ? "radial-tangential" : "equidistant")
+     << (c.distortion == ovton::core::DistortionModel::RadTan ? "radial-tangential" : "equidistant")
      << "\ndistortion_coefficients: [" << num(c.dist_coeffs(0)) << ", " << num(c.dist_coeffs(1)) << ", "
      << num(c.dist_coeffs(2)) << ", " << num(c.dist_coeffs(3)) << "]\n";
   return os.str();
 }
 
-std::string euroc_imu_yaml(const ov_core::ImuCalib &c, const std::string &comment) {
+std::string euroc_imu_yaml(const ovton::core::ImuCalib &c, const std::string &comment) {
   std::ostringstream os;
   os << "%YAML:1.0\n#Default imu sensor yaml file\nsensor_type: imu\ncomment: " << comment
      << "\n\n# Sensor extrinsics wrt. the body-frame.\n";
@@ -76,4 +76,4 @@ std::string euroc_imu_yaml(const ov_core::ImuCalib &c, const std::string &commen
   return os.str();
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

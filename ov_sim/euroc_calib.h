@@ -5,13 +5,13 @@
 #include "ov_core/cam/camera_calib.h"
 #include <string>
 
-namespace ov_sim {
+namespace ovton::sim {
 
-ov_core::CameraCalib euroc_cam0_calib();
-ov_core::ImuCalib euroc_imu0_calib();
+ovton::core::CameraCalib euroc_cam0_calib();
+ovton::core::ImuCalib euroc_imu0_calib();
 
 /// EuRoC-format sensor.yaml text (the layout of the original files, `%YAML:1.0` header included).
-std::string euroc_camera_yaml(const ov_core::CameraCalib &c, const std::string &comment);
-std::string euroc_imu_yaml(const ov_core::ImuCalib &c, const std::string &comment);
+std::string euroc_camera_yaml(const ovton::core::CameraCalib &c, const std::string &comment);
+std::string euroc_imu_yaml(const ovton::core::ImuCalib &c, const std::string &comment);
 
-} // namespace ov_sim
+} // namespace ovton::sim

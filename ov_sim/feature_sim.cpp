@@ -3,12 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ov_sim {
+namespace ovton::sim {
 
-FeatureSimulator::FeatureSimulator(const ov_core::CameraModel &cam, const Scene &scene, const FeatureSimOptions &opt)
+FeatureSimulator::FeatureSimulator(const ovton::core::CameraModel &cam, const Scene &scene,
+                                   const FeatureSimOptions &opt)
     : cam_(cam), scene_(scene), opt_(opt), rng_(opt.seed) {
   if (opt.max_tracks <= 0 || opt.grid_cols <= 0 || opt.grid_rows <= 0 || !(opt.mean_track_length >= 1.0))
-    throw ov_core::UsageError("feature simulation: max_tracks, grid and mean_track_length must be positive");
+    throw ovton::core::UsageError("feature simulation: max_tracks, grid and mean_track_length must be positive");
   const auto &surfs = scene.surfaces();
   for (size_t s = 0; s < surfs.size(); ++s) {
     if (surfs[s].mips[0].cols <= 2) // box bottoms rest on the floor
@@ -129,4 +130,4 @@ std::vector<FeatureObservation> FeatureSimulator::step(const FramePose &pose, in
   return out;
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

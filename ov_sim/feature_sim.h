@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 struct FeatureSimOptions {
   int max_tracks = 200;             ///< live tracks, as a tracker configured for 200 points
@@ -30,7 +30,7 @@ struct FeatureObservation {
 
 class FeatureSimulator {
 public:
-  FeatureSimulator(const ov_core::CameraModel &cam, const Scene &scene, const FeatureSimOptions &opt);
+  FeatureSimulator(const ovton::core::CameraModel &cam, const Scene &scene, const FeatureSimOptions &opt);
 
   /// Observations of one frame: the camera at (R_WC, p_WC) at its true instant, stamped t_cam_ns.
   std::vector<FeatureObservation> step(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_WC, int64_t t_cam_ns);
@@ -44,7 +44,7 @@ public:
 
 private:
   bool visible(size_t lm, const FramePose &pose, Eigen::Vector2d &uv) const;
-  const ov_core::CameraModel &cam_;
+  const ovton::core::CameraModel &cam_;
   const Scene &scene_;
   FeatureSimOptions opt_;
   Rng rng_;
@@ -53,4 +53,4 @@ private:
   std::vector<size_t> track_landmark_; ///< feature id -> landmark
 };
 
-} // namespace ov_sim
+} // namespace ovton::sim

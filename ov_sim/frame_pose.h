@@ -3,7 +3,7 @@
 #include <Eigen/Core>
 #include <functional>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 /// A global shutter sees the whole image from (R_WC, p_WC); a rolling shutter (at_row set) sees each image row from
 /// its own pose, at_row(v) for the (continuous, distorted-pixel) row v. (R_WC, p_WC) is then row 0's pose.
@@ -13,4 +13,4 @@ struct FramePose {
   std::function<void(double row, Eigen::Matrix3d &R_WC, Eigen::Vector3d &p_WC)> at_row; ///< empty: global shutter
 };
 
-} // namespace ov_sim
+} // namespace ovton::sim

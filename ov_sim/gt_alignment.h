@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 struct GtAlignment {
   double shift_s = 0.0;                               ///< the IMU reading at t matches the reference at t + shift
@@ -30,24 +30,25 @@ struct GtAlignment {
 /// with knots knot_dt_s) and, where `imu_frame_gt` (a ground truth in the IMU's frame, e.g. EuRoC's
 /// state_groundtruth_estimate0; may be empty) overlaps it, the IMU's origin in the reference body. Throws
 /// UsageError when the log and the reference overlap by less than 20 s.
-GtAlignment align_gt_to_imu(const std::vector<ov_core::ImuData> &imu, const std::vector<ov_core::StateSample> &ref,
-                            const std::vector<ov_core::StateSample> &imu_frame_gt, double knot_dt_s);
+GtAlignment align_gt_to_imu(const std::vector<ovton::core::ImuData> &imu,
+                            const std::vector<ovton::core::StateSample> &ref,
+                            const std::vector<ovton::core::StateSample> &imu_frame_gt, double knot_dt_s);
 
 /// `ref` moved into the IMU's clock (t - shift), world (tilt removed) and body (axes rotated, origin at the IMU).
 /// Velocities and biases are dropped (the spline derives the motion; a pose file carries no biases).
-std::vector<ov_core::StateSample> apply_gt_alignment(const std::vector<ov_core::StateSample> &ref,
-                                                     const GtAlignment &a);
+std::vector<ovton::core::StateSample> apply_gt_alignment(const std::vector<ovton::core::StateSample> &ref,
+                                                         const GtAlignment &a);
 
 /// `fine` (already aligned) on top of `base`, an IMU-frame ground truth of the same flight (EuRoC's estimate, any
 /// rate): below blend_hz the motion is base's (through a spline with knots base_knot_dt_s), above it fine's. At
 /// fine's stamps inside base's span. Why: the estimate was made with the IMU, so its slow motion and its bias
 /// columns agree with the real log, while a motion-capture pose file wanders against the log by ~0.005 rad/s over
 /// seconds (V1_01: 0.4 deg median, 1.2 deg at most against the estimate); the fast motion only the pose file has.
-std::vector<ov_core::StateSample> blend_gt(const std::vector<ov_core::StateSample> &base,
-                                           const std::vector<ov_core::StateSample> &fine, double blend_hz,
-                                           double base_knot_dt_s);
+std::vector<ovton::core::StateSample> blend_gt(const std::vector<ovton::core::StateSample> &base,
+                                               const std::vector<ovton::core::StateSample> &fine, double blend_hz,
+                                               double base_knot_dt_s);
 
 /// One line for sim.yaml and the progress output: shift [ms], rotation [deg], tilt [deg], lever arm [mm].
 std::string describe_gt_alignment(const GtAlignment &a);
 
-} // namespace ov_sim
+} // namespace ovton::sim

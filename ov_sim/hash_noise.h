@@ -3,7 +3,7 @@
 // order pixels are drawn in, and no generator state is carried between frames.
 #include <cstdint>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 /// SplitMix64's finaliser, top 32 bits: a well-mixed hash of a 64-bit key.
 inline uint32_t hash32(uint64_t x) {
@@ -30,4 +30,4 @@ inline float approx_normal(uint64_t key) {
   return (s - 131070.0f) * 2.6429e-5f;
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -8,7 +8,7 @@
 #include <opencv2/core.hpp>
 #include <sstream>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 void drop_imu_error_parts(ImuErrorModel &m, const std::string &parts) {
   std::istringstream list(parts);
@@ -33,15 +33,15 @@ void drop_imu_error_parts(ImuErrorModel &m, const std::string &parts) {
         if (b.low_hz >= 10.0)
           (p == "vibration-gyro" ? b.gyro : b.accel).setZero();
     } else
-      throw ov_core::UsageError("unknown IMU error part '" + p +
-                                "' (scale, turn-on, slow, mid, vibration, vibration-gyro, vibration-accel)");
+      throw ovton::core::UsageError("unknown IMU error part '" + p +
+                                    "' (scale, turn-on, slow, mid, vibration, vibration-gyro, vibration-accel)");
   }
 }
 
 void check(const ImuErrorModel &m) {
   const auto need = [](bool ok, const char *what) {
     if (!ok)
-      throw ov_core::UsageError(std::string("IMU error model: ") + what);
+      throw ovton::core::UsageError(std::string("IMU error model: ") + what);
   };
   need(m.gyro_scale_misalignment.allFinite() && std::abs(m.gyro_scale_misalignment.determinant() - 1.0) < 0.5,
        "gyro scale/misalignment must be finite and near identity");
@@ -83,12 +83,13 @@ std::vector<double> coloured_noise(size_t n, double fs, const std::function<doub
 } // namespace
 
 void add_imu_errors(const Trajectory &traj, const ImuErrorModel &m, double white_gyro, double white_accel,
-                    uint64_t seed, std::vector<ov_core::ImuData> &imu, std::vector<ov_core::StateSample> &truth) {
+                    uint64_t seed, std::vector<ovton::core::ImuData> &imu,
+                    std::vector<ovton::core::StateSample> &truth) {
   check(m);
   if (!m.enabled || imu.size() < 2)
     return;
   if (truth.size() != imu.size())
-    throw ov_core::UsageError("IMU errors: the log and its truth differ in length");
+    throw ovton::core::UsageError("IMU errors: the log and its truth differ in length");
   const size_t n = imu.size();
   const double fs = (n - 1) / ((imu.back().t_imu_ns - imu.front().t_imu_ns) * 1e-9);
   Rng rng(seed);
@@ -126,8 +127,8 @@ void add_imu_errors(const Trajectory &traj, const ImuErrorModel &m, double white
 
   const Eigen::Matrix3d S = m.gyro_scale_misalignment;
   for (size_t i = 0; i < n; ++i) {
-    ov_core::ImuData &d = imu[i];
-    ov_core::StateSample &t = truth[i];
+    ovton::core::ImuData &d = imu[i];
+    ovton::core::StateSample &t = truth[i];
     // The log holds w + b + white noise (w scaled by a planted gyro scale, if any): the misalignment applies to
     // what is not bias (its effect on the white noise, a few 1e-3 of it, is immaterial).
     const Eigen::Vector3d w_meas_rest = d.wm - t.bg;
@@ -179,10 +180,10 @@ double allan_variance(const ImuErrorModel &m, bool gyro, int axis, double white,
   return avar + walk * walk * tau_s / 3.0;
 }
 
-ov_core::ImuCalib fitted_imu_noise(const ImuErrorModel &m, const ov_core::ImuCalib &datasheet, double tau_min_s,
-                                   double tau_max_s) {
+ovton::core::ImuCalib fitted_imu_noise(const ImuErrorModel &m, const ovton::core::ImuCalib &datasheet, double tau_min_s,
+                                       double tau_max_s) {
   if (!(tau_min_s > 0 && tau_max_s > tau_min_s))
-    throw ov_core::UsageError("fitted_imu_noise: need 0 < tau_min < tau_max");
+    throw ovton::core::UsageError("fitted_imu_noise: need 0 < tau_min < tau_max");
   // AVAR(tau) ~ N^2 / tau + K^2 tau / 3, fitted by least squares on log AVAR at 25 averaging times spaced evenly in
   // log tau (every decade weighs alike; over- and under-declaring by the same factor cost alike): a grid search over
   // log N^2 and log K^2 (K^2 down to 1e-6 of the level that would explain everything), refined three times.
@@ -219,7 +220,7 @@ ov_core::ImuCalib fitted_imu_noise(const ImuErrorModel &m, const ov_core::ImuCal
     N = std::sqrt(std::exp(best_n));
     K = std::sqrt(std::exp(best_k));
   };
-  ov_core::ImuCalib out = datasheet;
+  ovton::core::ImuCalib out = datasheet;
   fit(true, datasheet.gyro_noise_density, datasheet.gyro_random_walk, out.gyro_noise_density, out.gyro_random_walk);
   fit(false, datasheet.accel_noise_density, datasheet.accel_random_walk, out.accel_noise_density,
       out.accel_random_walk);
@@ -257,4 +258,4 @@ ImuErrorModel euroc_v1_01_imu_errors() {
   return m;
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 /// One band of a one-sided noise spectrum: white-equivalent density per axis between low_hz and high_hz.
 struct NoiseBand {
@@ -44,7 +44,8 @@ void drop_imu_error_parts(ImuErrorModel &m, const std::string &parts);
 /// Adds the model's errors to a synthetic log (its stamps, in order) and the turn-on biases to the truth's biases.
 /// `white_gyro`/`white_accel` are the densities of the white noise already in the log. Deterministic in `seed`.
 void add_imu_errors(const Trajectory &traj, const ImuErrorModel &m, double white_gyro, double white_accel,
-                    uint64_t seed, std::vector<ov_core::ImuData> &imu, std::vector<ov_core::StateSample> &truth);
+                    uint64_t seed, std::vector<ovton::core::ImuData> &imu,
+                    std::vector<ovton::core::StateSample> &truth);
 
 /// Allan variance [unit^2] at averaging time tau_s of one axis of the noise a synthetic log carries: the datasheet
 /// white noise `white` and bias random walk `walk` (EuRoC sensor.yaml units) together with the model's coloured
@@ -58,11 +59,11 @@ double allan_variance(const ImuErrorModel &m, bool gyro, int axis, double white,
 /// noise is isotropic) over averaging times [tau_min_s, tau_max_s], by least squares on the log of the Allan variance
 /// on a log grid — how a real IMU's noise parameters are obtained (Allan variance of a log). Without `m`'s coloured
 /// noise the datasheet values come back (to the fit's accuracy). Only the four noise values of the result are set.
-ov_core::ImuCalib fitted_imu_noise(const ImuErrorModel &m, const ov_core::ImuCalib &datasheet, double tau_min_s = 0.05,
-                                   double tau_max_s = 20.0);
+ovton::core::ImuCalib fitted_imu_noise(const ImuErrorModel &m, const ovton::core::ImuCalib &datasheet,
+                                       double tau_min_s = 0.05, double tau_max_s = 20.0);
 
 /// The model measured on the real V1_01_easy log against EuRoC's own ground truth (docs/simulate.md has the
 /// command and the numbers): what `--realism euroc` uses.
 ImuErrorModel euroc_v1_01_imu_errors();
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -12,7 +12,7 @@
 #include <cstdio>
 #include <numeric>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 namespace {
 
@@ -26,7 +26,7 @@ struct GtAt {
 
 GtAt gt_at(const Trajectory &traj, int64_t t) {
   const TrajectorySample s = traj.sample(t);
-  const ov_core::ImuData m = ideal_imu(s, t, Eigen::Vector3d(0, 0, -kGravity));
+  const ovton::core::ImuData m = ideal_imu(s, t, Eigen::Vector3d(0, 0, -kGravity));
   GtAt g;
   g.w = m.wm;
   g.f = m.am;
@@ -116,17 +116,17 @@ BandDensity band_density(const std::vector<Eigen::Vector3d> &r, const std::vecto
 
 } // namespace
 
-ImuMatchReport match_imu(const std::vector<ov_core::ImuData> &imu, const std::vector<ov_core::StateSample> &gt,
+ImuMatchReport match_imu(const std::vector<ovton::core::ImuData> &imu, const std::vector<ovton::core::StateSample> &gt,
                          const ImuMatchOptions &opt) {
   if (imu.size() < 100 || gt.size() < 10)
-    throw ov_core::UsageError("IMU matching needs an IMU log and a ground truth");
-  const int64_t margin = ov_core::s_to_ns(opt.max_shift_s + 0.5);
+    throw ovton::core::UsageError("IMU matching needs an IMU log and a ground truth");
+  const int64_t margin = ovton::core::s_to_ns(opt.max_shift_s + 0.5);
   const int64_t t0 = std::max(imu.front().t_imu_ns, gt.front().t_ns) + margin;
   const int64_t t1 = std::min(imu.back().t_imu_ns, gt.back().t_ns) - margin;
-  if (t1 - t0 < ov_core::s_to_ns(20.0))
-    throw ov_core::UsageError("the IMU log and the ground truth overlap by less than 20 s");
+  if (t1 - t0 < ovton::core::s_to_ns(20.0))
+    throw ovton::core::UsageError("the IMU log and the ground truth overlap by less than 20 s");
   const SplineTrajectory traj(gt, t0 - margin, t1 + margin, opt.knot_dt_s, "imu match");
-  std::vector<const ov_core::ImuData *> used;
+  std::vector<const ovton::core::ImuData *> used;
   for (const auto &m : imu)
     if (m.t_imu_ns >= t0 && m.t_imu_ns <= t1)
       used.push_back(&m);
@@ -154,7 +154,7 @@ ImuMatchReport match_imu(const std::vector<ov_core::ImuData> &imu, const std::ve
   // time; the gyro's scale, axes and bias are free in the fit, so they cannot bias the shift).
   std::vector<Eigen::Vector3d> wg(used.size());
   const auto gyro_rss = [&](double shift) {
-    const int64_t d = ov_core::s_to_ns(shift);
+    const int64_t d = ovton::core::s_to_ns(shift);
     for (size_t i = 0; i < used.size(); ++i)
       wg[i] = gt_at(traj, used[i]->t_imu_ns + d).w;
     Eigen::Matrix3d A;
@@ -177,7 +177,7 @@ ImuMatchReport match_imu(const std::vector<ov_core::ImuData> &imu, const std::ve
   rep.gt_shift_s = best;
 
   // Final fits at that shift.
-  const int64_t d = ov_core::s_to_ns(best);
+  const int64_t d = ovton::core::s_to_ns(best);
   std::vector<GtAt> g(used.size());
   for (size_t i = 0; i < used.size(); ++i) {
     g[i] = gt_at(traj, used[i]->t_imu_ns + d);
@@ -199,7 +199,7 @@ ImuMatchReport match_imu(const std::vector<ov_core::ImuData> &imu, const std::ve
   // separate, bias and the world's tilt, with unit scale; report how much each axis' true signal varies.
   Eigen::Matrix<double, 5, 1> xa;
   const auto accel_fit = [&](double shift) {
-    const int64_t da = ov_core::s_to_ns(shift);
+    const int64_t da = ovton::core::s_to_ns(shift);
     Eigen::Matrix<double, 5, 5> N = Eigen::Matrix<double, 5, 5>::Zero();
     Eigen::Matrix<double, 5, 1> rhs = Eigen::Matrix<double, 5, 1>::Zero();
     double yy = 0.0;
@@ -232,7 +232,7 @@ ImuMatchReport match_imu(const std::vector<ov_core::ImuData> &imu, const std::ve
   rep.gt_tilt = xa.segment<2>(3);
   Eigen::Vector3d f_mean = Eigen::Vector3d::Zero(), f_sq = Eigen::Vector3d::Zero();
   for (size_t i = 0; i < used.size(); ++i) {
-    const GtAt ga = gt_at(traj, used[i]->t_imu_ns + ov_core::s_to_ns(best_a));
+    const GtAt ga = gt_at(traj, used[i]->t_imu_ns + ovton::core::s_to_ns(best_a));
     g[i].f = Rg * ga.f; // from here on in the IMU's axes
     g[i].R_BW = Rg * ga.R_BW;
     f_mean += g[i].f;
@@ -385,4 +385,4 @@ std::string imu_match_yaml(const ImuMatchReport &r) {
   return s;
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

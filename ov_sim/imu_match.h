@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 struct ImuMatchOptions {
   double knot_dt_s = 0.1;        ///< spline knots of the ground-truth fit (as the simulator's default)
@@ -60,10 +60,10 @@ struct ImuMatchReport {
 };
 
 /// imu: a real log (IMU clock), gt: its ground truth. Throws UsageError when they overlap by less than 20 s.
-ImuMatchReport match_imu(const std::vector<ov_core::ImuData> &imu, const std::vector<ov_core::StateSample> &gt,
+ImuMatchReport match_imu(const std::vector<ovton::core::ImuData> &imu, const std::vector<ovton::core::StateSample> &gt,
                          const ImuMatchOptions &opt = {});
 
 /// The report as YAML (units in the keys), with a comment line per group saying whose error it is.
 std::string imu_match_yaml(const ImuMatchReport &r);
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -3,10 +3,10 @@
 #include "ov_sim/random.h"
 #include <cmath>
 
-namespace ov_sim {
+namespace ovton::sim {
 
-ov_core::ImuData ideal_imu(const TrajectorySample &s, int64_t t_ns, const Eigen::Vector3d &gravity_W) {
-  ov_core::ImuData m;
+ovton::core::ImuData ideal_imu(const TrajectorySample &s, int64_t t_ns, const Eigen::Vector3d &gravity_W) {
+  ovton::core::ImuData m;
   m.t_imu_ns = t_ns;
   m.wm = s.w_B;
   // The accelerometer measures specific force: everything but gravity, in the sensor frame.
@@ -17,7 +17,7 @@ ov_core::ImuData ideal_imu(const TrajectorySample &s, int64_t t_ns, const Eigen:
 ImuSynthResult synthesize_imu(const Trajectory &traj, const ImuSynthOptions &opt) {
   const double rate = opt.calib.rate_hz;
   if (!(rate > 0.0))
-    throw ov_core::UsageError("IMU synthesis: rate must be positive");
+    throw ovton::core::UsageError("IMU synthesis: rate must be positive");
   const double period_ns_f = 1e9 / rate;
   const double dt = 1.0 / rate;
   const double sig_g = opt.calib.gyro_noise_density * std::sqrt(rate);
@@ -35,7 +35,7 @@ ImuSynthResult synthesize_imu(const Trajectory &traj, const ImuSynthOptions &opt
     if (t > t1)
       break;
     const TrajectorySample s = traj.sample(t);
-    ov_core::ImuData m = ideal_imu(s, t, opt.gravity_W);
+    ovton::core::ImuData m = ideal_imu(s, t, opt.gravity_W);
     // Draw all six values each step even when a component is off, so toggling one never reshuffles the other.
     Eigen::Vector3d ng, na, wg, wa;
     for (int i = 0; i < 3; ++i)
@@ -52,7 +52,7 @@ ImuSynthResult synthesize_imu(const Trajectory &traj, const ImuSynthOptions &opt
       m.wm += sig_g * ng;
       m.am += sig_a * na;
     }
-    ov_core::StateSample gt = to_state_sample(s, t);
+    ovton::core::StateSample gt = to_state_sample(s, t);
     gt.bg = bg;
     gt.ba = ba;
     out.imu.push_back(m);
@@ -65,4 +65,4 @@ ImuSynthResult synthesize_imu(const Trajectory &traj, const ImuSynthOptions &opt
   return out;
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -5,10 +5,10 @@
 #include "ov_sim/trajectory.h"
 #include <vector>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 struct ImuSynthOptions {
-  ov_core::ImuCalib calib;                                      ///< rate and continuous-time noise densities
+  ovton::core::ImuCalib calib;                                  ///< rate and continuous-time noise densities
   Eigen::Vector3d gravity_W = Eigen::Vector3d(0.0, 0.0, -9.81); ///< world z up
   Eigen::Vector3d bg0 = Eigen::Vector3d::Zero();                ///< initial gyro bias [rad/s]
   Eigen::Vector3d ba0 = Eigen::Vector3d::Zero();                ///< initial accel bias [m/s^2]
@@ -22,8 +22,8 @@ struct ImuSynthOptions {
 };
 
 struct ImuSynthResult {
-  std::vector<ov_core::ImuData> imu;
-  std::vector<ov_core::StateSample> truth; ///< true state (pose, velocity, biases) at every IMU stamp
+  std::vector<ovton::core::ImuData> imu;
+  std::vector<ovton::core::StateSample> truth; ///< true state (pose, velocity, biases) at every IMU stamp
 };
 
 /// Samples the IMU at calib.rate_hz on [traj.t_begin_ns(), traj.t_end_ns()], stamps on an exact ns grid.
@@ -31,6 +31,6 @@ struct ImuSynthResult {
 ImuSynthResult synthesize_imu(const Trajectory &traj, const ImuSynthOptions &opt);
 
 /// Ideal (noise-free, bias-free) measurement at one instant.
-ov_core::ImuData ideal_imu(const TrajectorySample &s, int64_t t_ns, const Eigen::Vector3d &gravity_W);
+ovton::core::ImuData ideal_imu(const TrajectorySample &s, int64_t t_ns, const Eigen::Vector3d &gravity_W);
 
-} // namespace ov_sim
+} // namespace ovton::sim

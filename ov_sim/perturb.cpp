@@ -10,24 +10,24 @@
 
 namespace fs = std::filesystem;
 
-namespace ov_sim {
+namespace ovton::sim {
 
 PerturbReport perturb_dataset(const PerturbOptions &opt) {
   if (opt.in_dir.empty() || opt.out_dir.empty())
-    throw ov_core::UsageError("perturb: need an input and an output folder");
+    throw ovton::core::UsageError("perturb: need an input and an output folder");
   const fs::path in_mav0 =
       fs::exists(fs::path(opt.in_dir) / "mav0") ? fs::path(opt.in_dir) / "mav0" : fs::path(opt.in_dir);
   const fs::path out_mav0 = fs::path(opt.out_dir) / "mav0";
   if (fs::exists(out_mav0))
-    throw ov_core::UsageError("perturb: " + out_mav0.string() + " already exists; choose an empty output folder");
+    throw ovton::core::UsageError("perturb: " + out_mav0.string() + " already exists; choose an empty output folder");
   if (fs::weakly_canonical(in_mav0) == fs::weakly_canonical(out_mav0))
-    throw ov_core::UsageError("perturb: output folder is the input folder");
+    throw ovton::core::UsageError("perturb: output folder is the input folder");
 
-  ov_core::LoadOptions lo;
+  ovton::core::LoadOptions lo;
   lo.check_images_exist = true;
-  const ov_core::Dataset ds = ov_core::load_dataset(opt.in_dir, lo);
+  const ovton::core::Dataset ds = ovton::core::load_dataset(opt.in_dir, lo);
   if (ds.images.empty())
-    throw ov_core::DataError((in_mav0 / "cam0" / "data.csv").string(), "no images");
+    throw ovton::core::DataError((in_mav0 / "cam0" / "data.csv").string(), "no images");
 
   std::vector<int64_t> t_true;
   for (const auto &im : ds.images)
@@ -65,19 +65,19 @@ PerturbReport perturb_dataset(const PerturbOptions &opt) {
   fs::create_directories(img_dir);
   std::ofstream list(out_mav0 / "cam0" / "data.csv");
   if (!list)
-    throw ov_core::DataError((out_mav0 / "cam0" / "data.csv").string(), "cannot open for writing");
+    throw ovton::core::DataError((out_mav0 / "cam0" / "data.csv").string(), "cannot open for writing");
   list << "#timestamp [ns],filename\n";
-  std::vector<ov_core::TdSample> td;
+  std::vector<ovton::core::TdSample> td;
   for (size_t k = 0; k < frames.size(); ++k) {
     const fs::path src = fs::absolute(ds.images[k].path);
     const std::string name = std::to_string(frames[k].t_cam_ns) + src.extension().string();
     fs::create_symlink(src, img_dir / name); // linked, not copied: a full EuRoC sequence is ~1 GB of PNG
     list << frames[k].t_cam_ns << "," << name << "\n";
-    td.push_back(ov_core::TdSample{frames[k].t_cam_ns, frames[k].td_s()});
+    td.push_back(ovton::core::TdSample{frames[k].t_cam_ns, frames[k].td_s()});
   }
   list.close();
   fs::create_directories(out_mav0 / "td_truth");
-  ov_core::write_td_truth((out_mav0 / "td_truth" / "data.csv").string(), td);
+  ovton::core::write_td_truth((out_mav0 / "td_truth" / "data.csv").string(), td);
 
   YAML::Emitter e;
   e.SetDoublePrecision(15);
@@ -100,4 +100,4 @@ PerturbReport perturb_dataset(const PerturbOptions &opt) {
   return rep;
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

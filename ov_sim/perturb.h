@@ -3,7 +3,7 @@
 #include "ov_sim/td_model.h"
 #include <string>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 struct PerturbOptions {
   std::string in_dir;  ///< EuRoC folder (holding mav0/ or mav0/ itself)
@@ -23,4 +23,4 @@ struct PerturbReport {
 /// mav0/td_truth/data.csv and OUT/perturb.yaml.
 PerturbReport perturb_dataset(const PerturbOptions &opt);
 
-} // namespace ov_sim
+} // namespace ovton::sim

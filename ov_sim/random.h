@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <random>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 /// Independent streams from one user seed (IMU noise, offset model, scene, ...), so adding draws to one
 /// stream never changes another.
@@ -46,4 +46,4 @@ private:
   bool has_spare_ = false;
 };
 
-} // namespace ov_sim
+} // namespace ovton::sim

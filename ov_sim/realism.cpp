@@ -3,7 +3,7 @@
 #include "ov_sim/imu_errors.h"
 #include "ov_sim/simulator.h"
 
-namespace ov_sim {
+namespace ovton::sim {
 
 std::vector<std::string> realism_presets() {
   return {"clean", "euroc", "harsh"};
@@ -22,7 +22,7 @@ void apply_realism(const std::string &preset, SimOptions &opt) {
     return;
   }
   if (preset != "euroc" && preset != "harsh")
-    throw ov_core::UsageError("unknown realism preset '" + preset + "' (clean, euroc or harsh)");
+    throw ovton::core::UsageError("unknown realism preset '" + preset + "' (clean, euroc or harsh)");
   // euroc: tuned on ../shared/data/euroc_v1_01_moving (docs/simulate.md has the table and the command).
   opt.scene.texture.style = TextureStyle::Room;
   CameraEffectsOptions &c = opt.camera_effects;
@@ -38,4 +38,4 @@ void apply_realism(const std::string &preset, SimOptions &opt) {
   opt.realism = preset;
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 struct SimOptions;
 
@@ -20,4 +20,4 @@ std::vector<std::string> realism_presets();
 /// Throws UsageError for an unknown name.
 void apply_realism(const std::string &preset, SimOptions &opt);
 
-} // namespace ov_sim
+} // namespace ovton::sim

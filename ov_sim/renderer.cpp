@@ -8,7 +8,7 @@
 #include <cstring>
 #include <limits>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 namespace {
 
@@ -56,7 +56,7 @@ inline float bilinear(const Level &L, float x, float y) {
 
 } // namespace
 
-Renderer::Renderer(const ov_core::CameraModel &cam, const Scene &scene, const RenderOptions &opt)
+Renderer::Renderer(const ovton::core::CameraModel &cam, const Scene &scene, const RenderOptions &opt)
     : cam_(cam), scene_(scene), opt_(opt) {
   const int w = cam.width(), h = cam.height();
   rays_.resize(static_cast<size_t>(w) * h);
@@ -106,7 +106,7 @@ void Renderer::render(const FramePose &pose, uint64_t noise_seed, cv::Mat &out) 
 
 void Renderer::accumulate(const FramePose &pose, float weight, cv::Mat &acc) const {
   if (acc.rows != cam_.height() || acc.cols != cam_.width() || acc.type() != CV_32F)
-    throw ov_core::UsageError("renderer: the accumulator must be a CV_32F image of the camera's size");
+    throw ovton::core::UsageError("renderer: the accumulator must be a CV_32F image of the camera's size");
   const auto sink = [&acc, weight](int u, int v, float val) { acc.ptr<float>(v)[u] += weight * val; };
   if (!pose.at_row) {
     cast_rows(pose.R_WC, pose.p_WC, 0, cam_.height(), sink);
@@ -284,4 +284,4 @@ void Renderer::cast_rows(const Eigen::Matrix3d &R_WC, const Eigen::Vector3d &p_W
   }
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

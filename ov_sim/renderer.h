@@ -7,7 +7,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 struct RenderOptions {
   double noise_sigma = 1.5; ///< grey-level sensor noise (approximately Gaussian, from a per-pixel hash)
@@ -18,7 +18,7 @@ struct RenderOptions {
 class Renderer {
 public:
   /// The scene must outlive the renderer (markers planted later are picked up at the next render).
-  Renderer(const ov_core::CameraModel &cam, const Scene &scene, const RenderOptions &opt = {});
+  Renderer(const ovton::core::CameraModel &cam, const Scene &scene, const RenderOptions &opt = {});
 
   /// Renders the view of a camera at pose (R_WC, p_WC) into an 8-bit image of the camera's size.
   /// noise_seed selects the sensor-noise pattern (use e.g. the frame index): same inputs, same pixels.
@@ -43,11 +43,11 @@ private:
     float xn, yn;   ///< undistorted normalised coordinates (x/z, y/z), for box culling
     float log2_pix; ///< log2 of the pixel's angular size [rad]
   };
-  const ov_core::CameraModel &cam_;
+  const ovton::core::CameraModel &cam_;
   const Scene &scene_;
   RenderOptions opt_;
   std::vector<Ray> rays_;
   std::vector<float> row_yn_lo_, row_yn_hi_; ///< per image row, the range of its rays' yn (row culling of boxes)
 };
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -7,7 +7,7 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 namespace {
 
@@ -23,7 +23,7 @@ constexpr double kLitScale = 0.7;
 
 Scene Scene::around_path(const std::vector<Eigen::Vector3d> &path, const SceneOptions &opt) {
   if (path.empty())
-    throw ov_core::UsageError("scene: empty path");
+    throw ovton::core::UsageError("scene: empty path");
   Eigen::Vector3d lo = path.front(), hi = path.front();
   for (const auto &p : path) {
     lo = lo.cwiseMin(p);
@@ -76,10 +76,10 @@ Scene::Scene(const AlignedBox &room, const std::vector<AlignedBox> &boxes, const
     : room_(room), boxes_(boxes), opt_(opt) {
   const TextureOptions &t = opt.texture;
   if (!(t.texel_m > 0) || !(t.feature_min_m > 0) || !(t.feature_max_m >= t.feature_min_m))
-    throw ov_core::UsageError("scene: texel and feature sizes must be positive and ordered");
+    throw ovton::core::UsageError("scene: texel and feature sizes must be positive and ordered");
   if (!(t.density >= 0 && t.density <= 1) || !(t.grain >= 0) || !(t.weave >= 0) || !(t.stain >= 0 && t.stain < 1) ||
       !(opt.light_ambient > 0 && opt.light_ambient <= 1))
-    throw ov_core::UsageError("scene: texture density in [0, 1], grain >= 0, stain in [0, 1), ambient in (0, 1]");
+    throw ovton::core::UsageError("scene: texture density in [0, 1], grain >= 0, stain in [0, 1), ambient in (0, 1]");
   if (t.style == TextureStyle::Room)
     place_lamps();
   for (int b = -1; b < static_cast<int>(boxes_.size()); ++b) {
@@ -293,4 +293,4 @@ Eigen::Vector3d Scene::plant_marker(int surface, double u, double v, double radi
   return surface_point(surface, u, v);
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -8,7 +8,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 struct SceneOptions {
   double margin_xy_m = 2.0;    ///< room walls this far beyond the path's bounding box
@@ -95,4 +95,4 @@ private:
   SceneOptions opt_;
 };
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -4,7 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   YAML::Emitter e;
@@ -33,7 +33,7 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::Key << "accelerometer_random_walk" << YAML::Value << opt.imu.accel_random_walk;
   {
     // What imu0/sensor.yaml declares (the values above are what the synthesis used for its white noise and walk).
-    const ov_core::ImuCalib d = declared_imu(opt);
+    const ovton::core::ImuCalib d = declared_imu(opt);
     e << YAML::Key << "declared" << YAML::Value << YAML::BeginMap;
     e << YAML::Key << "gyroscope_noise_density" << YAML::Value << d.gyro_noise_density;
     e << YAML::Key << "gyroscope_random_walk" << YAML::Value << d.gyro_random_walk;
@@ -91,7 +91,7 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::Key << "rolling_shutter_convention" << YAML::Value
     << "row v exposed at the image's IMU-clock instant + v/height * readout; the stamp belongs to row 0";
   e << YAML::Key << "focal_error" << YAML::Value << opt.focal_error;
-  const ov_core::CameraCalib tc = true_camera(opt);
+  const ovton::core::CameraCalib tc = true_camera(opt);
   // Planted extrinsic error: the data use R_BC_true = Exp(rot)·R_BC, p_BC_true = p_BC + trans (body frame).
   e << YAML::Key << "extrinsic_rotation_error_rad" << YAML::Value << YAML::Flow
     << std::vector<double>{opt.extrinsic_rot.x(), opt.extrinsic_rot.y(), opt.extrinsic_rot.z()};
@@ -170,4 +170,4 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   return std::string(e.c_str()) + "\n";
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -19,7 +19,7 @@
 
 namespace fs = std::filesystem;
 
-namespace ov_sim {
+namespace ovton::sim {
 
 namespace {
 
@@ -30,7 +30,7 @@ std::ofstream open_out(const fs::path &p) {
   fs::create_directories(p.parent_path());
   std::ofstream f(p, std::ios::binary);
   if (!f)
-    throw ov_core::DataError(p.string(), "cannot open for writing");
+    throw ovton::core::DataError(p.string(), "cannot open for writing");
   return f;
 }
 
@@ -38,7 +38,7 @@ void write_text(const fs::path &p, const std::string &text) {
   auto f = open_out(p);
   f << text;
   if (!f)
-    throw ov_core::DataError(p.string(), "write failed");
+    throw ovton::core::DataError(p.string(), "write failed");
 }
 
 /// CPU time of the calling thread [s] (the renderer runs on one thread: its cost on one core, whatever the load).
@@ -58,15 +58,15 @@ double max_exposure_s(const SimOptions &opt) {
 
 std::vector<int64_t> image_times(const Trajectory &traj, const SimOptions &opt) {
   const double rate = opt.cam.rate_hz > 0 ? opt.cam.rate_hz : 20.0;
-  const int64_t first = traj.t_begin_ns() + ov_core::s_to_ns(opt.first_image_s);
-  const int64_t half_exposure = ov_core::s_to_ns(max_exposure_s(opt) / 2);
+  const int64_t first = traj.t_begin_ns() + ovton::core::s_to_ns(opt.first_image_s);
+  const int64_t half_exposure = ovton::core::s_to_ns(max_exposure_s(opt) / 2);
   if (first - half_exposure < traj.t_begin_ns())
-    throw ov_core::UsageError("the first image's exposure would start before the trajectory");
+    throw ovton::core::UsageError("the first image's exposure would start before the trajectory");
   std::vector<int64_t> t;
   for (int64_t k = 0;; ++k) {
     const int64_t tk = first + std::llround(k * 1e9 / rate);
     // A rolling shutter's last row, and the end of every exposure, too, lie on the trajectory.
-    if (tk + ov_core::s_to_ns(opt.readout_s) + half_exposure > traj.t_end_ns())
+    if (tk + ovton::core::s_to_ns(opt.readout_s) + half_exposure > traj.t_end_ns())
       break;
     t.push_back(tk);
   }
@@ -85,7 +85,7 @@ double image_motion_px(const FramePose &a, const FramePose &b, double focal_px) 
 int render_exposed(const Renderer &renderer, CameraEffects &effects, const Trajectory &traj, const SimOptions &opt,
                    int64_t t_mid_ns, uint64_t frame_index, cv::Mat &acc, cv::Mat &img) {
   const double T = effects.next_exposure().exposure_s;
-  const int64_t half = ov_core::s_to_ns(T / 2);
+  const int64_t half = ovton::core::s_to_ns(T / 2);
   const double motion = image_motion_px(frame_pose(traj, opt, t_mid_ns - half), frame_pose(traj, opt, t_mid_ns + half),
                                         std::max(opt.cam.intrinsics(0), opt.cam.intrinsics(1)));
   const int n = effects.blur_samples(motion);
@@ -106,30 +106,30 @@ SimOptions::SimOptions() : cam(euroc_cam0_calib()), imu(euroc_imu0_calib()) {}
 
 std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt) {
   if (!(opt.duration_s > 0.0))
-    throw ov_core::UsageError("duration must be positive");
+    throw ovton::core::UsageError("duration must be positive");
   if (opt.gt_file.empty())
     return std::make_unique<LissajousTrajectory>(opt.duration_s, LissajousTrajectory::kDefaultBeginNs, opt.agility);
-  std::vector<ov_core::StateSample> gt = ov_core::read_trajectory(opt.gt_file);
+  std::vector<ovton::core::StateSample> gt = ovton::core::read_trajectory(opt.gt_file);
   if (gt.empty())
-    throw ov_core::DataError(opt.gt_file, "no poses");
+    throw ovton::core::DataError(opt.gt_file, "no poses");
   std::string source = "fit:" + opt.gt_file;
   // --start-s counts from the file's first pose, also when the alignment moves the poses in time.
-  int64_t t0 = gt.front().t_ns + ov_core::s_to_ns(opt.start_s);
+  int64_t t0 = gt.front().t_ns + ovton::core::s_to_ns(opt.start_s);
   if (!opt.align_gt_to.empty()) {
     if (!(opt.align_blend_hz >= 0.0 && std::isfinite(opt.align_blend_hz)))
-      throw ov_core::UsageError("the ground-truth blend's crossover (--align-blend-hz) must be >= 0 (0: no blend)");
-    ov_core::LoadOptions lo;
+      throw ovton::core::UsageError("the ground-truth blend's crossover (--align-blend-hz) must be >= 0 (0: no blend)");
+    ovton::core::LoadOptions lo;
     lo.check_images_exist = false;
-    const ov_core::Dataset real = ov_core::load_dataset(opt.align_gt_to, lo);
+    const ovton::core::Dataset real = ovton::core::load_dataset(opt.align_gt_to, lo);
     if (real.imu.empty())
-      throw ov_core::UsageError(opt.align_gt_to + " has no IMU log (mav0/imu0/data.csv) to align " + opt.gt_file +
-                                " to");
+      throw ovton::core::UsageError(opt.align_gt_to + " has no IMU log (mav0/imu0/data.csv) to align " + opt.gt_file +
+                                    " to");
     if (opt.align_blend_hz > 0.0 && real.groundtruth.empty())
-      throw ov_core::UsageError(opt.align_gt_to + " has no ground truth to blend " + opt.gt_file +
-                                " with (--align-blend-hz 0: the aligned file alone)");
+      throw ovton::core::UsageError(opt.align_gt_to + " has no ground truth to blend " + opt.gt_file +
+                                    " with (--align-blend-hz 0: the aligned file alone)");
     const GtAlignment a = align_gt_to_imu(real.imu, gt, real.groundtruth, opt.knot_dt_s);
     gt = apply_gt_alignment(gt, a);
-    t0 -= ov_core::s_to_ns(a.shift_s);
+    t0 -= ovton::core::s_to_ns(a.shift_s);
     source += "; " + describe_gt_alignment(a) + " (" + opt.align_gt_to + ")";
     if (opt.align_blend_hz > 0.0) {
       gt = blend_gt(real.groundtruth, gt, opt.align_blend_hz, 0.1);
@@ -138,13 +138,13 @@ std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt) {
       source += b;
     }
   }
-  return std::make_unique<SplineTrajectory>(gt, t0, t0 + ov_core::s_to_ns(opt.duration_s), opt.knot_dt_s, source);
+  return std::make_unique<SplineTrajectory>(gt, t0, t0 + ovton::core::s_to_ns(opt.duration_s), opt.knot_dt_s, source);
 }
 
-ov_core::CameraCalib true_camera(const SimOptions &opt) {
-  ov_core::CameraCalib c = opt.cam;
+ovton::core::CameraCalib true_camera(const SimOptions &opt) {
+  ovton::core::CameraCalib c = opt.cam;
   c.intrinsics.head<2>() *= 1.0 + opt.focal_error;
-  c.T_BC.block<3, 3>(0, 0) = ov_core::so3_exp(opt.extrinsic_rot) * opt.cam.T_BC.block<3, 3>(0, 0);
+  c.T_BC.block<3, 3>(0, 0) = ovton::core::so3_exp(opt.extrinsic_rot) * opt.cam.T_BC.block<3, 3>(0, 0);
   c.T_BC.block<3, 1>(0, 3) += opt.extrinsic_trans;
   return c;
 }
@@ -188,7 +188,7 @@ bool declares_fitted_imu_noise(const SimOptions &opt) {
   return opt.declare_imu_errors && (!opt.imu_from.empty() || (opt.imu_errors.enabled && opt.imu_noise));
 }
 
-ov_core::ImuCalib declared_imu(const SimOptions &opt) {
+ovton::core::ImuCalib declared_imu(const SimOptions &opt) {
   if (!declares_fitted_imu_noise(opt))
     return opt.imu;
   // A synthetic log holds the datasheet noise plus the model's coloured noise (add_imu_errors); a filter told only
@@ -200,21 +200,22 @@ ov_core::ImuCalib declared_imu(const SimOptions &opt) {
 
 SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   if (opt.out_dir.empty())
-    throw ov_core::UsageError("no output folder");
+    throw ovton::core::UsageError("no output folder");
   const double frame_s = 1.0 / (opt.cam.rate_hz > 0 ? opt.cam.rate_hz : 20.0);
   if (!(opt.readout_s >= 0.0 && opt.readout_s <= frame_s))
-    throw ov_core::UsageError(
+    throw ovton::core::UsageError(
         "rolling-shutter readout must lie in [0, one frame interval = " + std::to_string(frame_s) + " s]");
   if (!(std::abs(opt.focal_error) < 0.5))
-    throw ov_core::UsageError("focal error must lie in (-0.5, 0.5) (relative)");
+    throw ovton::core::UsageError("focal error must lie in (-0.5, 0.5) (relative)");
   if (!(std::abs(opt.gyro_scale) < 0.5))
-    throw ov_core::UsageError("gyro scale error must lie in (-0.5, 0.5) (relative)");
+    throw ovton::core::UsageError("gyro scale error must lie in (-0.5, 0.5) (relative)");
   if ((opt.gyro_scale != 0.0 || !opt.gyro_M.isZero() || !opt.accel_M.isZero()) && !opt.imu_from.empty())
-    throw ov_core::UsageError("IMU scale errors are planted in the synthetic IMU, not in a copied one (--imu-from)");
+    throw ovton::core::UsageError(
+        "IMU scale errors are planted in the synthetic IMU, not in a copied one (--imu-from)");
   if (!(opt.gyro_M.cwiseAbs().maxCoeff() < 0.5 && opt.accel_M.cwiseAbs().maxCoeff() < 0.5))
-    throw ov_core::UsageError("IMU per-axis scale and misalignment must lie in (-0.5, 0.5) (relative)");
+    throw ovton::core::UsageError("IMU per-axis scale and misalignment must lie in (-0.5, 0.5) (relative)");
   if (!(opt.extrinsic_rot.norm() < 0.5 && opt.extrinsic_trans.norm() < 1.0))
-    throw ov_core::UsageError("extrinsic error: rotation must be below 0.5 rad and translation below 1 m");
+    throw ovton::core::UsageError("extrinsic error: rotation must be below 0.5 rad and translation below 1 m");
   const auto wall0 = std::chrono::steady_clock::now();
   SimReport rep;
   const std::unique_ptr<Trajectory> traj = make_trajectory(opt);
@@ -222,7 +223,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   const fs::path mav0 = fs::path(opt.out_dir) / "mav0";
   if (fs::exists(mav0)) {
     if (!opt.overwrite)
-      throw ov_core::UsageError("" + mav0.string() + " already exists (use --force to replace it)");
+      throw ovton::core::UsageError("" + mav0.string() + " already exists (use --force to replace it)");
     fs::remove_all(mav0);
   }
   fs::create_directories(mav0);
@@ -251,17 +252,18 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
                    opt.imu_noise ? opt.imu.accel_noise_density : 0.0, derive_seed(opt.seed, kImuErrors), imu.imu,
                    imu.truth);
   if (!opt.imu_from.empty()) {
-    ov_core::LoadOptions lo;
+    ovton::core::LoadOptions lo;
     lo.check_images_exist = false;
-    const ov_core::Dataset real = ov_core::load_dataset(opt.imu_from, lo);
-    std::vector<ov_core::ImuData> cut;
+    const ovton::core::Dataset real = ovton::core::load_dataset(opt.imu_from, lo);
+    std::vector<ovton::core::ImuData> cut;
     for (const auto &m : real.imu)
       if (m.t_imu_ns >= traj->t_begin_ns() && m.t_imu_ns <= traj->t_end_ns())
         cut.push_back(m);
     if (cut.empty() || cut.front().t_imu_ns > traj->t_begin_ns() + 50000000 ||
         cut.back().t_imu_ns < traj->t_end_ns() - 50000000)
-      throw ov_core::UsageError("the IMU log of " + opt.imu_from +
-                                " does not cover the simulated time span (use the ground truth of the same sequence)");
+      throw ovton::core::UsageError(
+          "the IMU log of " + opt.imu_from +
+          " does not cover the simulated time span (use the ground truth of the same sequence)");
     imu.imu = cut;
     // Ground-truth biases of a real IMU are only known where the ground truth carries them (17-column csv).
     for (auto &s : imu.truth)
@@ -270,7 +272,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
       const auto &g = real.groundtruth;
       for (auto &s : imu.truth) {
         auto it = std::lower_bound(g.begin(), g.end(), s.t_ns,
-                                   [](const ov_core::StateSample &a, int64_t t) { return a.t_ns < t; });
+                                   [](const ovton::core::StateSample &a, int64_t t) { return a.t_ns < t; });
         if (it == g.end())
           --it;
         s.bg = it->bg;
@@ -290,21 +292,21 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
       f << buf;
     }
     if (!f)
-      throw ov_core::DataError((mav0 / "imu0" / "data.csv").string(), "write failed");
+      throw ovton::core::DataError((mav0 / "imu0" / "data.csv").string(), "write failed");
   }
   fs::create_directories(mav0 / "state_groundtruth_estimate0");
-  ov_core::write_euroc_groundtruth((mav0 / "state_groundtruth_estimate0" / "data.csv").string(), imu.truth);
+  ovton::core::write_euroc_groundtruth((mav0 / "state_groundtruth_estimate0" / "data.csv").string(), imu.truth);
 
   // Image instants (IMU clock) and their camera-clock stamps.
   TdModelOptions tdo = opt.td;
   tdo.seed = derive_seed(opt.seed, kTd);
   const std::vector<TimedImage> frames = apply_td_model(image_times(*traj, opt), tdo);
   {
-    std::vector<ov_core::TdSample> td;
+    std::vector<ovton::core::TdSample> td;
     for (const auto &f : frames)
-      td.push_back(ov_core::TdSample{f.t_cam_ns, f.td_s()});
+      td.push_back(ovton::core::TdSample{f.t_cam_ns, f.td_s()});
     fs::create_directories(mav0 / "td_truth");
-    ov_core::write_td_truth((mav0 / "td_truth" / "data.csv").string(), td);
+    ovton::core::write_td_truth((mav0 / "td_truth" / "data.csv").string(), td);
   }
   rep.n_images = frames.size();
 
@@ -314,7 +316,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   list << "#timestamp [ns],filename\n";
   const bool render = !opt.no_images && !opt.features_only;
   std::unique_ptr<Scene> scene;
-  std::unique_ptr<ov_core::CameraModel> cam;
+  std::unique_ptr<ovton::core::CameraModel> cam;
   std::unique_ptr<Renderer> renderer;
   std::unique_ptr<FeatureSimulator> feats;
   std::ofstream feat_out;
@@ -322,7 +324,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     if (progress)
       progress("building scene", 0, frames.size());
     scene = std::make_unique<Scene>(make_scene(*traj, opt));
-    cam = std::make_unique<ov_core::CameraModel>(true_camera(opt)); // sensor.yaml above keeps opt.cam
+    cam = std::make_unique<ovton::core::CameraModel>(true_camera(opt)); // sensor.yaml above keeps opt.cam
   }
   std::unique_ptr<CameraEffects> effects;
   std::ofstream exposure_out;
@@ -349,7 +351,7 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     feat_out = open_out(mav0 / "cam0" / "features.csv");
     feat_out << "#timestamp_ns,feature_id,u,v\n";
   }
-  const std::vector<int> png_params = {ov_core::png_compression_param(), 3};
+  const std::vector<int> png_params = {ovton::core::png_compression_param(), 3};
   cv::Mat img;
   for (size_t k = 0; k < frames.size(); ++k) {
     const TimedImage &fr = frames[k];
@@ -374,8 +376,8 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
       rep.render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
       rep.render_cpu_seconds += thread_cpu_seconds() - c0;
       const fs::path file = mav0 / "cam0" / "data" / name;
-      if (!ov_core::write_image(file.string(), img, png_params))
-        throw ov_core::DataError(file.string(), "cannot write image");
+      if (!ovton::core::write_image(file.string(), img, png_params))
+        throw ovton::core::DataError(file.string(), "cannot write image");
     }
     if (feats) {
       char buf[128];
@@ -393,9 +395,9 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
       progress(render ? "rendering" : "writing", k + 1, frames.size());
   }
   if (!list)
-    throw ov_core::DataError((mav0 / "cam0" / "data.csv").string(), "write failed");
+    throw ovton::core::DataError((mav0 / "cam0" / "data.csv").string(), "write failed");
   rep.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return rep;
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

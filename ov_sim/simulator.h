@@ -13,7 +13,7 @@
 #include <memory>
 #include <string>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 struct SimOptions {
   std::string out_dir;
@@ -31,8 +31,8 @@ struct SimOptions {
   double knot_dt_s = 0.1;     ///< B-spline knot spacing of the trajectory fit
   double first_image_s = 0.1; ///< first image this long after the first IMU sample (IMU clock)
   uint64_t seed = 1;
-  ov_core::CameraCalib cam; ///< defaults to euroc_cam0_calib()
-  ov_core::ImuCalib imu;    ///< defaults to euroc_imu0_calib()
+  ovton::core::CameraCalib cam; ///< defaults to euroc_cam0_calib()
+  ovton::core::ImuCalib imu;    ///< defaults to euroc_imu0_calib()
   std::string cam_source = "builtin EuRoC cam0", imu_source = "builtin EuRoC imu0 (ADIS16448)";
   bool imu_noise = true;
   bool imu_bias_walk = true;
@@ -93,7 +93,7 @@ void camera_pose(const TrajectorySample &s, const Eigen::Matrix4d &T_BC, Eigen::
 
 /// The camera the data are made with: `cam` with its focal lengths scaled by 1 + focal_error and its T_BC moved by
 /// the extrinsic error.
-ov_core::CameraCalib true_camera(const SimOptions &opt);
+ovton::core::CameraCalib true_camera(const SimOptions &opt);
 
 /// IMU-clock instant at which image row `row` of a frame whose row 0 is exposed at t_imu_ns is exposed.
 int64_t row_time_ns(int64_t t_imu_ns, double row, int height, double readout_s);
@@ -114,9 +114,9 @@ bool declares_fitted_imu_noise(const SimOptions &opt);
 
 /// What imu0/sensor.yaml says of the IMU: `imu`, with the noise of the realistic IMU's model fitted
 /// (fitted_imu_noise) when declares_fitted_imu_noise.
-ov_core::ImuCalib declared_imu(const SimOptions &opt);
+ovton::core::ImuCalib declared_imu(const SimOptions &opt);
 
 /// Text of sim.yaml for these options (every parameter and the seed).
 std::string sim_yaml(const SimOptions &opt, const Trajectory &traj);
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -6,11 +6,12 @@
 #include <string>
 #include <vector>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 enum class TdModelKind { Constant, Drift, Wander };
 
-TdModelKind parse_td_model(const std::string &name); ///< "constant" | "drift" | "wander"; throws ov_core::UsageError
+TdModelKind
+parse_td_model(const std::string &name); ///< "constant" | "drift" | "wander"; throws ovton::core::UsageError
 std::string to_string(TdModelKind k);
 
 struct TdModelOptions {
@@ -39,4 +40,4 @@ struct TimedImage {
 /// Throws UsageError if the resulting camera stamps would not be strictly increasing.
 std::vector<TimedImage> apply_td_model(const std::vector<int64_t> &t_imu_ns, const TdModelOptions &opt);
 
-} // namespace ov_sim
+} // namespace ovton::sim

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 const char *to_string(TextureStyle s) {
   return s == TextureStyle::Room ? "room" : "blotches";
@@ -20,7 +20,7 @@ TextureStyle parse_texture_style(const std::string &s) {
     return TextureStyle::Blotches;
   if (s == "room")
     return TextureStyle::Room;
-  throw ov_core::UsageError("texture style must be blotches or room, not '" + s + "'");
+  throw ovton::core::UsageError("texture style must be blotches or room, not '" + s + "'");
 }
 
 /// Layers of randomly placed rectangles and discs, one layer per size octave, each added as a +/- offset so that
@@ -207,7 +207,7 @@ void draw_seams(cv::Mat &acc, double base, double texel_m, Rng &rng) {
 
 cv::Mat make_room_texture(int w, int h, FaceKind kind, const TextureOptions &opt, Rng &rng) {
   if (!(opt.density >= 0.0 && opt.density <= 1.0))
-    throw ov_core::UsageError("texture density must lie in [0, 1]");
+    throw ovton::core::UsageError("texture density must lie in [0, 1]");
   const double base = base_grey(kind, rng);
   cv::Mat acc(h, w, CV_32F, cv::Scalar(base));
   // Stains at ~0.6 m, fading at room scale; then the grain of paint or fabric at texel scale.
@@ -252,21 +252,21 @@ cv::Mat make_room_texture(int w, int h, FaceKind kind, const TextureOptions &opt
 }
 
 std::vector<cv::Mat> load_texture_crops(const std::string &euroc_dir, int count) {
-  ov_core::LoadOptions lo;
-  const ov_core::Dataset d = ov_core::load_dataset(euroc_dir, lo);
+  ovton::core::LoadOptions lo;
+  const ovton::core::Dataset d = ovton::core::load_dataset(euroc_dir, lo);
   std::vector<cv::Mat> out;
   const size_t n = d.images.size();
   if (n == 0 || d.images.front().features)
-    throw ov_core::DataError(euroc_dir, "no cam0 images to take texture crops from");
+    throw ovton::core::DataError(euroc_dir, "no cam0 images to take texture crops from");
   const size_t take = std::min<size_t>(n, static_cast<size_t>(std::max(1, count)));
   for (size_t i = 0; i < take; ++i) {
     const std::string &file = d.images[i * n / take].path;
-    cv::Mat img = ov_core::read_gray_image(file);
+    cv::Mat img = ovton::core::read_gray_image(file);
     if (img.empty())
-      throw ov_core::DataError(file, "cannot read image");
+      throw ovton::core::DataError(file, "cannot read image");
     out.push_back(img);
   }
   return out;
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

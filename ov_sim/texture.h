@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 class Rng;
 
@@ -47,4 +47,4 @@ cv::Mat make_room_texture(int w, int h, FaceKind kind, const TextureOptions &opt
 /// Throws DataError when the folder cannot be read or holds no images.
 std::vector<cv::Mat> load_texture_crops(const std::string &euroc_dir, int count = 24);
 
-} // namespace ov_sim
+} // namespace ovton::sim

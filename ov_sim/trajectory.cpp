@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 namespace {
 
@@ -38,34 +38,35 @@ Eigen::Vector3d omega_body(const Eigen::Vector4d &q, const Eigen::Vector4d &dq) 
 
 } // namespace
 
-SplineTrajectory::SplineTrajectory(const std::vector<ov_core::StateSample> &gt, int64_t t_begin_ns, int64_t t_end_ns,
-                                   double knot_dt_s, const std::string &source)
+SplineTrajectory::SplineTrajectory(const std::vector<ovton::core::StateSample> &gt, int64_t t_begin_ns,
+                                   int64_t t_end_ns, double knot_dt_s, const std::string &source)
     : t_begin_ns_(t_begin_ns), t_end_ns_(t_end_ns), dt_(knot_dt_s), source_(source) {
   if (gt.size() < 4)
-    throw ov_core::UsageError("trajectory fit: need at least 4 ground-truth poses, got " + std::to_string(gt.size()));
+    throw ovton::core::UsageError("trajectory fit: need at least 4 ground-truth poses, got " +
+                                  std::to_string(gt.size()));
   if (!(knot_dt_s > 0.0))
-    throw ov_core::UsageError("trajectory fit: knot spacing must be positive");
+    throw ovton::core::UsageError("trajectory fit: knot spacing must be positive");
   if (t_end_ns <= t_begin_ns)
-    throw ov_core::UsageError("trajectory fit: empty time range");
+    throw ovton::core::UsageError("trajectory fit: empty time range");
   if (t_begin_ns < gt.front().t_ns || t_end_ns > gt.back().t_ns) {
-    throw ov_core::UsageError("trajectory fit: requested [" +
-                              std::to_string(ov_core::ns_to_s(t_begin_ns - gt.front().t_ns)) + ", " +
-                              std::to_string(ov_core::ns_to_s(t_end_ns - gt.front().t_ns)) +
-                              "] s (from the first pose) lies outside the ground truth, which spans " +
-                              std::to_string(ov_core::ns_to_s(gt.back().t_ns - gt.front().t_ns)) + " s");
+    throw ovton::core::UsageError("trajectory fit: requested [" +
+                                  std::to_string(ovton::core::ns_to_s(t_begin_ns - gt.front().t_ns)) + ", " +
+                                  std::to_string(ovton::core::ns_to_s(t_end_ns - gt.front().t_ns)) +
+                                  "] s (from the first pose) lies outside the ground truth, which spans " +
+                                  std::to_string(ovton::core::ns_to_s(gt.back().t_ns - gt.front().t_ns)) + " s");
   }
   for (const auto &s : gt)
     if (!s.has_orientation)
-      throw ov_core::UsageError(
+      throw ovton::core::UsageError(
           "trajectory fit: ground truth must carry orientation (position-only sources cannot drive "
           "an IMU simulation)");
 
   // Fit a little beyond the requested span so the ends are as well constrained as the middle.
-  const int64_t margin = ov_core::s_to_ns(1.0);
+  const int64_t margin = ovton::core::s_to_ns(1.0);
   const int64_t fit_begin = std::max(gt.front().t_ns, t_begin_ns - margin);
   const int64_t fit_end = std::min(gt.back().t_ns, t_end_ns + margin);
   t0_ns_ = fit_begin;
-  const int n_seg = std::max(1, static_cast<int>(std::ceil(ov_core::ns_to_s(fit_end - fit_begin) / dt_)));
+  const int n_seg = std::max(1, static_cast<int>(std::ceil(ovton::core::ns_to_s(fit_end - fit_begin) / dt_)));
   const int n_cp = n_seg + 3;
 
   std::vector<Eigen::Triplet<double>> trip;
@@ -76,7 +77,7 @@ SplineTrajectory::SplineTrajectory(const std::vector<ov_core::StateSample> &gt, 
   for (const auto &s : gt) {
     if (s.t_ns < fit_begin || s.t_ns > fit_end)
       continue;
-    const double x = ov_core::ns_to_s(s.t_ns - t0_ns_) / dt_;
+    const double x = ovton::core::ns_to_s(s.t_ns - t0_ns_) / dt_;
     const int i = std::clamp(static_cast<int>(std::floor(x)), 0, n_seg - 1);
     const Basis B(x - i);
     Eigen::Vector4d q(s.q_WB.w(), s.q_WB.x(), s.q_WB.y(), s.q_WB.z());
@@ -95,7 +96,7 @@ SplineTrajectory::SplineTrajectory(const std::vector<ov_core::StateSample> &gt, 
     ++used;
   }
   if (used < 4)
-    throw ov_core::UsageError("trajectory fit: fewer than 4 poses inside the requested span");
+    throw ovton::core::UsageError("trajectory fit: fewer than 4 poses inside the requested span");
   // Small second-difference penalty: keeps control points defined across gaps in the ground truth without
   // visibly smoothing where there is data (about 20 samples per knot at 200 Hz).
   const double lambda = 1e-3;
@@ -110,7 +111,7 @@ SplineTrajectory::SplineTrajectory(const std::vector<ov_core::StateSample> &gt, 
   A.setFromTriplets(trip.begin(), trip.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
   if (solver.info() != Eigen::Success)
-    throw ov_core::UsageError(
+    throw ovton::core::UsageError(
         "trajectory fit: normal equations are singular (ground truth too sparse for knot spacing)");
   const Eigen::MatrixXd cp = solver.solve(rhs);
   cp_pos_.resize(n_cp);
@@ -124,7 +125,7 @@ SplineTrajectory::SplineTrajectory(const std::vector<ov_core::StateSample> &gt, 
 TrajectorySample SplineTrajectory::sample(int64_t t_ns) const {
   t_ns = std::clamp(t_ns, t_begin_ns_, t_end_ns_);
   const int n_seg = static_cast<int>(cp_pos_.size()) - 3;
-  const double x = ov_core::ns_to_s(t_ns - t0_ns_) / dt_;
+  const double x = ovton::core::ns_to_s(t_ns - t0_ns_) / dt_;
   const int i = std::clamp(static_cast<int>(std::floor(x)), 0, n_seg - 1);
   const Basis B(x - i);
   TrajectorySample out;
@@ -150,9 +151,9 @@ TrajectorySample SplineTrajectory::sample(int64_t t_ns) const {
 LissajousTrajectory::LissajousTrajectory(double duration_s, int64_t t_begin_ns, double agility)
     : t_begin_ns_(t_begin_ns), duration_s_(duration_s), agility_(agility) {
   if (!(duration_s > 0.0))
-    throw ov_core::UsageError("builtin trajectory: duration must be positive");
+    throw ovton::core::UsageError("builtin trajectory: duration must be positive");
   if (!(agility >= 0.0 && agility <= 3.0))
-    throw ov_core::UsageError("builtin trajectory: agility must lie in [0, 3]");
+    throw ovton::core::UsageError("builtin trajectory: agility must lie in [0, 3]");
 }
 
 std::string LissajousTrajectory::describe() const {
@@ -160,7 +161,7 @@ std::string LissajousTrajectory::describe() const {
 }
 
 TrajectorySample LissajousTrajectory::sample(int64_t t_ns) const {
-  const double t = std::clamp(ov_core::ns_to_s(t_ns - t_begin_ns_), 0.0, duration_s_);
+  const double t = std::clamp(ovton::core::ns_to_s(t_ns - t_begin_ns_), 0.0, duration_s_);
   TrajectorySample out;
   // Position: amplitudes keep >= 1 m to every wall of the 6 x 6 x 3 room; speeds up to ~1.4 m/s as in EuRoC.
   const Eigen::Vector3d A(2.0, 2.0, 0.6), w(0.5, 0.7, 0.9), ph(0.0, 1.1, 0.4), c(0.0, 0.0, 1.5);
@@ -194,8 +195,8 @@ TrajectorySample LissajousTrajectory::sample(int64_t t_ns) const {
   return out;
 }
 
-ov_core::StateSample to_state_sample(const TrajectorySample &s, int64_t t_ns) {
-  ov_core::StateSample o;
+ovton::core::StateSample to_state_sample(const TrajectorySample &s, int64_t t_ns) {
+  ovton::core::StateSample o;
   o.t_ns = t_ns;
   o.p = s.p_W;
   o.q_WB = s.q_WB;
@@ -205,4 +206,4 @@ ov_core::StateSample to_state_sample(const TrajectorySample &s, int64_t t_ns) {
   return o;
 }
 
-} // namespace ov_sim
+} // namespace ovton::sim

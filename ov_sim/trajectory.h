@@ -7,7 +7,7 @@
 #include <memory>
 #include <vector>
 
-namespace ov_sim {
+namespace ovton::sim {
 
 /// Body (IMU) state at one instant. Derivatives are exact derivatives of the pose, not finite differences.
 struct TrajectorySample {
@@ -37,7 +37,7 @@ class SplineTrajectory : public Trajectory {
 public:
   /// Fits over [t_begin_ns, t_end_ns] (clamped to the samples' span). Samples outside [t_begin - 1 s,
   /// t_end + 1 s] are ignored. knot_dt_s sets the smoothing: 0.1 s keeps EuRoC's motion and drops mocap jitter.
-  SplineTrajectory(const std::vector<ov_core::StateSample> &gt, int64_t t_begin_ns, int64_t t_end_ns,
+  SplineTrajectory(const std::vector<ovton::core::StateSample> &gt, int64_t t_begin_ns, int64_t t_end_ns,
                    double knot_dt_s = 0.1, const std::string &source = "");
 
   int64_t t_begin_ns() const override { return t_begin_ns_; }
@@ -65,7 +65,7 @@ public:
   static constexpr int64_t kDefaultBeginNs = 1600000000000000000LL;
   explicit LissajousTrajectory(double duration_s = 60.0, int64_t t_begin_ns = kDefaultBeginNs, double agility = 0.0);
   int64_t t_begin_ns() const override { return t_begin_ns_; }
-  int64_t t_end_ns() const override { return t_begin_ns_ + ov_core::s_to_ns(duration_s_); }
+  int64_t t_end_ns() const override { return t_begin_ns_ + ovton::core::s_to_ns(duration_s_); }
   TrajectorySample sample(int64_t t_ns) const override;
   std::string describe() const override;
 
@@ -76,6 +76,6 @@ private:
 };
 
 /// Ground-truth sample of the trajectory (no biases) at t_ns.
-ov_core::StateSample to_state_sample(const TrajectorySample &s, int64_t t_ns);
+ovton::core::StateSample to_state_sample(const TrajectorySample &s, int64_t t_ns);
 
-} // namespace ov_sim
+} // namespace ovton::sim

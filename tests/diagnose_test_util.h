@@ -9,11 +9,11 @@
 
 namespace ovtest {
 
-inline const ov_eval::CandidateResult &top(const ov_eval::DiagnoseReport &r) {
+inline const ovton::eval::CandidateResult &top(const ovton::eval::DiagnoseReport &r) {
   return r.candidates.front();
 }
 
-inline double estimate(const ov_eval::CandidateResult &c, const std::string &name) {
+inline double estimate(const ovton::eval::CandidateResult &c, const std::string &name) {
   for (const auto &e : c.estimates)
     if (e.name == name)
       return e.value;
@@ -22,22 +22,22 @@ inline double estimate(const ov_eval::CandidateResult &c, const std::string &nam
 }
 
 /// The planted effect is ranked first, explained, and its estimate `name` lies within tol of `value`.
-inline void expect_top(const ov_eval::DiagnoseReport &r, const std::string &key, const std::string &name, double value,
-                       double tol) {
+inline void expect_top(const ovton::eval::DiagnoseReport &r, const std::string &key, const std::string &name,
+                       double value, double tol) {
   ASSERT_FALSE(r.candidates.empty());
-  EXPECT_TRUE(top(r).explained) << ov_eval::format_ranking(r);
-  EXPECT_EQ(top(r).key, key) << ov_eval::format_ranking(r);
+  EXPECT_TRUE(top(r).explained) << ovton::eval::format_ranking(r);
+  EXPECT_EQ(top(r).key, key) << ovton::eval::format_ranking(r);
   if (top(r).key == key) { // braces: EXPECT_* expands to an if/else
-    EXPECT_NEAR(estimate(top(r), name), value, tol) << ov_eval::format_ranking(r);
+    EXPECT_NEAR(estimate(top(r), name), value, tol) << ovton::eval::format_ranking(r);
   }
 }
 
 /// No candidate selected and no structure left that none explains (the UNEXPLAINED verdict).
-inline void expect_nothing_flagged(const ov_eval::DiagnoseReport &r) {
+inline void expect_nothing_flagged(const ovton::eval::DiagnoseReport &r) {
   for (const auto &c : r.candidates)
-    EXPECT_FALSE(c.explained) << ov_eval::format_ranking(r);
+    EXPECT_FALSE(c.explained) << ovton::eval::format_ranking(r);
   for (const auto &u : r.unexplained)
-    EXPECT_FALSE(u.flagged) << ov_eval::format_ranking(r);
+    EXPECT_FALSE(u.flagged) << ovton::eval::format_ranking(r);
 }
 
 } // namespace ovtest

@@ -34,7 +34,7 @@ template <typename F, typename Vec> Eigen::MatrixXd numeric_jacobian(const F &f,
 
 /// A rotation perturbed on the world side, R ⊞ δθ = Exp(δθ)·R: the error convention of the state (state.h).
 inline Eigen::Matrix3d rotation_plus(const Eigen::Matrix3d &R, const Eigen::VectorXd &d) {
-  return ov_core::so3_exp(Eigen::Vector3d(d)) * R;
+  return ovton::core::so3_exp(Eigen::Vector3d(d)) * R;
 }
 
 } // namespace ovtest

@@ -71,9 +71,9 @@ inline void replace_line(const std::string &file, int line_no, const std::string
 }
 
 /// Options of a feature-level simulation (no images: written and run in about a second) of the built-in flight with
-/// ov_sim's default +10 ms offset; the caller may change more before ov_sim::write_simulation.
-inline ov_sim::SimOptions feature_sim(const std::string &out_dir, double duration_s, uint64_t seed) {
-  ov_sim::SimOptions o;
+/// ov_sim's default +10 ms offset; the caller may change more before ovton::sim::write_simulation.
+inline ovton::sim::SimOptions feature_sim(const std::string &out_dir, double duration_s, uint64_t seed) {
+  ovton::sim::SimOptions o;
   o.out_dir = out_dir;
   o.duration_s = duration_s;
   o.seed = seed;

@@ -10,24 +10,24 @@
 namespace ovtest {
 
 /// Writes the built-in flight as features.csv (`pixel_noise` px) into `dir` and loads it.
-inline ov_core::Dataset feature_flight(const std::string &dir, double duration_s, unsigned seed, double pixel_noise,
-                                       double agility = 0.0) {
-  ov_sim::SimOptions so;
+inline ovton::core::Dataset feature_flight(const std::string &dir, double duration_s, unsigned seed, double pixel_noise,
+                                           double agility = 0.0) {
+  ovton::sim::SimOptions so;
   so.out_dir = dir;
   so.duration_s = duration_s;
   so.seed = seed;
   so.agility = agility;
   so.features_only = true;
   so.features.pixel_noise = pixel_noise;
-  ov_sim::write_simulation(so);
-  return ov_core::load_dataset(dir);
+  ovton::sim::write_simulation(so);
+  return ovton::core::load_dataset(dir);
 }
 
 /// Options of a run on such a flight: `mode`, ground-truth initialisation, sigma_px matching the data's noise.
-inline ov_msckf_ton::VioOptions gt_run_options(ov_msckf_ton::TdMode mode, double sigma_px) {
-  ov_msckf_ton::VioOptions opt;
+inline ovton::msckf::VioOptions gt_run_options(ovton::msckf::TdMode mode, double sigma_px) {
+  ovton::msckf::VioOptions opt;
   opt.td.mode = mode;
-  opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
+  opt.init.mode = ovton::msckf::InitMode::GroundTruth;
   opt.update.sigma_px = sigma_px;
   return opt;
 }

@@ -47,14 +47,14 @@ inline Eigen::Matrix3d look_along_x() {
 }
 
 /// An empty 6 x 6 x 3 m room (no boxes) to plant markers in, and noise-free rendering options.
-inline ov_sim::Scene marker_room() {
-  ov_sim::SceneOptions so;
+inline ovton::sim::Scene marker_room() {
+  ovton::sim::SceneOptions so;
   so.num_boxes = 0;
   so.seed = 5;
-  return ov_sim::Scene(ov_sim::AlignedBox{Eigen::Vector3d(-3, -3, 0), Eigen::Vector3d(3, 3, 3)}, {}, so);
+  return ovton::sim::Scene(ovton::sim::AlignedBox{Eigen::Vector3d(-3, -3, 0), Eigen::Vector3d(3, 3, 3)}, {}, so);
 }
-inline ov_sim::RenderOptions noise_free_rendering() {
-  ov_sim::RenderOptions ro;
+inline ovton::sim::RenderOptions noise_free_rendering() {
+  ovton::sim::RenderOptions ro;
   ro.noise_sigma = 0.0;
   return ro;
 }
@@ -62,17 +62,17 @@ inline ov_sim::RenderOptions noise_free_rendering() {
 /// The simulator's trajectory, scene and camera for `o`, with a noise-free feature simulator on them (members in
 /// construction order: the simulator keeps references to the camera and the scene).
 struct NoiseFreeFeatureSim {
-  explicit NoiseFreeFeatureSim(const ov_sim::SimOptions &o)
-      : traj(ov_sim::make_trajectory(o)), scene(ov_sim::make_scene(*traj, o)), cam(o.cam),
+  explicit NoiseFreeFeatureSim(const ovton::sim::SimOptions &o)
+      : traj(ovton::sim::make_trajectory(o)), scene(ovton::sim::make_scene(*traj, o)), cam(o.cam),
         features(cam, scene, noise_free()) {}
-  std::unique_ptr<ov_sim::Trajectory> traj;
-  ov_sim::Scene scene;
-  ov_core::CameraModel cam;
-  ov_sim::FeatureSimulator features;
+  std::unique_ptr<ovton::sim::Trajectory> traj;
+  ovton::sim::Scene scene;
+  ovton::core::CameraModel cam;
+  ovton::sim::FeatureSimulator features;
 
 private:
-  static ov_sim::FeatureSimOptions noise_free() {
-    ov_sim::FeatureSimOptions fo;
+  static ovton::sim::FeatureSimOptions noise_free() {
+    ovton::sim::FeatureSimOptions fo;
     fo.pixel_noise = 0.0;
     return fo;
   }

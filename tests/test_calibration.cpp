@@ -20,7 +20,7 @@
 
 #include <random>
 
-using namespace ov_msckf_ton;
+using namespace ovton::msckf;
 
 namespace {
 
@@ -28,10 +28,10 @@ constexpr int64_t kT0 = 1403636579763555584;
 
 /// Five clones along an arc looking at a point, calibration variables in the state, a feature with velocities.
 struct CalibScene {
-  ov_core::CameraCalib calib = ov_sim::euroc_cam0_calib();
-  ov_core::CameraModel cam{calib};
+  ovton::core::CameraCalib calib = ovton::sim::euroc_cam0_calib();
+  ovton::core::CameraModel cam{calib};
   State state{true};
-  ov_core::Feature feature;
+  ovton::core::Feature feature;
   Eigen::Vector3d p_f{0.2, -0.3, 0.1};
 
   CalibScene() {
@@ -46,7 +46,7 @@ struct CalibScene {
     c.readout_index = state.add_variable(Eigen::MatrixXd::Identity(1, 1) * 1e-4);
     const Eigen::Matrix3d look = (Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished() * c.R_BC.transpose();
     for (int k = 0; k < 5; ++k) {
-      state.imu.R = ov_core::so3_exp(Eigen::Vector3d(0.03 * k, -0.02 * k, 0.04 * k)) * look;
+      state.imu.R = ovton::core::so3_exp(Eigen::Vector3d(0.03 * k, -0.02 * k, 0.04 * k)) * look;
       state.imu.p = Eigen::Vector3d(-3.0, 0.15 * k, 0.05 * k);
       state.t_imu_ns = kT0 + 50000000LL * k;
       // A turning, moving body: the rolling shutter's predicted velocities (and their Jacobians) are not zero.
@@ -57,7 +57,7 @@ struct CalibScene {
       cl.td_ref = 0.001 * k;
       Eigen::Vector2d xy;
       EXPECT_TRUE(project_in_clone(cl.R, cl.p, c.R_BC, c.p_BC, p_f, xy));
-      ov_core::FeatureObservation o;
+      ovton::core::FeatureObservation o;
       o.t_cam_ns = state.t_imu_ns;
       o.uv = cam.distort(xy) + Eigen::Vector2d(0.3 * k, -0.2 * k); // off the model, so residuals are not zero
       o.xy = cam.undistort(o.uv);
@@ -166,7 +166,7 @@ TEST(CalibrationJacobians, LandmarkMeasurementWithReadoutMatchesFiniteDifference
 
 TEST(CalibrationJacobians, ImuStepWithScaleAndMisalignmentMatchesFiniteDifferences) {
   ImuState x;
-  x.R = ov_core::so3_exp(Eigen::Vector3d(0.2, -0.1, 0.3));
+  x.R = ovton::core::so3_exp(Eigen::Vector3d(0.2, -0.1, 0.3));
   x.v = Eigen::Vector3d(0.4, -0.2, 0.1);
   x.p = Eigen::Vector3d(1, 2, 3);
   x.bg = Eigen::Vector3d(0.01, -0.02, 0.015);
@@ -185,7 +185,7 @@ TEST(CalibrationJacobians, ImuStepWithScaleAndMisalignmentMatchesFiniteDifferenc
   // The step's error as a 15-vector in the state convention.
   const auto err = [&](const ImuState &a) {
     Eigen::Matrix<double, 15, 1> e;
-    e << ov_core::so3_log(a.R * y.R.transpose()), a.p - y.p, a.v - y.v, a.bg - y.bg, a.ba - y.ba;
+    e << ovton::core::so3_log(a.R * y.R.transpose()), a.p - y.p, a.v - y.v, a.bg - y.bg, a.ba - y.ba;
     return e;
   };
   const auto step_from_intrinsics = [&](const Eigen::VectorXd &d) {
@@ -206,7 +206,7 @@ TEST(CalibrationJacobians, ImuStepWithScaleAndMisalignmentMatchesFiniteDifferenc
   // The state columns with D != I (the bias columns carry D).
   const auto step_from_state = [&](const Eigen::VectorXd &d) {
     ImuState z = x;
-    z.R = ov_core::so3_exp(Eigen::Vector3d(d.segment<3>(0))) * z.R;
+    z.R = ovton::core::so3_exp(Eigen::Vector3d(d.segment<3>(0))) * z.R;
     z.p += d.segment<3>(3);
     z.v += d.segment<3>(6);
     z.bg += d.segment<3>(9);
@@ -252,19 +252,19 @@ TEST(CalibrationRun, EveryCalibrationOnStaysConsistentOnCleanData) {
   // A feature-level flight whose calibration is exactly what the dataset says: with every calibration estimated,
   // the pose stays consistent and no calibration wanders beyond its sigma.
   ovtest::TempDir tmp;
-  const ov_core::Dataset data = ovtest::feature_flight(tmp / "sim", 12.0, 6, 0.5, 1.0);
+  const ovton::core::Dataset data = ovtest::feature_flight(tmp / "sim", 12.0, 6, 0.5, 1.0);
   VioOptions opt = ovtest::gt_run_options(TdMode::Sr, 0.5);
   opt.calibration.extrinsics = opt.calibration.intrinsics = opt.calibration.readout = true;
   opt.calibration.imu_intrinsics = true;
   VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);
-  ov_eval::NeesAccumulator nees(data.groundtruth, data.td_truth);
-  vio.set_state_callback([&](const ov_core::StateSample &s) { nees.add(s); });
-  ov_core::Replay(data).run(vio);
+  ovton::eval::NeesAccumulator nees(data.groundtruth, data.td_truth);
+  vio.set_state_callback([&](const ovton::core::StateSample &s) { nees.add(s); });
+  ovton::core::Replay(data).run(vio);
   const State &s = vio.state();
   const CalibState &c = s.calib;
   const auto sigma = [&](int i) { return std::sqrt(s.P(i, i)); };
-  const Eigen::Vector3d e_rot = ov_core::so3_log(c.R_BC * data.cam.T_BC.topLeftCorner<3, 3>().transpose());
+  const Eigen::Vector3d e_rot = ovton::core::so3_log(c.R_BC * data.cam.T_BC.topLeftCorner<3, 3>().transpose());
   std::cout << "[calibration] NEES orientation " << nees.stats().ori() << ", position " << nees.stats().pos()
             << "; extrinsic rotation error " << e_rot.norm() * 180 / M_PI << " deg (sigma "
             << sigma(c.extrinsics_index) * 180 / M_PI << "), fu " << c.intrinsics(0) << " (true "

@@ -29,7 +29,7 @@ protected:
   static void SetUpTestSuite() {
     dir_ = std::make_unique<TempDir>();
     // A feature-level flight (+10 ms): the filter runs it in a second, and it initialises from its ground truth.
-    ov_sim::write_simulation(ovtest::feature_sim((*dir_) / "sim", 8.0, 5));
+    ovton::sim::write_simulation(ovtest::feature_sim((*dir_) / "sim", 8.0, 5));
   }
   static void TearDownTestSuite() { dir_.reset(); }
 
@@ -143,7 +143,7 @@ TEST_F(CliRobustness, DivergedEstimateFailsRunAndCompare) {
   const Cli r = run("run --dataset " + spiked + " --init groundtruth --output " + traj);
   expect_failure(r, 4, "estimate failed");
   EXPECT_NE(r.err.find(traj), std::string::npos) << r.err;
-  const auto rows = ov_core::read_trajectory(traj);
+  const auto rows = ovton::core::read_trajectory(traj);
   EXPECT_GT(rows.size(), 20u);
   for (const auto &s : rows)
     ASSERT_TRUE(s.p.allFinite());
@@ -171,6 +171,6 @@ TEST_F(CliRobustness, PaperSirOnAFastStartConvergesOrFailsNeverAConfidentWrongAn
       continue;
     }
     ASSERT_EQ(r.code, 0) << mode << ": " << r.err;
-    EXPECT_NEAR(ov_core::read_trajectory(traj).back().td_s, 0.010, 0.001) << mode << " exited 0 with a wrong t_d";
+    EXPECT_NEAR(ovton::core::read_trajectory(traj).back().td_s, 0.010, 0.001) << mode << " exited 0 with a wrong t_d";
   }
 }

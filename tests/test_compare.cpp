@@ -21,8 +21,8 @@
 #include <sys/wait.h>
 
 namespace fs = std::filesystem;
-using namespace ov_core;
-using namespace ov_eval;
+using namespace ovton::core;
+using namespace ovton::eval;
 
 namespace {
 
@@ -66,16 +66,16 @@ class CompareTest : public ::testing::Test {
 protected:
   static void SetUpTestSuite() {
     dir_ = std::make_unique<ovtest::TempDir>();
-    ov_sim::SimOptions o;
+    ovton::sim::SimOptions o;
     o.out_dir = (*dir_) / "sim";
     o.duration_s = 8.0;
     o.seed = 7;
     o.features_only = true;
-    o.td.kind = ov_sim::TdModelKind::Drift;
+    o.td.kind = ovton::sim::TdModelKind::Drift;
     o.td.td0_s = 0.010;
     o.td.bias_s_per_s = 1e-4;
     o.td.noise_s_per_sqrt_s = 1e-4;
-    ov_sim::write_simulation(o);
+    ovton::sim::write_simulation(o);
     data_ = std::make_unique<Dataset>(load_dataset(o.out_dir));
   }
   static void TearDownTestSuite() {
@@ -86,10 +86,10 @@ protected:
   /// What tools/compare_report.cpp does per mode through run_dataset(), with the VioManager directly (the test
   /// binary does not link the CLI).
   static RunRecord run_mode(const Dataset &data, const std::string &name) {
-    ov_msckf_ton::VioOptions opt;
-    opt.td.mode = ov_msckf_ton::parse_td_mode(name);
-    opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
-    ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
+    ovton::msckf::VioOptions opt;
+    opt.td.mode = ovton::msckf::parse_td_mode(name);
+    opt.init.mode = ovton::msckf::InitMode::GroundTruth;
+    ovton::msckf::VioManager vio(opt, data.cam, data.imu_calib);
     if (data.has_td_truth())
       vio.set_td_oracle([&data](int64_t t) { return data.td_truth_at(t); });
     vio.set_groundtruth(data.groundtruth);
@@ -115,7 +115,7 @@ std::unique_ptr<Dataset> CompareTest::data_;
 TEST_F(CompareTest, ThreeModesGiveTableAndPlots) {
   const Dataset &data = *data_;
   ASSERT_TRUE(data.has_td_truth());
-  const auto names = parse_name_list("off, sr,oracle", ov_msckf_ton::all_td_mode_names(), "mode");
+  const auto names = parse_name_list("off, sr,oracle", ovton::msckf::all_td_mode_names(), "mode");
   ASSERT_EQ(names, (std::vector<std::string>{"off", "sr", "oracle"}));
 
   std::atomic<int> calls{0};
@@ -187,16 +187,16 @@ TEST_F(CompareTest, ThreeModesGiveTableAndPlots) {
 
 TEST(CompareModes, UnknownModeIsAUsageErrorNamingIt) {
   try {
-    parse_name_list("off,frobnicate,sr", ov_msckf_ton::all_td_mode_names(), "mode");
+    parse_name_list("off,frobnicate,sr", ovton::msckf::all_td_mode_names(), "mode");
     FAIL() << "unknown mode accepted";
   } catch (const UsageError &e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("'frobnicate'"), std::string::npos) << what;
     EXPECT_NE(what.find("oracle"), std::string::npos) << what; // the valid names are listed
   }
-  EXPECT_THROW(parse_name_list("off,sr,off", ov_msckf_ton::all_td_mode_names(), "mode"), UsageError);
-  EXPECT_THROW(parse_name_list("off,,sr", ov_msckf_ton::all_td_mode_names(), "mode"), UsageError);
-  EXPECT_THROW(parse_name_list("", ov_msckf_ton::all_td_mode_names(), "mode"), UsageError);
+  EXPECT_THROW(parse_name_list("off,sr,off", ovton::msckf::all_td_mode_names(), "mode"), UsageError);
+  EXPECT_THROW(parse_name_list("off,,sr", ovton::msckf::all_td_mode_names(), "mode"), UsageError);
+  EXPECT_THROW(parse_name_list("", ovton::msckf::all_td_mode_names(), "mode"), UsageError);
 }
 
 TEST(CompareRunner, FailingRunIsReportedAndTheOthersContinue) {

@@ -15,12 +15,12 @@ namespace {
 /// A reader of `text` (written to a temporary file) positioned on its first row.
 struct OneRow {
   ovtest::TempDir dir;
-  std::unique_ptr<ov_core::TextTableReader> reader;
+  std::unique_ptr<ovton::core::TextTableReader> reader;
   std::vector<std::string> fields;
   OneRow(const std::string &text, char sep) {
     const std::string file = dir / "t.csv";
     ovtest::write_text(file, text);
-    reader = std::make_unique<ov_core::TextTableReader>(file, sep);
+    reader = std::make_unique<ovton::core::TextTableReader>(file, sep);
     EXPECT_TRUE(reader->next(fields));
   }
 };
@@ -47,14 +47,14 @@ TEST(CsvNumbers, RefusesWhatIsNotAFiniteNumber) {
     try {
       r.reader->to_double(r.fields[0], "angle");
       ADD_FAILURE() << "accepted '" << text << "'";
-    } catch (const ov_core::DataError &e) {
+    } catch (const ovton::core::DataError &e) {
       EXPECT_NE(std::string(e.what()).find(":2"), std::string::npos) << e.what(); // the line
       EXPECT_NE(std::string(e.what()).find("angle"), std::string::npos) << e.what();
     }
   }
   for (const char *text : {"9223372036854775808", "12.0", "1e3", "0x10", "12 3", "+-1"}) {
     OneRow r(std::string(text) + "\n", ',');
-    EXPECT_THROW(r.reader->to_int64(r.fields[0], "t"), ov_core::DataError) << text;
+    EXPECT_THROW(r.reader->to_int64(r.fields[0], "t"), ovton::core::DataError) << text;
   }
 }
 

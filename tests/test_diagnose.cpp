@@ -15,8 +15,8 @@
 #include <iostream>
 #include <random>
 
-using namespace ov_core;
-using namespace ov_eval;
+using namespace ovton::core;
+using namespace ovton::eval;
 
 namespace {
 
@@ -33,11 +33,11 @@ struct Planted {
 /// velocities of a few hundred px/s, positions over the whole image), pixel noise that sits both in the measured pixel
 /// and in the residual, and the part a shift of the track's point could explain removed from the residual (what
 /// triangulating the point from the same observations does to first order).
-std::vector<ov_msckf_ton::ResidualRecord> make_log(const Planted &p, unsigned seed, int tracks = 2500) {
+std::vector<ovton::msckf::ResidualRecord> make_log(const Planted &p, unsigned seed, int tracks = 2500) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> N(0.0, 1.0);
   std::uniform_real_distribution<double> U(0.0, 1.0);
-  std::vector<ov_msckf_ton::ResidualRecord> out;
+  std::vector<ovton::msckf::ResidualRecord> out;
   const int64_t t_base = 1'600'000'000'000'000'000;
   const Eigen::Vector2d f(kFu, kFv), c(kCu, kCv);
   for (int k = 0; k < tracks; ++k) {
@@ -51,7 +51,7 @@ std::vector<ov_msckf_ton::ResidualRecord> make_log(const Planted &p, unsigned se
       const int steps = std::max(1, static_cast<int>(std::ceil(s / 0.001)));
       const double h = s / steps;
       for (int q = 0; q < steps; ++q)
-        R = R * ov_core::so3_exp(0.5 * (rate(q * h) + rate((q + 1) * h)) * h);
+        R = R * ovton::core::so3_exp(0.5 * (rate(q * h) + rate((q + 1) * h)) * h);
       return R;
     };
     const Eigen::Vector3d P0(-0.55 + 1.1 * U(rng), -0.35 + 0.7 * U(rng), 1.0); // bearing in the first camera frame
@@ -62,7 +62,7 @@ std::vector<ov_msckf_ton::ResidualRecord> make_log(const Planted &p, unsigned se
       z = P.z();
       return Eigen::Vector2d(P.x() / P.z(), P.y() / P.z());
     };
-    std::vector<ov_msckf_ton::ResidualRecord> tr;
+    std::vector<ovton::msckf::ResidualRecord> tr;
     Eigen::VectorXd r(2 * len);
     Eigen::MatrixXd J(2 * len, 3);
     std::vector<Eigen::Vector2d> meas_px(len);
@@ -83,7 +83,7 @@ std::vector<ov_msckf_ton::ResidualRecord> make_log(const Planted &p, unsigned se
       Eigen::Matrix<double, 2, 3> Jp;
       Jp << kFu / z, 0, -kFu * x.x() / z, 0, kFv / z, -kFv * x.y() / z;
       J.middleRows<2>(2 * j) = Jp * rotation(s).transpose();
-      ov_msckf_ton::ResidualRecord rec;
+      ovton::msckf::ResidualRecord rec;
       rec.update_id = static_cast<uint64_t>(k);
       rec.t_cam_ns = t_base + static_cast<int64_t>(std::llround(t * 1e9));
       rec.feature_id = static_cast<uint64_t>(k);
@@ -102,7 +102,7 @@ std::vector<ov_msckf_ton::ResidualRecord> make_log(const Planted &p, unsigned se
       rec.depth_m = z;
       rec.chi2 = 1.0, rec.chi2_threshold = 10.0;
       const bool gated = U(rng) < 0.05;
-      rec.status = gated ? ov_msckf_ton::ResidualStatus::GatedChi2 : ov_msckf_ton::ResidualStatus::Accepted;
+      rec.status = gated ? ovton::msckf::ResidualStatus::GatedChi2 : ovton::msckf::ResidualStatus::Accepted;
       rec.accepted = gated ? 0 : 1;
       tr.push_back(rec);
     }
@@ -114,9 +114,9 @@ std::vector<ov_msckf_ton::ResidualRecord> make_log(const Planted &p, unsigned se
     }
   }
   // A few triangulation failures, which must be left out.
-  ov_msckf_ton::ResidualRecord bad = out.front();
-  bad.status = ov_msckf_ton::ResidualStatus::TriangulationFailed;
-  bad.res_u_px = bad.res_v_px = ov_msckf_ton::ResidualRecord::kNaN;
+  ovton::msckf::ResidualRecord bad = out.front();
+  bad.status = ovton::msckf::ResidualStatus::TriangulationFailed;
+  bad.res_u_px = bad.res_v_px = ovton::msckf::ResidualRecord::kNaN;
   out.push_back(bad);
   return out;
 }
@@ -132,7 +132,7 @@ CameraCalib synthetic_camera() {
 DiagnoseReport run(const ovtest::TempDir &dir, const Planted &p, unsigned seed) {
   const std::string file = dir / ("log_" + std::to_string(seed) + ".csv");
   {
-    ov_msckf_ton::ResidualLogWriter w(file);
+    ovton::msckf::ResidualLogWriter w(file);
     w.write(make_log(p, seed));
   }
   DiagnoseOptions opt;
@@ -198,10 +198,10 @@ TEST(Diagnose, CleanLogFlagsNothingAndWritesReport) {
 TEST(Diagnose, BadLogsFailWithFileAndLine) {
   ovtest::TempDir dir;
   EXPECT_THROW(load_residual_log(dir / "missing.csv"), DataError);
-  const std::string header = ov_msckf_ton::ResidualLogWriter::header();
-  ov_msckf_ton::ResidualRecord rec;
+  const std::string header = ovton::msckf::ResidualLogWriter::header();
+  ovton::msckf::ResidualRecord rec;
   rec.res_u_px = rec.res_v_px = 0.1;
-  const std::string good = ov_msckf_ton::ResidualLogWriter::format(rec);
+  const std::string good = ovton::msckf::ResidualLogWriter::format(rec);
 
   ovtest::write_text(dir / "wrong_header.csv", "timestamp_ns,px,py,pz\n1,2,3,4\n");
   try {
@@ -215,15 +215,15 @@ TEST(Diagnose, BadLogsFailWithFileAndLine) {
   EXPECT_THROW(load_residual_log(dir / "no_header.csv"), DataError);
 
   // An accepted row with a NaN residual (allowed only for triangulation failures), on line 3.
-  rec.res_u_px = ov_msckf_ton::ResidualRecord::kNaN;
+  rec.res_u_px = ovton::msckf::ResidualRecord::kNaN;
   ovtest::write_text(dir / "nan.csv",
-                     header + "\n" + good + "\n" + ov_msckf_ton::ResidualLogWriter::format(rec) + "\n");
+                     header + "\n" + good + "\n" + ovton::msckf::ResidualLogWriter::format(rec) + "\n");
   ovtest::expect_data_error([&] { load_residual_log(dir / "nan.csv"); }, "nan.csv", 3, "NaN residual");
   // NaN pixel on line 2.
-  rec = ov_msckf_ton::ResidualRecord{};
+  rec = ovton::msckf::ResidualRecord{};
   rec.res_u_px = rec.res_v_px = 0.0;
-  rec.u_px = ov_msckf_ton::ResidualRecord::kNaN;
-  ovtest::write_text(dir / "nan_px.csv", header + "\n" + ov_msckf_ton::ResidualLogWriter::format(rec) + "\n");
+  rec.u_px = ovton::msckf::ResidualRecord::kNaN;
+  ovtest::write_text(dir / "nan_px.csv", header + "\n" + ovton::msckf::ResidualLogWriter::format(rec) + "\n");
   ovtest::expect_data_error([&] { load_residual_log(dir / "nan_px.csv"); }, "nan_px.csv", 2, "NaN pixel");
   // A short row and a non-number.
   ovtest::write_text(dir / "short.csv", header + "\n" + good + "\n1,2,3\n");
@@ -265,7 +265,7 @@ TEST(Diagnose, CalibrationLogRoundTripAndLookup) {
   ovtest::expect_data_error([&] { load_calibration_log(dir / "back.csv"); }, "back.csv", 3, "goes back");
   ovtest::write_text(dir / "short.csv", calibration_log_header(false) + "\n1,2,3\n");
   ovtest::expect_data_error([&] { load_calibration_log(dir / "short.csv"); }, "short.csv", 2, "short row");
-  ovtest::write_text(dir / "res.csv", ov_msckf_ton::ResidualLogWriter::header() + "\n");
+  ovtest::write_text(dir / "res.csv", ovton::msckf::ResidualLogWriter::header() + "\n");
   EXPECT_THROW(load_calibration_log(dir / "res.csv"), DataError);
 }
 

@@ -12,8 +12,8 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
-using namespace ov_core;
-using namespace ov_eval;
+using namespace ovton::core;
+using namespace ovton::eval;
 
 namespace {
 

@@ -23,8 +23,8 @@
 #include <iostream>
 #include <map>
 
-using namespace ov_core;
-using namespace ov_eval;
+using namespace ovton::core;
+using namespace ovton::eval;
 using ovtest::estimate;
 using ovtest::expect_nothing_flagged;
 using ovtest::expect_top;
@@ -38,7 +38,7 @@ struct Plant {
   double readout_s = 0.0;              ///< rolling shutter
   double focal_error = 0.0;            ///< relative
   double duration_s = 20.0;
-  double agility = 0.0;    ///< the built-in flight's extra angular oscillations (ov_sim::LissajousTrajectory)
+  double agility = 0.0;    ///< the built-in flight's extra angular oscillations (ovton::sim::LissajousTrajectory)
   double gyro_scale = 0.0; ///< relative: the gyro reads (1 + s)·ω
   Eigen::Matrix3d gyro_M = Eigen::Matrix3d::Zero(), accel_M = Eigen::Matrix3d::Zero(); ///< (I + M)·ω, (I + M)·f
   Eigen::Vector3d ext_rot = Eigen::Vector3d::Zero();   ///< R_BC true = Exp(ext_rot)·R_BC [rad]
@@ -50,15 +50,15 @@ struct Plant {
   int seed = 7;
 };
 
-ov_sim::SimOptions sim_options(const std::string &dir, const Plant &p) {
-  ov_sim::SimOptions o;
+ovton::sim::SimOptions sim_options(const std::string &dir, const Plant &p) {
+  ovton::sim::SimOptions o;
   o.out_dir = dir;
   o.duration_s = p.duration_s;
   o.seed = p.seed;
   o.features_only = true;
-  o.td.kind = p.td_rate != 0.0    ? ov_sim::TdModelKind::Drift
-              : p.wander_s != 0.0 ? ov_sim::TdModelKind::Wander
-                                  : ov_sim::TdModelKind::Constant;
+  o.td.kind = p.td_rate != 0.0    ? ovton::sim::TdModelKind::Drift
+              : p.wander_s != 0.0 ? ovton::sim::TdModelKind::Wander
+                                  : ovton::sim::TdModelKind::Constant;
   o.td.wander_amplitude_s = p.wander_s;
   o.td.wander_period_s = p.wander_period_s;
   o.gyro_M = p.gyro_M;
@@ -73,7 +73,7 @@ ov_sim::SimOptions sim_options(const std::string &dir, const Plant &p) {
   o.gyro_scale = p.gyro_scale;
   o.focal_error = p.focal_error;
   if (p.euroc_imu)
-    o.imu_errors = ov_sim::euroc_v1_01_imu_errors();
+    o.imu_errors = ovton::sim::euroc_v1_01_imu_errors();
   return o;
 }
 
@@ -89,8 +89,9 @@ DiagnoseOptions diagnose_options(const Dataset &data) {
 /// Residual log with the TRUE camera poses at t_cam + td_model (td_model NaN: each image's true offset). Every track is
 /// cut into windows of at most 20 frames as the filter's, its point triangulated (Gauss-Newton on the normalised
 /// reprojection error) with the camera of sensor.yaml, and its residuals written as the filter writes them.
-void write_true_pose_log(const ov_sim::SimOptions &o, const Dataset &data, double td_model_s, const std::string &file) {
-  const auto traj = ov_sim::make_trajectory(o);
+void write_true_pose_log(const ovton::sim::SimOptions &o, const Dataset &data, double td_model_s,
+                         const std::string &file) {
+  const auto traj = ovton::sim::make_trajectory(o);
   const CameraModel cam(data.cam);
   struct Obs {
     size_t frame;
@@ -105,12 +106,12 @@ void write_true_pose_log(const ov_sim::SimOptions &o, const Dataset &data, doubl
     const int64_t t_cam = data.images[k].t_cam_ns;
     td[k] = std::isnan(td_model_s) ? data.td_truth_at(t_cam) : td_model_s;
     const auto s = traj->sample(t_cam + s_to_ns(td[k]));
-    ov_sim::camera_pose(s, data.cam.T_BC, R_WC[k], p_WC[k]);
+    ovton::sim::camera_pose(s, data.cam.T_BC, R_WC[k], p_WC[k]);
     w_B[k] = s.w_B;
     for (const auto &f : *data.images[k].features)
       tracks[f.id].push_back({k, f.uv, cam.undistort(f.uv)});
   }
-  ov_msckf_ton::ResidualLogWriter log(file);
+  ovton::msckf::ResidualLogWriter log(file);
   const double fu = data.cam.intrinsics(0), fv = data.cam.intrinsics(1);
   for (const auto &[id, all] : tracks) {
     for (size_t c0 = 0; c0 + 3 <= all.size(); c0 += 20) {
@@ -137,11 +138,11 @@ void write_true_pose_log(const ov_sim::SimOptions &o, const Dataset &data, doubl
         }
         P += H.ldlt().solve(g);
       }
-      std::vector<ov_msckf_ton::ResidualRecord> recs;
+      std::vector<ovton::msckf::ResidualRecord> recs;
       for (size_t j = 0; j < tr.size(); ++j) {
         const Obs &ob = tr[j];
         const Eigen::Vector3d pc = R_WC[ob.frame].transpose() * (P - p_WC[ob.frame]);
-        ov_msckf_ton::ResidualRecord r;
+        ovton::msckf::ResidualRecord r;
         r.update_id = tr.back().frame; // the filter updates a track when it ends: tracks ending together share clones
         r.t_cam_ns = data.images[ob.frame].t_cam_ns;
         r.feature_id = id;
@@ -171,23 +172,23 @@ using CalibEdit = std::function<void(std::vector<CalibrationLogRow> &)>;
 /// residual log diagnosed with its calibration log (edited by `edit`, when one is given). Prints the ranking and the
 /// wall time.
 DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_init_s, const CalibEdit &edit = {},
-                           const ov_msckf_ton::CalibrationOptions &calibration = {}) {
+                           const ovton::msckf::CalibrationOptions &calibration = {}) {
   const auto t0 = std::chrono::steady_clock::now();
   ovtest::TempDir dir;
-  const ov_sim::SimOptions o = sim_options(dir / "sim", p);
-  ov_sim::write_simulation(o);
+  const ovton::sim::SimOptions o = sim_options(dir / "sim", p);
+  ovton::sim::write_simulation(o);
   const Dataset data = load_dataset(o.out_dir);
-  ov_msckf_ton::VioOptions opt;
-  opt.td.mode = ov_msckf_ton::parse_td_mode(mode);
+  ovton::msckf::VioOptions opt;
+  opt.td.mode = ovton::msckf::parse_td_mode(mode);
   opt.td.init_s = td_init_s;
-  opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
+  opt.init.mode = ovton::msckf::InitMode::GroundTruth;
   opt.update.sigma_px = o.features.pixel_noise;
   opt.calibration = calibration;
-  ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
+  ovton::msckf::VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);
   const std::string log_file = dir / "res.csv";
   {
-    ov_msckf_ton::ResidualLogWriter log(log_file);
+    ovton::msckf::ResidualLogWriter log(log_file);
     vio.set_residual_log(&log);
     Replay(data).run(vio);
     vio.set_residual_log(nullptr);
@@ -206,7 +207,7 @@ DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_in
 class TruePoseLog {
 public:
   TruePoseLog(const Plant &p, double td_model_s) : o_(sim_options(dir_ / "sim", p)), td_model_s_(td_model_s) {
-    ov_sim::write_simulation(o_);
+    ovton::sim::write_simulation(o_);
     data_ = load_dataset(o_.out_dir);
     write_true_pose_log(o_, data_, td_model_s, dir_ / "res.csv");
   }
@@ -230,14 +231,14 @@ public:
       r.readout_s = calib_readout_s;
       dopt.calibration.push_back(r);
     }
-    const DiagnoseReport rep = ov_eval::diagnose(load_residual_log(dir_ / "res.csv"), dopt);
+    const DiagnoseReport rep = ovton::eval::diagnose(load_residual_log(dir_ / "res.csv"), dopt);
     std::cout << format_ranking(rep);
     return rep;
   }
 
 private:
   ovtest::TempDir dir_;
-  ov_sim::SimOptions o_;
+  ovton::sim::SimOptions o_;
   double td_model_s_;
   Dataset data_;
 };
@@ -294,13 +295,13 @@ TEST(DiagnoseTruePoses, AgileFlightReadsNoGyroScaleNoiseFree) {
   p.agility = 1.0;
   p.seed = 3;
   ovtest::TempDir dir;
-  ov_sim::SimOptions o = sim_options(dir / "sim", p);
+  ovton::sim::SimOptions o = sim_options(dir / "sim", p);
   o.features.pixel_noise = 0.0;
   o.imu_noise = false;
-  ov_sim::write_simulation(o);
+  ovton::sim::write_simulation(o);
   const Dataset data = load_dataset(o.out_dir);
   write_true_pose_log(o, data, p.td0_s, dir / "res.csv");
-  const DiagnoseReport rep = ov_eval::diagnose(load_residual_log(dir / "res.csv"), diagnose_options(data));
+  const DiagnoseReport rep = ovton::eval::diagnose(load_residual_log(dir / "res.csv"), diagnose_options(data));
   std::cout << format_ranking(rep);
   for (const auto &c : rep.candidates)
     if (c.key == "gyro_scale")
@@ -478,7 +479,7 @@ TEST(DiagnoseFilterLog, ExtrinsicRotationInTheCalibrationLogIsNotNamed) {
       Eigen::Matrix3d R;
       for (int i = 0; i < 9; ++i)
         R(i / 3, i % 3) = r.R_BC[i];
-      R = ov_core::so3_exp(p.ext_rot) * R;
+      R = ovton::core::so3_exp(p.ext_rot) * R;
       for (int i = 0; i < 9; ++i)
         r.R_BC[i] = R(i / 3, i % 3);
     }
@@ -495,7 +496,7 @@ TEST(DiagnoseFilterLog, GyroScaleEstimatedByTheFilterIsNotNamed) {
   Plant p;
   p.gyro_M(2, 2) = 0.03;
   p.agility = 1.0;
-  ov_msckf_ton::CalibrationOptions calibration;
+  ovton::msckf::CalibrationOptions calibration;
   calibration.imu_intrinsics = true;
   expect_nothing_flagged(filter_case(p, "off", p.td0_s, {}, calibration));
 }

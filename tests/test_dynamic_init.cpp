@@ -19,8 +19,8 @@
 #include <cmath>
 #include <random>
 
-using namespace ov_msckf_ton;
-using ov_core::ImuData;
+using namespace ovton::msckf;
+using ovton::core::ImuData;
 
 namespace {
 
@@ -31,23 +31,23 @@ double rad2deg(double r) {
 }
 
 /// Roll/pitch and velocity errors as `ovton run` reports them (ov_eval/init_check.h), for a state and its truth.
-ov_eval::InitCheck check(const Eigen::Matrix3d &R, const Eigen::Vector3d &v, const ov_sim::TrajectorySample &truth,
-                         int64_t t_ns) {
-  ov_core::StateSample est, gt;
+ovton::eval::InitCheck check(const Eigen::Matrix3d &R, const Eigen::Vector3d &v,
+                             const ovton::sim::TrajectorySample &truth, int64_t t_ns) {
+  ovton::core::StateSample est, gt;
   est.t_ns = gt.t_ns = t_ns;
   est.q_WB = Eigen::Quaterniond(R);
   est.v = v;
   gt.q_WB = truth.q_WB;
   gt.v = truth.v_W;
   gt.has_velocity = true;
-  return ov_eval::check_initialisation(est, {gt, gt}, t_ns);
+  return ovton::eval::check_initialisation(est, {gt, gt}, t_ns);
 }
 
-std::deque<ImuData> ideal_imu_log(const ov_sim::Trajectory &traj, int64_t t0, int64_t t1, const Eigen::Vector3d &bg,
+std::deque<ImuData> ideal_imu_log(const ovton::sim::Trajectory &traj, int64_t t0, int64_t t1, const Eigen::Vector3d &bg,
                                   const Eigen::Vector3d &ba) {
   std::deque<ImuData> imu;
   for (int64_t t = t0; t <= t1; t += 5000000) {
-    ImuData d = ov_sim::ideal_imu(traj.sample(t), t, kGravity);
+    ImuData d = ovton::sim::ideal_imu(traj.sample(t), t, kGravity);
     d.wm += bg;
     d.am += ba;
     imu.push_back(d);
@@ -58,7 +58,7 @@ std::deque<ImuData> ideal_imu_log(const ov_sim::Trajectory &traj, int64_t t0, in
 } // namespace
 
 TEST(Preintegration, MatchesTheTrajectory) {
-  ov_sim::LissajousTrajectory traj(20.0, 1000000000LL, 1.0);
+  ovton::sim::LissajousTrajectory traj(20.0, 1000000000LL, 1.0);
   const int64_t t0 = traj.t_begin_ns() + 2000000000LL, t1 = t0 + 1000000000LL;
   const Eigen::Vector3d bg(0.01, -0.02, 0.03), ba(0.1, -0.05, 0.08);
   const auto imu = ideal_imu_log(traj, t0 - 100000000LL, t1 + 100000000LL, bg, ba);
@@ -68,7 +68,7 @@ TEST(Preintegration, MatchesTheTrajectory) {
   const Eigen::Matrix3d Ra = a.q_WB.toRotationMatrix(), Rb = b.q_WB.toRotationMatrix();
   const double T = 1e-9 * static_cast<double>((t1 - 777) - (t0 + 1234567));
   EXPECT_LT((pre[0].p).norm(), 1e-15);
-  EXPECT_LT(ov_core::so3_log(pre[1].R.transpose() * Ra.transpose() * Rb).norm(), 1e-5);
+  EXPECT_LT(ovton::core::so3_log(pre[1].R.transpose() * Ra.transpose() * Rb).norm(), 1e-5);
   EXPECT_LT((pre[1].v - Ra.transpose() * (b.v_W - a.v_W - kGravity * T)).norm(), 2e-4);
   EXPECT_LT((pre[1].p - Ra.transpose() * (b.p_W - a.p_W - a.v_W * T - 0.5 * kGravity * T * T)).norm(), 1e-4);
   EXPECT_FALSE(preintegrate(imu, t0, {t1 + 1000000000LL}, bg, ba, pre)); // beyond the log
@@ -81,12 +81,12 @@ namespace {
 struct SyntheticWindow {
   std::vector<InitFrame> frames;
   std::deque<ImuData> imu;
-  ov_sim::TrajectorySample truth; ///< at the newest frame
+  ovton::sim::TrajectorySample truth; ///< at the newest frame
 };
 
-SyntheticWindow synthetic_window(const ov_sim::Trajectory &traj, const ov_core::CameraModel &cam, int64_t t_start,
-                                 const Eigen::Vector3d &bg, const Eigen::Vector3d &ba, std::mt19937 &landmark_rng,
-                                 std::mt19937 &noise_rng, double px_sigma) {
+SyntheticWindow synthetic_window(const ovton::sim::Trajectory &traj, const ovton::core::CameraModel &cam,
+                                 int64_t t_start, const Eigen::Vector3d &bg, const Eigen::Vector3d &ba,
+                                 std::mt19937 &landmark_rng, std::mt19937 &noise_rng, double px_sigma) {
   const Eigen::Matrix4d &T_BC = cam.calib().T_BC;
   SyntheticWindow w;
   w.imu = ideal_imu_log(traj, t_start - 200000000LL, t_start + 1300000000LL, bg, ba);
@@ -121,13 +121,13 @@ SyntheticWindow synthetic_window(const ov_sim::Trajectory &traj, const ov_core::
 
 /// Error of an initialisation in its own world frame, [δθ_x δθ_y δv] (state.h's convention): the truth's world is
 /// first turned about z onto the estimate's, whose yaw is arbitrary.
-Eigen::Matrix<double, 5, 1> tilt_velocity_error(const DynamicInitResult &r, const ov_sim::TrajectorySample &truth) {
+Eigen::Matrix<double, 5, 1> tilt_velocity_error(const DynamicInitResult &r, const ovton::sim::TrajectorySample &truth) {
   const Eigen::Matrix3d R_true = truth.q_WB.toRotationMatrix();
   const Eigen::Matrix3d A = r.R_WB * R_true.transpose();
   const Eigen::Matrix3d Rz =
       Eigen::AngleAxisd(std::atan2(A(1, 0), A(0, 0)), Eigen::Vector3d::UnitZ()).toRotationMatrix();
   Eigen::Matrix<double, 5, 1> e;
-  e << ov_core::so3_log(Rz * R_true * r.R_WB.transpose()).head<2>(), Rz * truth.v_W - r.v_W;
+  e << ovton::core::so3_log(Rz * R_true * r.R_WB.transpose()).head<2>(), Rz * truth.v_W - r.v_W;
   return e;
 }
 
@@ -146,8 +146,8 @@ Eigen::Matrix<double, 5, 5> tilt_velocity_cov(const DynamicInitResult &r, double
 // Tracks of random landmarks along an agile flight, with IMU biases the solver is not told: it must find the state
 // of the newest frame, the biases, and a covariance that covers its error.
 TEST(DynamicInit, RecoversMovingStateAndBiases) {
-  ov_sim::LissajousTrajectory traj(30.0, 1000000000LL, 1.0);
-  const ov_core::CameraModel cam(ov_sim::euroc_cam0_calib());
+  ovton::sim::LissajousTrajectory traj(30.0, 1000000000LL, 1.0);
+  const ovton::core::CameraModel cam(ovton::sim::euroc_cam0_calib());
   const Eigen::Matrix4d T_BC = cam.calib().T_BC;
   const Eigen::Vector3d bg(0.004, -0.02, 0.03), ba(0.05, -0.08, 0.1);
   std::mt19937 rng(7);
@@ -191,8 +191,8 @@ TEST(DynamicInit, RecoversMovingStateAndBiases) {
 // overestimate. The joint 5-d NEES is printed only: tilt and world velocity are nearly collinear (δv ≈ δθ × v), so
 // it weighs a near-singular direction.
 TEST(DynamicInit, CovarianceMatchesMonteCarloSpread) {
-  ov_sim::LissajousTrajectory traj(30.0, 1000000000LL, 1.0);
-  const ov_core::CameraModel cam(ov_sim::euroc_cam0_calib());
+  ovton::sim::LissajousTrajectory traj(30.0, 1000000000LL, 1.0);
+  const ovton::core::CameraModel cam(ovton::sim::euroc_cam0_calib());
   const Eigen::Vector3d bg(0.004, -0.02, 0.03), ba(0.05, -0.08, 0.1);
   DynamicInitOptions o;
   o.sigma_px = 0.5;
@@ -231,8 +231,8 @@ TEST(DynamicInit, CovarianceMatchesMonteCarloSpread) {
 
 // Too little motion: refused, not guessed.
 TEST(DynamicInit, RefusesAStillWindow) {
-  ov_sim::LissajousTrajectory traj(30.0, 1000000000LL, 0.0);
-  const ov_core::CameraModel cam(ov_sim::euroc_cam0_calib());
+  ovton::sim::LissajousTrajectory traj(30.0, 1000000000LL, 0.0);
+  const ovton::core::CameraModel cam(ovton::sim::euroc_cam0_calib());
   const int64_t t0 = traj.t_begin_ns() + 3000000000LL;
   const auto imu =
       ideal_imu_log(traj, t0 - 200000000LL, t0 + 1300000000LL, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
@@ -251,20 +251,20 @@ TEST(DynamicInit, RefusesAStillWindow) {
 namespace {
 
 struct CutRun {
-  std::vector<ov_core::StateSample> traj;
+  std::vector<ovton::core::StateSample> traj;
   std::string init_message;
   long images_before_init = 0;
 };
 
-CutRun run_cut(const ov_core::Dataset &d, InitMode mode) {
+CutRun run_cut(const ovton::core::Dataset &d, InitMode mode) {
   VioOptions opt = load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
   opt.init.mode = mode;
   VioManager vio(opt, d.cam, d.imu_calib);
   if (mode == InitMode::GroundTruth)
     vio.set_groundtruth(d.groundtruth);
   CutRun r;
-  vio.set_state_callback([&](const ov_core::StateSample &s) { r.traj.push_back(s); });
-  ov_core::Replay(d).run(vio);
+  vio.set_state_callback([&](const ovton::core::StateSample &s) { r.traj.push_back(s); });
+  ovton::core::Replay(d).run(vio);
   r.init_message = vio.init_message();
   r.images_before_init = vio.counters().images_before_init;
   return r;
@@ -277,12 +277,12 @@ CutRun run_cut(const ov_core::Dataset &d, InitMode mode) {
 // started from the ground truth (over the same poses).
 TEST(DynamicInitReal, MovingEurocCutWithoutGroundTruth) {
   OVTEST_REQUIRE_SHARED_DATA();
-  const ov_core::Dataset d = ov_core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_moving");
+  const ovton::core::Dataset d = ovton::core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_moving");
   const CutRun dyn = run_cut(d, InitMode::Auto);
   ASSERT_FALSE(dyn.traj.empty()) << dyn.init_message;
   EXPECT_NE(dyn.init_message.find("dynamic initialisation"), std::string::npos) << dyn.init_message;
-  const ov_core::StateSample &first = dyn.traj.front();
-  const auto ic = ov_eval::check_initialisation(first, d.groundtruth, d.images.front().t_cam_ns);
+  const ovton::core::StateSample &first = dyn.traj.front();
+  const auto ic = ovton::eval::check_initialisation(first, d.groundtruth, d.images.front().t_cam_ns);
   ASSERT_TRUE(ic.ok);
   const double data_s = ic.data_s, tilt = ic.tilt_err_deg, dv = ic.vel_err_m_s;
   EXPECT_LE(data_s, 1.5) << dyn.init_message;
@@ -292,12 +292,12 @@ TEST(DynamicInitReal, MovingEurocCutWithoutGroundTruth) {
   EXPECT_LT(dv, 0.1);
 
   const CutRun ref = run_cut(d, InitMode::GroundTruth);
-  std::vector<ov_core::StateSample> ref_rest;
+  std::vector<ovton::core::StateSample> ref_rest;
   for (const auto &s : ref.traj)
     if (s.t_ns >= first.t_ns)
       ref_rest.push_back(s);
-  const auto e_dyn = ov_eval::evaluate(dyn.traj, d.groundtruth, {}, ov_eval::EvalOptions{});
-  const auto e_ref = ov_eval::evaluate(ref_rest, d.groundtruth, {}, ov_eval::EvalOptions{});
+  const auto e_dyn = ovton::eval::evaluate(dyn.traj, d.groundtruth, {}, ovton::eval::EvalOptions{});
+  const auto e_ref = ovton::eval::evaluate(ref_rest, d.groundtruth, {}, ovton::eval::EvalOptions{});
   std::cout << "APE after the dynamic start " << e_dyn.ape_rmse_m << " m, ground-truth start over the same poses "
             << e_ref.ape_rmse_m << " m\n";
   EXPECT_LT(e_dyn.ape_rmse_m, 2.0 * e_ref.ape_rmse_m);
@@ -306,7 +306,7 @@ TEST(DynamicInitReal, MovingEurocCutWithoutGroundTruth) {
 // auto on a still start (the micro cut stands on the ground) is the static initialisation.
 TEST(DynamicInitReal, StillEurocStartIsStatic) {
   OVTEST_REQUIRE_SHARED_DATA();
-  ov_core::Dataset d = ov_core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_micro");
+  ovton::core::Dataset d = ovton::core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_micro");
   d.images.resize(40);
   const CutRun r = run_cut(d, InitMode::Auto);
   ASSERT_FALSE(r.traj.empty()) << r.init_message;

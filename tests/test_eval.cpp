@@ -8,8 +8,8 @@
 #include <fstream>
 #include <sstream>
 
-using namespace ov_core;
-using namespace ov_eval;
+using namespace ovton::core;
+using namespace ovton::eval;
 
 namespace {
 
@@ -388,21 +388,21 @@ TEST(EvalCit, HandComputedCase) {
 
 TEST(EvalAlign, StillTrajectoryTakesYawFromOrientations) {
   // A platform that does not move: positions cannot fix yaw, orientations can.
-  std::vector<ov_core::StateSample> gt, est;
+  std::vector<ovton::core::StateSample> gt, est;
   const Eigen::Matrix3d Rz = Eigen::AngleAxisd(1.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   for (int i = 0; i < 50; ++i) {
-    ov_core::StateSample g;
+    ovton::core::StateSample g;
     g.t_ns = 1000000000LL + i * 50000000LL;
     g.p = Eigen::Vector3d(1.0, 2.0, 0.5) + 1e-4 * Eigen::Vector3d(std::sin(i), std::cos(i), 0);
     g.q_WB = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 1, 0).normalized()));
-    ov_core::StateSample e = g;
+    ovton::core::StateSample e = g;
     e.p = Rz.transpose() * g.p;
     e.q_WB = Eigen::Quaterniond(Rz.transpose() * g.q_WB.toRotationMatrix());
     gt.push_back(g);
     est.push_back(e);
   }
-  ov_eval::EvalOptions opt;
-  const auto r = ov_eval::evaluate(est, gt, {}, opt);
+  ovton::eval::EvalOptions opt;
+  const auto r = ovton::eval::evaluate(est, gt, {}, opt);
   EXPECT_LT(r.ape_rmse_m, 1e-9);
   EXPECT_LT(r.are_rmse_deg, 1e-6);
 }

@@ -13,7 +13,7 @@
 #include <cmath>
 #include <limits>
 
-using namespace ov_msckf_ton;
+using namespace ovton::msckf;
 
 namespace {
 
@@ -29,7 +29,7 @@ UpdateStats stats(int used, int gated, int tri) {
 template <typename F> std::string failure(F f) {
   try {
     f();
-  } catch (const ov_core::EstimatorFailure &e) {
+  } catch (const ovton::core::EstimatorFailure &e) {
     return e.what();
   }
   return "";
@@ -46,7 +46,7 @@ std::string feed(
   s.P = Eigen::MatrixXd::Identity(s.dim(), s.dim());
   const double dt = 0.05;
   for (double t = t0_s; t < t0_s + dur_s - 1e-9; t += dt) {
-    s.t_imu_ns = ov_core::s_to_ns(t);
+    s.t_imu_ns = ovton::core::s_to_ns(t);
     s.td = td(t);
     s.P(s.td_index, s.td_index) = var(t);
     h.on_update(s.t_imu_ns, st);
@@ -168,9 +168,9 @@ TEST(FilterHealth, NonFiniteStateOrCovarianceFails) {
 // initialisation: the rows handed out are finite up to the spike, and then the run stops with EstimatorFailure.
 TEST(FilterHealth, AbsurdImuReadingAfterInitialisationStopsTheRun) {
   ovtest::TempDir tmp;
-  const ov_sim::SimOptions o = ovtest::feature_sim(tmp / "sim", 8.0, 3);
-  ov_sim::write_simulation(o);
-  ov_core::Dataset data = ov_core::load_dataset(o.out_dir);
+  const ovton::sim::SimOptions o = ovtest::feature_sim(tmp / "sim", 8.0, 3);
+  ovton::sim::write_simulation(o);
+  ovton::core::Dataset data = ovton::core::load_dataset(o.out_dir);
   const size_t k = data.imu.size() / 2;
   data.imu[k].am = Eigen::Vector3d(4000, -4000, 4000);
 
@@ -178,12 +178,12 @@ TEST(FilterHealth, AbsurdImuReadingAfterInitialisationStopsTheRun) {
   opt.init.mode = InitMode::GroundTruth;
   VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);
-  std::vector<ov_core::StateSample> rows;
-  vio.set_state_callback([&](const ov_core::StateSample &s) { rows.push_back(s); });
+  std::vector<ovton::core::StateSample> rows;
+  vio.set_state_callback([&](const ovton::core::StateSample &s) { rows.push_back(s); });
   try {
-    ov_core::Replay(data).run(vio);
+    ovton::core::Replay(data).run(vio);
     FAIL() << "a run through a 4000 m/s^2 spike ended normally with " << rows.size() << " rows";
-  } catch (const ov_core::EstimatorFailure &e) {
+  } catch (const ovton::core::EstimatorFailure &e) {
     EXPECT_GT(e.t_ns(), data.imu[k].t_imu_ns) << e.what();
   }
   ASSERT_GT(rows.size(), 10u);

@@ -12,7 +12,7 @@
 #include <cmath>
 #include <map>
 
-using namespace ov_core;
+using namespace ovton::core;
 
 namespace {
 
@@ -71,7 +71,7 @@ TEST(TrackKLT, GyroPriorFindsATurnTheFlatPyramidCannot) {
   cv::Mat img1;
   cv::warpPerspective(img0, img1, Hcv, img0.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
 
-  const Eigen::Matrix3d R_IC = ov_sim::euroc_cam0_calib().T_BC.block<3, 3>(0, 0);
+  const Eigen::Matrix3d R_IC = ovton::sim::euroc_cam0_calib().T_BC.block<3, 3>(0, 0);
   // Constant rate in the camera frame, w_C = log(R_c0c1) / dt, measured in the IMU frame.
   const Eigen::Vector3d w_I = R_IC * so3_log(R_c1c0.transpose()) / (kDt * 1e-9);
   const auto prior = std::make_shared<GyroRotationPrior>(gyro_log([&](int64_t) { return w_I; }), R_IC, 0.003);

@@ -39,34 +39,34 @@ TEST(ImageCodecs, FilesTheFastDecoderRefusesReadAsOpenCvReadsThem) {
        {std::pair<std::string, cv::Mat>{"colour.png", colour}, {"gray16.png", gray16}, {"colour.jpg", colour}}) {
     const std::string file = temp_file(name);
     ASSERT_TRUE(cv::imwrite(file, img));
-    const cv::Mat gray = ov_core::read_gray_image(file);
+    const cv::Mat gray = ovton::core::read_gray_image(file);
     EXPECT_TRUE(same(gray, cv::imread(file, cv::IMREAD_GRAYSCALE))) << name;
     EXPECT_EQ(gray.type(), CV_8UC1) << name;
-    EXPECT_TRUE(same(ov_core::read_color_image(file), cv::imread(file, cv::IMREAD_COLOR))) << name;
+    EXPECT_TRUE(same(ovton::core::read_color_image(file), cv::imread(file, cv::IMREAD_COLOR))) << name;
     std::filesystem::remove(file);
   }
-  EXPECT_TRUE(ov_core::read_gray_image(temp_file("no_such_file.png")).empty());
-  EXPECT_TRUE(ov_core::read_color_image(temp_file("no_such_file.png")).empty());
+  EXPECT_TRUE(ovton::core::read_gray_image(temp_file("no_such_file.png")).empty());
+  EXPECT_TRUE(ovton::core::read_color_image(temp_file("no_such_file.png")).empty());
 }
 
 TEST(ImageCodecs, WritesAndEncodesAsOpenCvDoes) {
   const cv::Mat colour = colour_pattern();
-  const std::vector<int> params = {ov_core::png_compression_param(), 3};
+  const std::vector<int> params = {ovton::core::png_compression_param(), 3};
   EXPECT_EQ(params[0], cv::IMWRITE_PNG_COMPRESSION);
   const std::string file = temp_file("written.png");
-  ASSERT_TRUE(ov_core::write_image(file, colour, params));
+  ASSERT_TRUE(ovton::core::write_image(file, colour, params));
   EXPECT_TRUE(same(cv::imread(file, cv::IMREAD_COLOR), colour));
   std::filesystem::remove(file);
 
   std::vector<uchar> ours, theirs;
-  ASSERT_TRUE(ov_core::encode_image(".png", colour, ours, params));
+  ASSERT_TRUE(ovton::core::encode_image(".png", colour, ours, params));
   ASSERT_TRUE(cv::imencode(".png", colour, theirs, params));
   EXPECT_EQ(ours, theirs);
   // An 8-bit gray PNG comes back through the fast decoder, pixel for pixel.
   cv::Mat gray;
   cv::cvtColor(colour, gray, cv::COLOR_BGR2GRAY);
-  ASSERT_TRUE(ov_core::write_image(file, gray));
-  EXPECT_TRUE(same(ov_core::read_gray_image(file), gray));
+  ASSERT_TRUE(ovton::core::write_image(file, gray));
+  EXPECT_TRUE(same(ovton::core::read_gray_image(file), gray));
   std::filesystem::remove(file);
-  EXPECT_FALSE(ov_core::write_image(temp_file("no_such_folder/x.png"), gray));
+  EXPECT_FALSE(ovton::core::write_image(temp_file("no_such_folder/x.png"), gray));
 }

@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <sstream>
 
-using namespace ov_core;
+using namespace ovton::core;
 using ovtest::expect_data_error;
 using ovtest::kCamYaml;
 using ovtest::kImuYaml;

@@ -16,7 +16,7 @@
 #include <filesystem>
 #include <limits>
 
-using namespace ov_core;
+using namespace ovton::core;
 using ovtest::expect_data_error;
 using ovtest::kCamYaml;
 using ovtest::kImuYaml;
@@ -203,7 +203,7 @@ TEST(ReaderPlausibility, YamlTrapsNameFileAndLine) {
   // An estimator config `text` is refused, naming the file and `line` (0: the file only).
   const auto bad_config = [&](const std::string &name, const std::string &text, long line, const std::string &why) {
     write_text(tmp / name, text);
-    expect_data_error([&] { ov_msckf_ton::load_vio_options(tmp / name); }, name, line, why);
+    expect_data_error([&] { ovton::msckf::load_vio_options(tmp / name); }, name, line, why);
   };
   // Keys that are not names escaped as bare yaml-cpp errors (exit 1, no file).
   bad_config("key.yaml", "? [a, b]\n: 3\n", 1, "list as section");
@@ -220,7 +220,7 @@ TEST(ReaderPlausibility, YamlTrapsNameFileAndLine) {
   expect_data_error([&] { load_dataset(copy); }, "camchain-imucam.yaml", 1, "scalar cam0");
   // A BOM in a config is fine.
   write_text(tmp / "bom.yaml", std::string(kUtf8Bom) + "update:\n  max_clones: 12\n");
-  EXPECT_EQ(ov_msckf_ton::load_vio_options(tmp / "bom.yaml").update.max_clones, 12);
+  EXPECT_EQ(ovton::msckf::load_vio_options(tmp / "bom.yaml").update.max_clones, 12);
 }
 
 TEST(ReaderPlausibility, OutputPathsAndImagesNameTheFile) {

@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-using namespace ov_core;
+using namespace ovton::core;
 
 namespace {
 

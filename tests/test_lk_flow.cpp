@@ -47,7 +47,7 @@ struct Comparison {
 /// OpenCV's pyramids of a and b and lk_flow's made from them.
 struct Pyramids {
   std::vector<cv::Mat> pa, pb;
-  ov_core::LkPyramid la, lb;
+  ovton::core::LkPyramid la, lb;
   Pyramids(const cv::Mat &a, const cv::Mat &b) {
     cv::buildOpticalFlowPyramid(a, pa, cv::Size(kWin, kWin), kLevels, false);
     cv::buildOpticalFlowPyramid(b, pb, cv::Size(kWin, kWin), kLevels, false);
@@ -60,12 +60,12 @@ struct Pyramids {
 Comparison compare(const cv::Mat &a, const cv::Mat &b, const std::vector<cv::Point2f> &pts) {
   const Pyramids py(a, b);
   const auto &[pa, pb, la, lb] = py;
-  ov_core::LkParams p;
+  ovton::core::LkParams p;
   p.win = kWin;
   p.max_level = kLevels;
   std::vector<cv::Point2f> ours, theirs;
   std::vector<unsigned char> st_ours, st_theirs;
-  ov_core::lk_flow(la, lb, pts, ours, st_ours, p);
+  ovton::core::lk_flow(la, lb, pts, ours, st_ours, p);
   cv::calcOpticalFlowPyrLK(pa, pb, pts, theirs, st_theirs, cv::noArray(), cv::Size(kWin, kWin), kLevels,
                            cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, p.max_iter, p.eps));
   Comparison c;
@@ -139,10 +139,10 @@ TEST(LkFlow, FindsAKnownSubPixelShiftAsOpenCvDoes) {
   EXPECT_LT(quantile(c.dist, 0.99), 0.02);
 
   const Pyramids py(a, b);
-  const ov_core::LkPyramid &la = py.la, &lb = py.lb;
+  const ovton::core::LkPyramid &la = py.la, &lb = py.lb;
   std::vector<cv::Point2f> next;
   std::vector<unsigned char> status;
-  ov_core::lk_flow(la, lb, pts, next, status, ov_core::LkParams{});
+  ovton::core::lk_flow(la, lb, pts, next, status, ovton::core::LkParams{});
   // Within 0.1 px of the true shift: bilinear interpolation of a cubic-resampled texture leaves both implementations
   // up to 0.06 px short in y here (they agree with each other to 0.02 px, above).
   for (size_t i = 0; i < pts.size(); ++i) {
@@ -155,9 +155,9 @@ TEST(LkFlow, FindsAKnownSubPixelShiftAsOpenCvDoes) {
   for (auto &g : guess)
     g += cv::Point2f(0.6f, -0.4f);
   again = guess;
-  ov_core::LkParams p;
+  ovton::core::LkParams p;
   p.use_initial = true;
-  ov_core::lk_flow(la, lb, pts, again, status, p);
+  ovton::core::lk_flow(la, lb, pts, again, status, p);
   for (size_t i = 0; i < pts.size(); ++i)
     EXPECT_LT(cv::norm(again[i] - next[i]), 0.02) << i;
 }
@@ -166,21 +166,21 @@ TEST(LkFlow, PointsOutsideTheImageAreLost) {
   const cv::Mat a = textured(160, 120, 3);
   std::vector<cv::Mat> pa;
   cv::buildOpticalFlowPyramid(a, pa, cv::Size(kWin, kWin), 2, false);
-  ov_core::LkPyramid la;
+  ovton::core::LkPyramid la;
   la.build(pa, kWin);
   const std::vector<cv::Point2f> pts = {{80, 60}, {-40, 60}, {80, 500}, {159.9f, 119.9f}};
   std::vector<cv::Point2f> next;
   std::vector<unsigned char> status;
-  ov_core::lk_flow(la, la, pts, next, status, ov_core::LkParams{});
+  ovton::core::lk_flow(la, la, pts, next, status, ovton::core::LkParams{});
   EXPECT_TRUE(status[0]);
   EXPECT_LT(cv::norm(next[0] - pts[0]), 1e-3);
   EXPECT_FALSE(status[1]);
   EXPECT_FALSE(status[2]);
   // A window larger than the pyramid's border, and a pyramid built without its padding, are refused, not read out
   // of bounds.
-  ov_core::LkParams wide;
+  ovton::core::LkParams wide;
   wide.win = kWin + 2;
-  EXPECT_THROW(ov_core::lk_flow(la, la, pts, next, status, wide), ov_core::UsageError);
+  EXPECT_THROW(ovton::core::lk_flow(la, la, pts, next, status, wide), ovton::core::UsageError);
   cv::Mat bare = a.clone();
-  EXPECT_THROW(la.build({bare}, kWin), ov_core::UsageError);
+  EXPECT_THROW(la.build({bare}, kWin), ovton::core::UsageError);
 }

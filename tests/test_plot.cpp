@@ -10,8 +10,8 @@
 #include <filesystem>
 #include <limits>
 
-using namespace ov_core;
-using namespace ov_eval;
+using namespace ovton::core;
+using namespace ovton::eval;
 
 namespace {
 

@@ -39,7 +39,7 @@ bool same(const cv::Mat &a, const cv::Mat &b) {
 } // namespace
 
 TEST(PngGray, SamePixelsAsOpenCVForEveryFilterAndLevel) {
-  if (!ov_core::png_gray_fast_path_available())
+  if (!ovton::core::png_gray_fast_path_available())
     GTEST_SKIP() << "built without libdeflate";
   const cv::Mat img = test_image(97, 61, 3);
   // Strategies change the filters libpng picks (default: adaptive, all five; RLE/Huffman-only: often None/Sub).
@@ -48,7 +48,7 @@ TEST(PngGray, SamePixelsAsOpenCVForEveryFilterAndLevel) {
     for (int level : {0, 1, 3, 9}) {
       const auto buf = encode(img, {cv::IMWRITE_PNG_COMPRESSION, level, cv::IMWRITE_PNG_STRATEGY, strategy});
       cv::Mat fast;
-      ASSERT_TRUE(ov_core::decode_png_gray8(buf.data(), buf.size(), fast)) << strategy << " " << level;
+      ASSERT_TRUE(ovton::core::decode_png_gray8(buf.data(), buf.size(), fast)) << strategy << " " << level;
       EXPECT_TRUE(same(fast, cv::imdecode(buf, cv::IMREAD_GRAYSCALE))) << strategy << " " << level;
       EXPECT_TRUE(same(fast, img));
     }
@@ -122,16 +122,16 @@ TEST(PngGray, EveryRowFilterTypeDecodes) {
       // OpenCV (libpng) reads the hand-made file as the image: the encoder above is right.
       ASSERT_TRUE(same(cv::imdecode(png, cv::IMREAD_GRAYSCALE), img)) << filters[0] << " w " << w;
       cv::Mat fast;
-      if (!ov_core::png_gray_fast_path_available())
+      if (!ovton::core::png_gray_fast_path_available())
         continue;
-      ASSERT_TRUE(ov_core::decode_png_gray8(png.data(), png.size(), fast)) << filters[0] << " w " << w;
+      ASSERT_TRUE(ovton::core::decode_png_gray8(png.data(), png.size(), fast)) << filters[0] << " w " << w;
       EXPECT_TRUE(same(fast, img)) << "filters from " << filters[0] << ", " << filters.size() << " long, w " << w;
     }
 }
 #endif
 
 TEST(PngGray, RefusesOtherKindsAndDamagedFiles) {
-  if (!ov_core::png_gray_fast_path_available())
+  if (!ovton::core::png_gray_fast_path_available())
     GTEST_SKIP() << "built without libdeflate";
   const cv::Mat img = test_image(50, 30, 7);
   cv::Mat out;
@@ -139,25 +139,25 @@ TEST(PngGray, RefusesOtherKindsAndDamagedFiles) {
   cv::Mat bgr;
   cv::cvtColor(img, bgr, cv::COLOR_GRAY2BGR);
   auto buf = encode(bgr, {});
-  EXPECT_FALSE(ov_core::decode_png_gray8(buf.data(), buf.size(), out));
+  EXPECT_FALSE(ovton::core::decode_png_gray8(buf.data(), buf.size(), out));
   cv::Mat img16;
   img.convertTo(img16, CV_16U, 256);
   buf = encode(img16, {});
-  EXPECT_FALSE(ov_core::decode_png_gray8(buf.data(), buf.size(), out));
+  EXPECT_FALSE(ovton::core::decode_png_gray8(buf.data(), buf.size(), out));
 
   const auto good = encode(img, {});
-  ASSERT_TRUE(ov_core::decode_png_gray8(good.data(), good.size(), out));
+  ASSERT_TRUE(ovton::core::decode_png_gray8(good.data(), good.size(), out));
   // Truncated anywhere: refused, never a crash or a partial image.
   for (size_t n = 0; n < good.size(); n += 7)
-    EXPECT_FALSE(ov_core::decode_png_gray8(good.data(), n, out)) << n;
+    EXPECT_FALSE(ovton::core::decode_png_gray8(good.data(), n, out)) << n;
   // Any flipped byte after the signature: refused (CRC, Adler-32, header checks) or, in an ignored ancillary chunk,
   // decoded to the same pixels. Never a different image.
   for (size_t i = 8; i < good.size(); ++i) {
     auto bad = good;
     bad[i] ^= 0x5a;
-    if (ov_core::decode_png_gray8(bad.data(), bad.size(), out)) {
+    if (ovton::core::decode_png_gray8(bad.data(), bad.size(), out)) {
       EXPECT_TRUE(same(out, img)) << "byte " << i;
     }
   }
-  EXPECT_FALSE(ov_core::read_png_gray8("/nonexistent/ovton/none.png", out));
+  EXPECT_FALSE(ovton::core::read_png_gray8("/nonexistent/ovton/none.png", out));
 }

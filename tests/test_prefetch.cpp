@@ -7,7 +7,7 @@
 
 #include <memory>
 
-using namespace ov_core;
+using namespace ovton::core;
 
 namespace {
 

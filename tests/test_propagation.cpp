@@ -8,9 +8,9 @@
 #include <gtest/gtest.h>
 #include <random>
 
-using namespace ov_msckf_ton;
-using ov_core::so3_exp;
-using ov_core::so3_log;
+using namespace ovton::msckf;
+using ovton::core::so3_exp;
+using ovton::core::so3_log;
 
 namespace {
 
@@ -51,14 +51,14 @@ Eigen::Matrix<double, 15, 1> minus(const ImuState &y, const ImuState &x) {
 
 TEST(So3, JacobiansAgainstFiniteDifferences) {
   const Eigen::Vector3d phi(0.3, -0.7, 1.1);
-  const Eigen::Matrix3d Jr = ov_core::so3_jr(phi);
+  const Eigen::Matrix3d Jr = ovton::core::so3_jr(phi);
   // Exp(phi + d) ≈ Exp(phi) Exp(Jr d)
   const Eigen::MatrixXd num = ovtest::numeric_jacobian(
       [&](const Eigen::Vector3d &y) -> Eigen::Vector3d { return so3_log(so3_exp(phi).transpose() * so3_exp(y)); }, phi,
       1e-6);
   for (int i = 0; i < 3; ++i)
     EXPECT_NEAR((num.col(i) - Jr.col(i)).norm(), 0, 1e-8);
-  EXPECT_NEAR((ov_core::so3_jr_inv(phi) * Jr - Eigen::Matrix3d::Identity()).norm(), 0, 1e-12);
+  EXPECT_NEAR((ovton::core::so3_jr_inv(phi) * Jr - Eigen::Matrix3d::Identity()).norm(), 0, 1e-12);
   EXPECT_NEAR((so3_log(so3_exp(phi)) - phi).norm(), 0, 1e-12);
 }
 
@@ -146,7 +146,7 @@ TEST(Propagation, NoiseFreeIntegrationOfAnAnalyticMotion) {
   auto feed_until = [&](int64_t t_ns) {
     for (; static_cast<int64_t>(fed) * 5000000LL <= t_ns + 5000000LL && fed <= 2000; ++fed) {
       const double t = fed * 0.005;
-      ov_core::ImuData m;
+      ovton::core::ImuData m;
       m.t_imu_ns = static_cast<int64_t>(fed) * 5000000LL;
       m.wm = wbody(t);
       m.am = rot(t).transpose() * (acc(t) - g);
@@ -165,7 +165,7 @@ TEST(Propagation, NoiseFreeIntegrationOfAnAnalyticMotion) {
     feed_until(t);
     ASSERT_TRUE(prop.propagate(s, t));
   }
-  const double tf = ov_core::ns_to_s(t);
+  const double tf = ovton::core::ns_to_s(t);
   EXPECT_LT((s.imu.p - pos(tf)).norm(), 0.01);
   EXPECT_LT(so3_log(rot(tf).transpose() * s.imu.R).norm() * 180 / M_PI, 0.01);
   EXPECT_GT(state_helper::min_eigenvalue(s), 0.0);
@@ -182,7 +182,7 @@ TEST(Cloning, TdJacobianMatchesFiniteDifferences) {
   std::mt19937 rng(5);
   std::normal_distribution<double> n(0, 1);
   for (int i = 0; i <= 400; ++i) {
-    ov_core::ImuData m;
+    ovton::core::ImuData m;
     m.t_imu_ns = static_cast<int64_t>(i) * 5000000LL;
     m.wm = Eigen::Vector3d(0.5 + 0.1 * std::sin(0.01 * i), -0.3, 0.9);
     m.am = Eigen::Vector3d(0.5, 1.0 + 0.2 * std::cos(0.02 * i), 9.5);
@@ -204,7 +204,7 @@ TEST(Cloning, TdJacobianMatchesFiniteDifferences) {
   const int64_t h_ns = 100000; // 0.1 ms
   ImuState ap;
   ASSERT_TRUE(prop.predict_mean(s0, t_img + h_ns, ap));
-  const double h = ov_core::ns_to_s(h_ns);
+  const double h = ovton::core::ns_to_s(h_ns);
   const Eigen::Vector3d dth = so3_log(ap.R * c.R.transpose()) / h; // world-frame rate
   const Eigen::Vector3d dp = (ap.p - c.p) / h;
   // The clone rows of P equal J P, so the td column of J is recovered from P(clone, td) / P(td, td).
@@ -266,7 +266,7 @@ TEST(Propagation, FirstEstimateJacobiansKeepYawAndPositionUnobservable) {
     Propagator prop(quiet);
     prop.set_use_fej(fej);
     for (int i = 0; i <= 100; ++i) {
-      ov_core::ImuData m;
+      ovton::core::ImuData m;
       m.t_imu_ns = static_cast<int64_t>(i) * 5000000LL;
       m.wm = Eigen::Vector3d(0.3, -0.2, 0.5 + 0.01 * i);
       m.am = Eigen::Vector3d(0.4, 0.1 * std::sin(0.1 * i), 9.9);

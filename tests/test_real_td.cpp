@@ -19,28 +19,28 @@ struct RealRun {
 
 RealRun run_sr_on_shifted_cut(double td_ms) {
   ovtest::TempDir dir;
-  ov_sim::PerturbOptions po;
+  ovton::sim::PerturbOptions po;
   po.in_dir = ovtest::shared_data() + "/euroc_v1_01_moving";
   po.out_dir = dir / "shifted";
-  po.td.kind = ov_sim::TdModelKind::Constant;
+  po.td.kind = ovton::sim::TdModelKind::Constant;
   po.td.td0_s = td_ms * 1e-3;
-  ov_sim::perturb_dataset(po);
-  const ov_core::Dataset d = ov_core::load_dataset(po.out_dir);
-  ov_msckf_ton::VioOptions opt =
-      ov_msckf_ton::load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
-  opt.td.mode = ov_msckf_ton::TdMode::Sr;
-  opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
-  ov_msckf_ton::VioManager vio(opt, d.cam, d.imu_calib);
+  ovton::sim::perturb_dataset(po);
+  const ovton::core::Dataset d = ovton::core::load_dataset(po.out_dir);
+  ovton::msckf::VioOptions opt =
+      ovton::msckf::load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
+  opt.td.mode = ovton::msckf::TdMode::Sr;
+  opt.init.mode = ovton::msckf::InitMode::GroundTruth;
+  ovton::msckf::VioManager vio(opt, d.cam, d.imu_calib);
   vio.set_groundtruth(d.groundtruth);
-  std::vector<ov_core::StateSample> traj;
-  vio.set_state_callback([&](const ov_core::StateSample &s) { traj.push_back(s); });
-  ov_core::Replay(d).run(vio);
+  std::vector<ovton::core::StateSample> traj;
+  vio.set_state_callback([&](const ovton::core::StateSample &s) { traj.push_back(s); });
+  ovton::core::Replay(d).run(vio);
   RealRun r;
   if (traj.empty())
     return r;
   r.final_td_ms = traj.back().td_s * 1e3;
   r.td_sigma_ms = traj.back().td_sigma_s * 1e3;
-  const ov_eval::EvalResult e = ov_eval::evaluate(traj, d.groundtruth, {}, ov_eval::EvalOptions{});
+  const ovton::eval::EvalResult e = ovton::eval::evaluate(traj, d.groundtruth, {}, ovton::eval::EvalOptions{});
   r.ape_m = e.ape_rmse_m;
   r.are_deg = e.are_rmse_deg;
   return r;

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <random>
 
-using namespace ov_eval::diag;
+using namespace ovton::eval::diag;
 
 namespace {
 
@@ -281,7 +281,7 @@ TEST(RobustRegression, BinnedCurveFollowsTheFittedSlope) {
   Design d = random_design(4000, 1, 2, rng);
   plant(d, {2.0, -1.0}, 0.1, rng);
   const Fit f = fit_cols(d, {1, 0}, 3.0);
-  const ov_eval::BinnedCurve cur = binned_curve({0}, d, f, {1, 0}, 8);
+  const ovton::eval::BinnedCurve cur = binned_curve({0}, d, f, {1, 0}, 8);
   EXPECT_NEAR(cur.slope, 2.0, 0.01);
   ASSERT_EQ(cur.x.size(), 8u);
   for (size_t b = 0; b < cur.x.size(); ++b)

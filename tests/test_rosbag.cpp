@@ -16,13 +16,13 @@
 #include <sys/wait.h>
 
 namespace fs = std::filesystem;
-using namespace ov_core;
+using namespace ovton::core;
 
 namespace {
 
 #define OVTEST_REQUIRE_ROSBAG()                                                                                        \
   do {                                                                                                                 \
-    if (!ov_core::rosbag_supported())                                                                                  \
+    if (!ovton::core::rosbag_supported())                                                                              \
       GTEST_SKIP() << "built with OVTON_WITH_ROSBAG=OFF";                                                              \
   } while (0)
 
@@ -31,7 +31,7 @@ fs::path ovton_binary() {
 }
 
 /// Runs `ovton ARGS`, stderr to `err`; returns the exit code.
-int ovton(const std::string &args, const std::string &err) {
+int run_ovton(const std::string &args, const std::string &err) {
   const std::string cmd = ovton_binary().string() + " " + args + " >/dev/null 2>" + err;
   const int rc = std::system(cmd.c_str());
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
@@ -55,11 +55,11 @@ protected:
     if (!rosbag_supported())
       return;
     dir_ = new ovtest::TempDir();
-    ov_sim::SimOptions o;
+    ovton::sim::SimOptions o;
     o.out_dir = (*dir_) / "flight";
     o.duration_s = 4.0;
     o.seed = 11;
-    ov_sim::write_simulation(o);
+    ovton::sim::write_simulation(o);
     folder_ = new Dataset(load_dataset(o.out_dir));
     write_bag(*folder_, (*dir_) / "flight.bag");
   }
@@ -111,9 +111,9 @@ TEST_F(BagTest, BagReplaysToTheByteIdenticalTrajectory) {
   if (!fs::exists(ovton_binary()))
     GTEST_SKIP() << "ovton not built";
   const std::string cfg = std::string(OVTON_SOURCE_DIR) + "/config/sim/estimator_config.yaml", err = (*dir_) / "e";
-  ASSERT_EQ(ovton("run -q -c " + cfg + " --dataset " + folder() + " -o " + ((*dir_) / "folder.csv"), err), 0)
+  ASSERT_EQ(run_ovton("run -q -c " + cfg + " --dataset " + folder() + " -o " + ((*dir_) / "folder.csv"), err), 0)
       << ovtest::read_text(err);
-  ASSERT_EQ(ovton("run -q -c " + cfg + " --dataset " + bag() + " -o " + ((*dir_) / "bag.csv"), err), 0)
+  ASSERT_EQ(run_ovton("run -q -c " + cfg + " --dataset " + bag() + " -o " + ((*dir_) / "bag.csv"), err), 0)
       << ovtest::read_text(err);
   const std::string a = bytes_of((*dir_) / "folder.csv"), b = bytes_of((*dir_) / "bag.csv");
   EXPECT_GT(std::count(a.begin(), a.end(), '\n'), 50);
@@ -238,10 +238,10 @@ TEST_F(BagTest, UnsupportedEncodingNamesTheMessage) {
   if (!fs::exists(ovton_binary()))
     return;
   const std::string err = d / "err.txt";
-  EXPECT_EQ(ovton("run -q --dataset " + (d / "yuv.bag") + " --calib " + folder() + " -o " + (d / "t.csv"), err), 3);
+  EXPECT_EQ(run_ovton("run -q --dataset " + (d / "yuv.bag") + " --calib " + folder() + " -o " + (d / "t.csv"), err), 3);
   EXPECT_NE(ovtest::read_text(err).find("unsupported image encoding 'yuv42'"), std::string::npos)
       << ovtest::read_text(err);
-  EXPECT_EQ(ovton("info --dataset " + bag() + " --cam-topic /nope", err), 3);
+  EXPECT_EQ(run_ovton("info --dataset " + bag() + " --cam-topic /nope", err), 3);
   EXPECT_NE(ovtest::read_text(err).find("no topic /nope"), std::string::npos) << ovtest::read_text(err);
 }
 
@@ -254,11 +254,11 @@ TEST(BagReal, EurocMovingCutByteIdentical) {
   ovtest::TempDir d;
   const std::string folder = ovtest::shared_data() + "/euroc_v1_01_moving", err = d / "e";
   const std::string bag = d / "moving.bag";
-  ASSERT_EQ(ovton("export -q --dataset " + folder + " --bag " + bag, err), 0) << ovtest::read_text(err);
+  ASSERT_EQ(run_ovton("export -q --dataset " + folder + " --bag " + bag, err), 0) << ovtest::read_text(err);
   const std::string cfg = std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml";
   const std::string common = "run -q -c " + cfg + " --init groundtruth --max-images 60 ";
-  ASSERT_EQ(ovton(common + "--dataset " + folder + " -o " + (d / "folder.csv"), err), 0) << ovtest::read_text(err);
-  ASSERT_EQ(ovton(common + "--dataset " + bag + " --calib " + folder + " -o " + (d / "bag.csv"), err), 0)
+  ASSERT_EQ(run_ovton(common + "--dataset " + folder + " -o " + (d / "folder.csv"), err), 0) << ovtest::read_text(err);
+  ASSERT_EQ(run_ovton(common + "--dataset " + bag + " --calib " + folder + " -o " + (d / "bag.csv"), err), 0)
       << ovtest::read_text(err);
   const std::string a = bytes_of(d / "folder.csv"), b = bytes_of(d / "bag.csv");
   EXPECT_GT(std::count(a.begin(), a.end(), '\n'), 40);

@@ -23,7 +23,7 @@ fs::path ovton_binary() {
 }
 
 /// Runs `ovton ARGS` with stdout to `out`, stderr to `out`.err; returns the exit code.
-int ovton(const std::string &args, const std::string &out) {
+int run_ovton(const std::string &args, const std::string &out) {
   const std::string cmd = ovton_binary().string() + " " + args + " >" + out + " 2>" + out + ".err";
   const int rc = std::system(cmd.c_str());
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
@@ -51,9 +51,9 @@ TEST(SearchImages, ReusedTracksAndImagesGiveTheByteIdenticalTrajectory) {
   const std::string cfg = std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml";
   const auto run = [&](const std::string &name, const std::string &extra, const std::string &mode = "sr") {
     const std::string out = d / (name + ".out");
-    EXPECT_EQ(ovton("run -q -c " + cfg + " --init groundtruth -m " + mode + " -d " + folder + " -o " +
-                        (d / (name + ".csv")) + " " + extra,
-                    out),
+    EXPECT_EQ(run_ovton("run -q -c " + cfg + " --init groundtruth -m " + mode + " -d " + folder + " -o " +
+                            (d / (name + ".csv")) + " " + extra,
+                        out),
               0)
         << ovtest::read_text(out + ".err");
     return reused(out);
@@ -79,10 +79,10 @@ TEST(SearchImages, ReusedTracksAndImagesGiveTheByteIdenticalTrajectory) {
   // `compare` shares the search's tracks among its modes: each goes on from a clone of the search's tracker, and
   // gets the trajectory `run` gets, the mode without a search (off) as well.
   const std::string cmp = d / "cmp";
-  ASSERT_EQ(
-      ovton("compare -c " + cfg + " --init groundtruth --modes off,sr --jobs 2 --dataset " + folder + " --out " + cmp,
-            d / "cmp.out"),
-      0)
+  ASSERT_EQ(run_ovton("compare -c " + cfg + " --init groundtruth --modes off,sr --jobs 2 --dataset " + folder +
+                          " --out " + cmp,
+                      d / "cmp.out"),
+            0)
       << ovtest::read_text(d / "cmp.out.err");
   EXPECT_NE(ovtest::read_text(d / "cmp.out.err").find("every mode takes its tracks of " + std::to_string(tracked)),
             std::string::npos)
@@ -92,15 +92,15 @@ TEST(SearchImages, ReusedTracksAndImagesGiveTheByteIdenticalTrajectory) {
   EXPECT_TRUE(ovtest::read_text(cmp + "/traj_off.csv") == ovtest::read_text(d / "off.csv"))
       << "compare's off differs from run's";
 
-  if (!ov_core::rosbag_supported())
+  if (!ovton::core::rosbag_supported())
     return;
   const std::string bag = d / "moving.bag";
-  ASSERT_EQ(ovton("export -q --dataset " + folder + " --bag " + bag, d / "export.out"), 0)
+  ASSERT_EQ(run_ovton("export -q --dataset " + folder + " --bag " + bag, d / "export.out"), 0)
       << ovtest::read_text(d / "export.out.err");
   const std::string out = d / "bag.out";
-  ASSERT_EQ(ovton("run -q -c " + cfg + " --init groundtruth -m sr -d " + bag + " --calib " + folder + " -o " +
-                      (d / "bag.csv"),
-                  out),
+  ASSERT_EQ(run_ovton("run -q -c " + cfg + " --init groundtruth -m sr -d " + bag + " --calib " + folder + " -o " +
+                          (d / "bag.csv"),
+                      out),
             0)
       << ovtest::read_text(out + ".err");
   EXPECT_EQ(reused(out), P(0, tracked));

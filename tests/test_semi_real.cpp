@@ -16,15 +16,15 @@
 #include <filesystem>
 
 TEST(SemiReal, DeclaresTheRealLogsNoiseNotTheDatasheet) {
-  ov_sim::SimOptions o;
+  ovton::sim::SimOptions o;
   o.imu_from = "any EuRoC folder";
-  const ov_core::ImuCalib fitted = ov_sim::declared_imu(o);
-  const ov_core::ImuCalib model = ov_sim::fitted_imu_noise(ov_sim::euroc_v1_01_imu_errors(), o.imu);
+  const ovton::core::ImuCalib fitted = ovton::sim::declared_imu(o);
+  const ovton::core::ImuCalib model = ovton::sim::fitted_imu_noise(ovton::sim::euroc_v1_01_imu_errors(), o.imu);
   EXPECT_DOUBLE_EQ(fitted.gyro_noise_density, model.gyro_noise_density);
   EXPECT_DOUBLE_EQ(fitted.accel_random_walk, model.accel_random_walk);
   EXPECT_GT(fitted.gyro_noise_density, 2 * o.imu.gyro_noise_density);
   o.declare_imu_errors = false; // --imu-declare datasheet
-  EXPECT_DOUBLE_EQ(ov_sim::declared_imu(o).gyro_noise_density, o.imu.gyro_noise_density);
+  EXPECT_DOUBLE_EQ(ovton::sim::declared_imu(o).gyro_noise_density, o.imu.gyro_noise_density);
 }
 
 TEST(SemiReal, SrIsConsistentOnTheRealCutsSpan) {
@@ -33,8 +33,8 @@ TEST(SemiReal, SrIsConsistentOnTheRealCutsSpan) {
   if (!std::filesystem::is_directory(cut))
     GTEST_SKIP() << "../shared/data/euroc_v1_01_moving not found";
   ovtest::TempDir dir;
-  ov_sim::SimOptions o;
-  ov_sim::apply_realism("euroc", o);
+  ovton::sim::SimOptions o;
+  ovton::sim::apply_realism("euroc", o);
   o.gt_file = cut + "/mav0/state_groundtruth_estimate0/data.csv";
   o.start_s = 11.9; // the real cut's span, as scripts/experiments/imu_realism.sh
   o.duration_s = 4.62;
@@ -42,22 +42,22 @@ TEST(SemiReal, SrIsConsistentOnTheRealCutsSpan) {
   o.td.td0_s = 0.010;
   o.imu_from = cut;
   o.out_dir = dir / "semi";
-  ov_sim::write_simulation(o);
+  ovton::sim::write_simulation(o);
 
-  const ov_core::Dataset d = ov_core::load_dataset(o.out_dir);
-  const ov_msckf_ton::VioOptions opt =
-      ov_msckf_ton::load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/sim/estimator_config.yaml");
-  ov_msckf_ton::VioManager vio(opt, d.cam, d.imu_calib);
+  const ovton::core::Dataset d = ovton::core::load_dataset(o.out_dir);
+  const ovton::msckf::VioOptions opt =
+      ovton::msckf::load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/sim/estimator_config.yaml");
+  ovton::msckf::VioManager vio(opt, d.cam, d.imu_calib);
   vio.set_groundtruth(d.groundtruth);
-  ov_eval::NeesAccumulator nees(d.groundtruth, d.td_truth);
-  std::vector<ov_core::StateSample> traj;
-  vio.set_state_callback([&](const ov_core::StateSample &s) {
+  ovton::eval::NeesAccumulator nees(d.groundtruth, d.td_truth);
+  std::vector<ovton::core::StateSample> traj;
+  vio.set_state_callback([&](const ovton::core::StateSample &s) {
     nees.add(s);
     traj.push_back(s);
   });
-  ov_core::Replay(d).run(vio);
+  ovton::core::Replay(d).run(vio);
   ASSERT_FALSE(traj.empty()) << "the filter produced no trajectory";
-  const ov_eval::EvalResult e = ov_eval::evaluate(traj, d.groundtruth, {}, ov_eval::EvalOptions{});
+  const ovton::eval::EvalResult e = ovton::eval::evaluate(traj, d.groundtruth, {}, ovton::eval::EvalOptions{});
   std::cout << "[ measured ] semi-real V1_01 span: NEES orientation " << nees.stats().ori() << ", position "
             << nees.stats().pos() << ", t_d " << nees.stats().td() << "; APE " << e.ape_rmse_m * 1e3 << " mm, ARE "
             << e.are_rmse_deg << " deg\n";

@@ -5,11 +5,11 @@
 
 #include <gtest/gtest.h>
 
-using namespace ov_core;
+using namespace ovton::core;
 
 namespace {
 CameraCalib equidistant_calib() {
-  CameraCalib c = ov_sim::euroc_cam0_calib();
+  CameraCalib c = ovton::sim::euroc_cam0_calib();
   c.distortion = DistortionModel::Equidistant;
   c.dist_coeffs << -0.01, 0.02, -0.005, 0.001;
   return c;
@@ -17,7 +17,7 @@ CameraCalib equidistant_calib() {
 } // namespace
 
 TEST(SimCameraModel, UndistortInvertsDistortAcrossTheImage) {
-  for (const CameraCalib &c : {ov_sim::euroc_cam0_calib(), equidistant_calib()}) {
+  for (const CameraCalib &c : {ovton::sim::euroc_cam0_calib(), equidistant_calib()}) {
     CameraModel cam(c);
     for (int v = 0; v < c.height; v += 37)
       for (int u = 0; u < c.width; u += 41) {
@@ -31,7 +31,7 @@ TEST(SimCameraModel, UndistortInvertsDistortAcrossTheImage) {
 }
 
 TEST(SimCameraModel, ProjectionJacobianMatchesFiniteDifferences) {
-  for (const CameraCalib &c : {ov_sim::euroc_cam0_calib(), equidistant_calib()}) {
+  for (const CameraCalib &c : {ovton::sim::euroc_cam0_calib(), equidistant_calib()}) {
     CameraModel cam(c);
     for (const Eigen::Vector3d &p :
          {Eigen::Vector3d(0.3, -0.2, 1.5), Eigen::Vector3d(-0.9, 0.5, 1.2), Eigen::Vector3d(0.01, 0.02, 3.0)}) {
@@ -53,7 +53,7 @@ TEST(SimCameraModel, ProjectionJacobianMatchesFiniteDifferences) {
 }
 
 TEST(SimCameraModel, PointsBehindTheCameraDoNotProject) {
-  CameraModel cam(ov_sim::euroc_cam0_calib());
+  CameraModel cam(ovton::sim::euroc_cam0_calib());
   Eigen::Vector2d uv(-7, -7);
   EXPECT_FALSE(cam.project(Eigen::Vector3d(0.1, 0.1, -1.0), uv));
   EXPECT_EQ(uv, Eigen::Vector2d(-7, -7));

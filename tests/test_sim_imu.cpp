@@ -8,8 +8,8 @@
 
 #include <cmath>
 
-using namespace ov_core;
-using namespace ov_sim;
+using namespace ovton::core;
+using namespace ovton::sim;
 
 namespace {
 

@@ -16,13 +16,13 @@
 
 #include <Eigen/Geometry>
 
-using namespace ov_sim;
+using namespace ovton::sim;
 
 namespace {
 
 /// Ground truth of the built-in flight at 200 Hz (pose, velocity), as a reader would return it.
-std::vector<ov_core::StateSample> builtin_truth(const Trajectory &traj) {
-  std::vector<ov_core::StateSample> gt;
+std::vector<ovton::core::StateSample> builtin_truth(const Trajectory &traj) {
+  std::vector<ovton::core::StateSample> gt;
   for (int64_t t = traj.t_begin_ns(); t <= traj.t_end_ns(); t += 5000000)
     gt.push_back(to_state_sample(traj.sample(t), t));
   return gt;
@@ -57,7 +57,7 @@ TEST(SimImuMatch, FindsAPlantedGroundTruthShiftAndRotationAndTheGyroScale) {
   const ImuSynthResult imu = synthesize_imu(traj, io);
   // The ground truth is stamped 4 ms late and its body frame is rotated by 0.5 deg against the IMU's axes.
   const Eigen::Matrix3d R_BI = Eigen::AngleAxisd(0.5 * M_PI / 180, Eigen::Vector3d(1, 2, 3).normalized()).matrix();
-  std::vector<ov_core::StateSample> gt = builtin_truth(traj);
+  std::vector<ovton::core::StateSample> gt = builtin_truth(traj);
   for (auto &s : gt) {
     s.t_ns += 4000000;
     s.q_WB = Eigen::Quaterniond(s.q_WB.toRotationMatrix() * R_BI);
@@ -80,16 +80,16 @@ TEST(SimGtAlignment, MovesAPlantedReferenceBackOntoTheImu) {
   // 0.6 deg, its world tilted by (0.1, -0.15) deg and its origin 45 mm from the IMU's (a marker's pose file).
   const LissajousTrajectory traj(60.0, LissajousTrajectory::kDefaultBeginNs, 1.0);
   const ImuSynthResult imu = synthesize_imu(traj, noise_free_imu());
-  const std::vector<ov_core::StateSample> truth = builtin_truth(traj);
-  const Eigen::Matrix3d R_IB = ov_core::so3_exp(Eigen::Vector3d(0.004, -0.006, 0.007)); // w_I = R_IB w_B
+  const std::vector<ovton::core::StateSample> truth = builtin_truth(traj);
+  const Eigen::Matrix3d R_IB = ovton::core::so3_exp(Eigen::Vector3d(0.004, -0.006, 0.007)); // w_I = R_IB w_B
   const Eigen::Vector2d tilt(0.1 * M_PI / 180, -0.15 * M_PI / 180);
-  const Eigen::Matrix3d R_WW1 = ov_core::so3_exp(Eigen::Vector3d(tilt.x(), tilt.y(), 0.0)); // IMU world -> ref's
+  const Eigen::Matrix3d R_WW1 = ovton::core::so3_exp(Eigen::Vector3d(tilt.x(), tilt.y(), 0.0)); // IMU world -> ref's
   const Eigen::Vector3d lever(0.002, -0.042, 0.006);
-  std::vector<ov_core::StateSample> ref, truth_20hz;
+  std::vector<ovton::core::StateSample> ref, truth_20hz;
   for (size_t i = 0; i < truth.size(); ++i) {
-    const ov_core::StateSample &s = truth[i];
+    const ovton::core::StateSample &s = truth[i];
     const Eigen::Matrix3d R_W1I = s.q_WB.toRotationMatrix();
-    ov_core::StateSample r;
+    ovton::core::StateSample r;
     r.t_ns = s.t_ns + 3000000;
     r.p = R_WW1 * (s.p - R_W1I * lever);
     r.q_WB = Eigen::Quaterniond(R_WW1 * R_W1I * R_IB);
@@ -100,15 +100,15 @@ TEST(SimGtAlignment, MovesAPlantedReferenceBackOntoTheImu) {
   const GtAlignment a = align_gt_to_imu(imu.imu, ref, truth_20hz, 0.1);
   std::cout << "[ measured ] " << describe_gt_alignment(a) << "\n";
   EXPECT_NEAR(a.shift_s, 0.003, 0.0005);
-  EXPECT_LT((ov_core::so3_exp(a.rotation) * R_IB.transpose() - Eigen::Matrix3d::Identity()).norm(), 2e-4);
+  EXPECT_LT((ovton::core::so3_exp(a.rotation) * R_IB.transpose() - Eigen::Matrix3d::Identity()).norm(), 2e-4);
   EXPECT_LT((a.tilt - tilt).norm(), 2e-4);
   ASSERT_TRUE(a.lever_fitted);
   EXPECT_LT((a.lever_I - lever).norm(), 0.002);
   // Moved back, the reference is the truth (compared where the 3-ms shift leaves both defined).
-  const std::vector<ov_core::StateSample> back = apply_gt_alignment(ref, a);
+  const std::vector<ovton::core::StateSample> back = apply_gt_alignment(ref, a);
   double worst_p = 0.0, worst_deg = 0.0;
   for (size_t i = 1; i + 1 < truth.size(); i += 37) {
-    const ov_core::StateSample &s = truth[i], &b = back[i];
+    const ovton::core::StateSample &s = truth[i], &b = back[i];
     ASSERT_LT(std::abs(b.t_ns - s.t_ns), 600000);
     worst_p = std::max(worst_p, (b.p - s.p).norm());
     worst_deg = std::max(worst_deg, Eigen::AngleAxisd(b.q_WB.inverse() * s.q_WB).angle() * 180 / M_PI);
@@ -124,39 +124,40 @@ TEST(SimGtAlignment, BlendKeepsTheEstimatesSlowMotionAndThePoseFilesFastMotion) 
   // motion); the "pose file" is it at 200 Hz with a 0.6-deg wander at 0.15 Hz, a constant 3-deg body rotation and a
   // 30-mm offset (what a pose file does against the estimate). Blended at 1.5 Hz, each one's error goes.
   const LissajousTrajectory traj(30.0, LissajousTrajectory::kDefaultBeginNs, 2.0);
-  std::vector<ov_core::StateSample> truth = builtin_truth(traj);
+  std::vector<ovton::core::StateSample> truth = builtin_truth(traj);
   for (auto &s : truth) { // the airframe's fast motion: 0.3 deg and 1 mm at 6 Hz
-    const double ph = 2 * M_PI * 6.0 * ov_core::ns_to_s(s.t_ns - truth.front().t_ns);
-    s.q_WB = Eigen::Quaterniond(s.q_WB.toRotationMatrix() *
-                                ov_core::so3_exp(0.3 * M_PI / 180 * Eigen::Vector3d(std::sin(ph), 0.0, std::cos(ph))));
+    const double ph = 2 * M_PI * 6.0 * ovton::core::ns_to_s(s.t_ns - truth.front().t_ns);
+    s.q_WB =
+        Eigen::Quaterniond(s.q_WB.toRotationMatrix() *
+                           ovton::core::so3_exp(0.3 * M_PI / 180 * Eigen::Vector3d(std::sin(ph), 0.0, std::cos(ph))));
     s.p += 0.001 * Eigen::Vector3d(0.0, std::sin(ph), 0.0);
   }
-  std::vector<ov_core::StateSample> estimate, pose_file;
-  const Eigen::Matrix3d B = ov_core::so3_exp(Eigen::Vector3d(0.03, -0.04, 0.02));
+  std::vector<ovton::core::StateSample> estimate, pose_file;
+  const Eigen::Matrix3d B = ovton::core::so3_exp(Eigen::Vector3d(0.03, -0.04, 0.02));
   for (size_t i = 0; i < truth.size(); ++i) {
     if (i % 10 == 0)
       estimate.push_back(truth[i]);
-    ov_core::StateSample f = truth[i];
-    const double tau = ov_core::ns_to_s(f.t_ns - truth.front().t_ns);
+    ovton::core::StateSample f = truth[i];
+    const double tau = ovton::core::ns_to_s(f.t_ns - truth.front().t_ns);
     const Eigen::Vector3d wander = 0.6 * M_PI / 180 * std::sin(2 * M_PI * 0.15 * tau) * Eigen::Vector3d(0.6, 0.0, 0.8);
-    f.q_WB = Eigen::Quaterniond(f.q_WB.toRotationMatrix() * B * ov_core::so3_exp(wander));
+    f.q_WB = Eigen::Quaterniond(f.q_WB.toRotationMatrix() * B * ovton::core::so3_exp(wander));
     f.p += Eigen::Vector3d(0.03, 0.0, 0.0);
     pose_file.push_back(f);
   }
-  const std::vector<ov_core::StateSample> blended = blend_gt(estimate, pose_file, 1.5, 0.1);
+  const std::vector<ovton::core::StateSample> blended = blend_gt(estimate, pose_file, 1.5, 0.1);
   const SplineTrajectory slow(estimate, estimate.front().t_ns, estimate.back().t_ns, 0.1);
   double e_blend = 0.0, e_slow = 0.0, e_file = 0.0, ep_blend = 0.0;
   int n = 0;
   for (size_t i = 0; i < blended.size(); ++i) {
-    const ov_core::StateSample &b = blended[i];
+    const ovton::core::StateSample &b = blended[i];
     const auto it = std::lower_bound(truth.begin(), truth.end(), b.t_ns,
-                                     [](const ov_core::StateSample &s, int64_t t) { return s.t_ns < t; });
-    if (it == truth.end() || it->t_ns != b.t_ns || b.t_ns - truth.front().t_ns < ov_core::s_to_ns(1.0) ||
-        truth.back().t_ns - b.t_ns < ov_core::s_to_ns(1.0))
+                                     [](const ovton::core::StateSample &s, int64_t t) { return s.t_ns < t; });
+    if (it == truth.end() || it->t_ns != b.t_ns || b.t_ns - truth.front().t_ns < ovton::core::s_to_ns(1.0) ||
+        truth.back().t_ns - b.t_ns < ovton::core::s_to_ns(1.0))
       continue; // the ends: the low pass's kernel is cut there
     const Eigen::Matrix3d R = it->q_WB.toRotationMatrix();
     const auto deg = [&](const Eigen::Matrix3d &E) {
-      return std::pow(ov_core::so3_log(R.transpose() * E).norm() * 180 / M_PI, 2);
+      return std::pow(ovton::core::so3_log(R.transpose() * E).norm() * 180 / M_PI, 2);
     };
     e_blend += deg(b.q_WB.toRotationMatrix());
     e_slow += deg(slow.sample(b.t_ns).q_WB.toRotationMatrix());
@@ -184,10 +185,10 @@ TEST(SimGtAlignment, EurocsPoseFileMovedOntoTheRealV101ImuAgreesWithIt) {
   const std::string txt = ovtest::shared_data() + "/euroc_groundtruth/V1_01_easy.txt";
   if (!std::filesystem::is_directory(cut) || !std::filesystem::exists(txt))
     GTEST_SKIP() << cut << " or " << txt << " not found";
-  ov_core::LoadOptions lo;
+  ovton::core::LoadOptions lo;
   lo.check_images_exist = false;
-  const ov_core::Dataset d = ov_core::load_dataset(cut, lo);
-  const std::vector<ov_core::StateSample> ref = ov_core::read_trajectory(txt);
+  const ovton::core::Dataset d = ovton::core::load_dataset(cut, lo);
+  const std::vector<ovton::core::StateSample> ref = ovton::core::read_trajectory(txt);
   const GtAlignment a = align_gt_to_imu(d.imu, ref, d.groundtruth, 0.05);
   std::cout << "[ measured ] " << describe_gt_alignment(a) << "\n";
   ASSERT_TRUE(a.lever_fitted);
@@ -210,7 +211,7 @@ TEST(SimGtAlignment, EurocsPoseFileMovedOntoTheRealV101ImuAgreesWithIt) {
   o.start_s = 11.0;
   o.duration_s = 3.0;
   const auto traj = make_trajectory(o);
-  EXPECT_NEAR(ov_core::ns_to_s(traj->t_begin_ns() - ref.front().t_ns), 11.0 - a.shift_s, 1e-6);
+  EXPECT_NEAR(ovton::core::ns_to_s(traj->t_begin_ns() - ref.front().t_ns), 11.0 - a.shift_s, 1e-6);
   const SplineTrajectory est(d.groundtruth, traj->t_begin_ns(), traj->t_end_ns(), 0.1);
   double worst_p = 0.0, worst_deg = 0.0;
   for (int64_t t = traj->t_begin_ns() + 500000000; t < traj->t_end_ns() - 500000000; t += 50000000) {
@@ -262,9 +263,9 @@ TEST(SimImuErrors, RealV101LogAgreesWithEurocsBiasesAndWithThePreset) {
   const std::string cut = ovtest::shared_data() + "/euroc_v1_01_moving";
   if (!std::filesystem::is_directory(cut))
     GTEST_SKIP() << cut << " not found";
-  ov_core::LoadOptions lo;
+  ovton::core::LoadOptions lo;
   lo.check_images_exist = false;
-  const ov_core::Dataset d = ov_core::load_dataset(cut, lo);
+  const ovton::core::Dataset d = ovton::core::load_dataset(cut, lo);
   const ImuMatchReport r = match_imu(d.imu, d.groundtruth);
   std::cout << imu_match_yaml(r);
   // EuRoC's ground truth carries its own gyro bias estimate: (-0.00225, 0.0215, 0.0770) rad/s at the start.
@@ -333,10 +334,10 @@ TEST(SimImuErrors, DeclaredNoiseIsTheAllanFitOfWhatTheLogCarries) {
   //    log's curve (it dips near 2 s and rises again: the wander's flat spectrum below 0.2 Hz), so the check is the
   //    fit's own property - declared/log balanced around 1 over the averaging times a filter spans (a frame to a
   //    run: the geometric mean of the ratio within 15 % of 1) - and its worst ratios, as measured (0.40-2.39).
-  const ov_core::ImuCalib none = fitted_imu_noise(ImuErrorModel{}, io.calib);
+  const ovton::core::ImuCalib none = fitted_imu_noise(ImuErrorModel{}, io.calib);
   EXPECT_NEAR(none.gyro_noise_density / io.calib.gyro_noise_density, 1.0, 0.03);
   EXPECT_NEAR(none.accel_random_walk / io.calib.accel_random_walk, 1.0, 0.03);
-  const ov_core::ImuCalib fit = fitted_imu_noise(m, io.calib);
+  const ovton::core::ImuCalib fit = fitted_imu_noise(m, io.calib);
   std::cout << "[ measured ] declared: gyro " << fit.gyro_noise_density << " rad/s/sqrt(Hz), walk "
             << fit.gyro_random_walk << "; accel " << fit.accel_noise_density << ", walk " << fit.accel_random_walk
             << "\n";
@@ -380,5 +381,5 @@ TEST(SimImuErrors, DroppedPartsLeaveTheRestOfTheModel) {
   drop_imu_error_parts(m, "turn-on,mid,vibration");
   EXPECT_TRUE(m.gyro_bias0.isZero() && m.accel_bias0.isZero());
   EXPECT_TRUE(m.flight_spectrum.empty());
-  EXPECT_THROW(drop_imu_error_parts(m, "scale,wobble"), ov_core::UsageError);
+  EXPECT_THROW(drop_imu_error_parts(m, "scale,wobble"), ovton::core::UsageError);
 }

@@ -18,8 +18,8 @@
 #include <iostream>
 #include <map>
 
-using namespace ov_core;
-using namespace ov_sim;
+using namespace ovton::core;
+using namespace ovton::sim;
 using ovtest::median;
 
 namespace {

@@ -17,8 +17,8 @@
 #include <fstream>
 #include <opencv2/imgproc.hpp>
 
-using namespace ov_core;
-using namespace ov_sim;
+using namespace ovton::core;
+using namespace ovton::sim;
 
 namespace {
 
@@ -180,7 +180,7 @@ TEST(SimRealism, RoomTextureIsMostlyPlainBlotchesAreNot) {
       cv::Mat acc(cam.height(), cam.width(), CV_32F, cv::Scalar(0)), img;
       rend.accumulate(frame_pose(*traj, o, traj->t_begin_ns() + k * 200000000LL), 1.0f, acc);
       acc.convertTo(img, CV_8U);
-      sum += ov_eval::gradient_stats(img).low_share;
+      sum += ovton::eval::gradient_stats(img).low_share;
     }
     share[style] = sum / 4;
   }

@@ -12,8 +12,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
-using namespace ov_core;
-using namespace ov_sim;
+using namespace ovton::core;
+using namespace ovton::sim;
 
 using ovtest::dark_centroid;
 using ovtest::median;

@@ -16,8 +16,8 @@
 #include <set>
 #include <sstream>
 
-using namespace ov_core;
-using namespace ov_sim;
+using namespace ovton::core;
+using namespace ovton::sim;
 namespace fs = std::filesystem;
 
 namespace {

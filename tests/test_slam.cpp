@@ -15,7 +15,7 @@
 
 #include <random>
 
-using namespace ov_msckf_ton;
+using namespace ovton::msckf;
 
 namespace {
 
@@ -23,7 +23,7 @@ constexpr int64_t kT0 = 1403636579763555584;
 
 /// A state with `n` clones along a short arc looking at the origin region, and t_d in the state.
 struct SlamScene {
-  ov_core::CameraCalib calib = ov_sim::euroc_cam0_calib();
+  ovton::core::CameraCalib calib = ovton::sim::euroc_cam0_calib();
   Eigen::Matrix3d R_BC = calib.T_BC.topLeftCorner<3, 3>();
   Eigen::Vector3d p_BC = calib.T_BC.topRightCorner<3, 1>();
   State state{true};
@@ -33,7 +33,7 @@ struct SlamScene {
     for (int k = 0; k < n; ++k) {
       const double a = 0.05 * k;
       // Body x forward-ish; the camera (R_BC) then looks roughly along world +x.
-      state.imu.R = ov_core::so3_exp(Eigen::Vector3d(0.02 * k, -0.01 * k, 0.03 * k)) *
+      state.imu.R = ovton::core::so3_exp(Eigen::Vector3d(0.02 * k, -0.01 * k, 0.03 * k)) *
                     (Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished() * R_BC.transpose();
       state.imu.p = Eigen::Vector3d(-3.0 + 0.1 * std::sin(a), 0.3 * a, 0.1 * a);
       state.t_imu_ns = kT0 + 50000000LL * k;
@@ -45,16 +45,16 @@ struct SlamScene {
   }
 };
 
-ov_core::Feature feature_of(const SlamScene &sc, const Eigen::Vector3d &p_W, double noise, std::mt19937 &rng) {
+ovton::core::Feature feature_of(const SlamScene &sc, const Eigen::Vector3d &p_W, double noise, std::mt19937 &rng) {
   std::normal_distribution<double> n(0, noise);
-  ov_core::CameraModel cam(sc.calib);
-  ov_core::Feature f;
+  ovton::core::CameraModel cam(sc.calib);
+  ovton::core::Feature f;
   f.id = 7;
   for (const auto &[t, c] : sc.state.clones) {
     Eigen::Vector2d xy;
     EXPECT_TRUE(sc.project(c, p_W, xy));
     // Noise where the tracker makes it: in distorted pixels.
-    ov_core::FeatureObservation o;
+    ovton::core::FeatureObservation o;
     o.t_cam_ns = t;
     o.uv = cam.distort(xy) + Eigen::Vector2d(n(rng), n(rng));
     o.xy = cam.undistort(o.uv);
@@ -92,7 +92,7 @@ double landmark_nees_with_correlated_errors(double rho_true, double rho_model, d
     sc.state.P *= 1e-8; // the clones are the truth: only the pixel noise is uncertain
     if (rho_report > 0)
       sc.state.start_report();
-    ov_core::CameraModel cam(sc.calib);
+    ovton::core::CameraModel cam(sc.calib);
     const std::vector<Eigen::Vector2d> e = ar1_errors(n, 1.0, rho_true, rng);
     std::vector<std::pair<int64_t, Eigen::Vector2d>> uv;
     for (const auto &[t_ns, c] : sc.state.clones) {
@@ -108,7 +108,7 @@ double landmark_nees_with_correlated_errors(double rho_true, double rho_model, d
     so.chi2_multiplier = 100;
     so.track_correlation = rho_model;
     UpdaterSLAM slam(sc.calib, so, msckf);
-    ov_core::FeatureDatabase db;
+    ovton::core::FeatureDatabase db;
     for (int k = 0; k < init; ++k)
       db.add_observation(7, uv[k].first, uv[k].second, cam.undistort(uv[k].second));
     SlamStats st;
@@ -165,7 +165,7 @@ TEST(SlamJacobians, LandmarkMeasurementMatchesFiniteDifferences) {
   SlamScene sc(4);
   const Eigen::Vector3d p_f(0.4, -0.3, 0.2);
   std::mt19937 rng(1);
-  const ov_core::Feature f = feature_of(sc, p_f, 0.5, rng);
+  const ovton::core::Feature f = feature_of(sc, p_f, 0.5, rng);
   LandmarkState l;
   l.p_W = l.p_fej = p_f + Eigen::Vector3d(0.01, -0.02, 0.015);
   l.index = sc.state.add_variable(Eigen::Matrix3d::Identity() * 1e-4);
@@ -185,7 +185,7 @@ TEST(SlamJacobians, LandmarkMeasurementMatchesFiniteDifferences) {
   const auto residual = [&](const Eigen::Matrix<double, 10, 1> &d) {
     State s = sc.state;
     CloneState &cc = s.clones.rbegin()->second;
-    cc.R = ov_core::so3_exp(d.segment<3>(0)) * cc.R;
+    cc.R = ovton::core::so3_exp(d.segment<3>(0)) * cc.R;
     cc.p += d.segment<3>(3);
     LandmarkState &ll = s.landmarks.at(l.id);
     ll.p_W += d.segment<3>(6);
@@ -205,9 +205,9 @@ TEST(SlamJacobians, LandmarkMeasurementMatchesFiniteDifferences) {
 
 /// A body turning and moving, a camera on it and a point in front: the predicted image velocity's test case.
 struct MovingCamera {
-  Eigen::Matrix3d R_WB = ov_core::so3_exp(Eigen::Vector3d(0.2, -0.4, 1.1));
+  Eigen::Matrix3d R_WB = ovton::core::so3_exp(Eigen::Vector3d(0.2, -0.4, 1.1));
   Eigen::Vector3d p_WB{0.3, -0.2, 1.0}, p_W{2.5, 0.8, 1.4};
-  Eigen::Matrix3d R_BC = ov_core::so3_exp(Eigen::Vector3d(-1.2, 0.1, -1.5));
+  Eigen::Matrix3d R_BC = ovton::core::so3_exp(Eigen::Vector3d(-1.2, 0.1, -1.5));
   Eigen::Vector3d p_BC{0.05, -0.02, 0.01};
   BodyMotion m{Eigen::Vector3d(0.7, -1.3, 0.4), Eigen::Vector3d(-0.6, 0.9, 0.3)};
 };
@@ -221,7 +221,8 @@ TEST(SlamJacobians, PredictedImageVelocityIsTheProjectionsTimeDerivative) {
   const BodyMotion &m = mc.m;
   auto z_at = [&](const Eigen::Matrix<double, 1, 1> &t) {
     Eigen::Vector2d z;
-    const bool ok = project_in_clone(R_WB * ov_core::so3_exp(m.w_B * t(0)), p_WB + m.v_W * t(0), R_BC, p_BC, p_W, z);
+    const bool ok =
+        project_in_clone(R_WB * ovton::core::so3_exp(m.w_B * t(0)), p_WB + m.v_W * t(0), R_BC, p_BC, p_W, z);
     EXPECT_TRUE(ok);
     return z;
   };
@@ -242,8 +243,8 @@ TEST(SlamJacobians, PredictedImageVelocityJacobiansMatchFiniteDifferences) {
   const BodyMotion &m = mc.m;
   const auto vel_at = [&](const Eigen::Matrix<double, 15, 1> &d) {
     Eigen::Vector2d v;
-    EXPECT_TRUE(predicted_image_velocity(ov_core::so3_exp(d.segment<3>(0)) * R_WB, p_WB + d.segment<3>(3),
-                                         ov_core::so3_exp(d.segment<3>(9)) * R_BC, p_BC + d.segment<3>(12),
+    EXPECT_TRUE(predicted_image_velocity(ovton::core::so3_exp(d.segment<3>(0)) * R_WB, p_WB + d.segment<3>(3),
+                                         ovton::core::so3_exp(d.segment<3>(9)) * R_BC, p_BC + d.segment<3>(12),
                                          p_W + d.segment<3>(6), m, v));
     return v;
   };
@@ -268,7 +269,7 @@ TEST(SlamInit, DelayedInitialisationIsConsistentOverMonteCarloTrials) {
   for (int t = 0; t < 300; ++t) {
     SlamScene sc(8);
     sc.state.P *= 1e-8; // the clones are the truth: only the pixel noise is uncertain
-    const ov_core::Feature f = feature_of(sc, p_true, 1.0, rng);
+    const ovton::core::Feature f = feature_of(sc, p_true, 1.0, rng);
     UpdaterMSCKFOptions mo;
     mo.chi2_multiplier = 100; // this test is about the covariance, not the gate
     UpdaterMSCKF msckf(sc.calib, mo);
@@ -294,15 +295,15 @@ TEST(SlamInit, DelayedInitialisationIsConsistentOverMonteCarloTrials) {
 
 TEST(SlamRun, LandmarksEnterLeaveAndKeepTheFilterConsistent) {
   ovtest::TempDir tmp;
-  const ov_core::Dataset data = ovtest::feature_flight(tmp / "sim", 10.0, 4, 0.5);
+  const ovton::core::Dataset data = ovtest::feature_flight(tmp / "sim", 10.0, 4, 0.5);
   VioOptions opt = ovtest::gt_run_options(TdMode::Sr, 0.5);
   opt.slam.max_features = 50;
   VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);
   size_t max_landmarks = 0;
   vio.set_state_callback(
-      [&](const ov_core::StateSample &) { max_landmarks = std::max(max_landmarks, vio.state().landmarks.size()); });
-  ov_core::Replay(data).run(vio);
+      [&](const ovton::core::StateSample &) { max_landmarks = std::max(max_landmarks, vio.state().landmarks.size()); });
+  ovton::core::Replay(data).run(vio);
   const VioCounters &c = vio.counters();
   std::cout << "[slam run] " << c.slam_initialised << " landmarks initialised, " << c.slam_updates
             << " observations used, " << c.slam_gated << " gated; at most " << max_landmarks << " in the state\n";

@@ -13,13 +13,13 @@
 #include <cmath>
 #include <iostream>
 
-using namespace ov_msckf_ton;
+using namespace ovton::msckf;
 using namespace updtest;
 
 namespace {
 
 /// Σ W_j·xy_j of a stencil.
-Eigen::Vector2d apply(const VelocityStencil &s, const ov_core::Feature &f) {
+Eigen::Vector2d apply(const VelocityStencil &s, const ovton::core::Feature &f) {
   Eigen::Vector2d v = Eigen::Vector2d::Zero();
   for (const auto &[i, w] : s.terms)
     v += w * f.obs[i].xy;
@@ -42,9 +42,9 @@ struct MeanSe {
 
 TEST(TdDebias, StencilsReproduceTheVelocities) {
   const Scene sc = make_scene(6, 3, 2.0, 0.0, 3);
-  ov_core::FeatureDatabase db;
+  ovton::core::FeatureDatabase db;
   observe(sc, db, 0.5, 4);
-  const ov_core::Feature &f = *db.get(1);
+  const ovton::core::Feature &f = *db.get(1);
   const VelocityProvider backward;
   const CentralVelocityProvider central;
   const NextForFirstVelocityProvider next_backward(backward), next_central(central);
@@ -84,9 +84,9 @@ TEST(TdDebias, PredictedSpuriousCorrelationMatchesMonteCarlo) {
        {static_cast<const VelocityProvider *>(&next_backward), static_cast<const VelocityProvider *>(&next_central)}) {
     MeanSe emp, pred;
     for (int draw = 0; draw < 3000; ++draw) {
-      ov_core::FeatureDatabase db;
+      ovton::core::FeatureDatabase db;
       observe(sc, db, sigma, 1000 + draw);
-      const ov_core::Feature &f = *db.get(0);
+      const ovton::core::Feature &f = *db.get(0);
       FeatureLinearization lin;
       ASSERT_TRUE(up.linearize(s, f, sc.points[0], TdObservation::ImagePlane, *vp, lin));
       const UpdaterMSCKF::FeatureQR qr(lin.H_f);
@@ -121,7 +121,7 @@ TEST(TdDebias, CorrectedUpdatesLeaveTdUnbiased) {
     MeanSe dtd;
     double sigma_after = 0.0;
     for (int draw = 0; draw < 300; ++draw) {
-      ov_core::FeatureDatabase db;
+      ovton::core::FeatureDatabase db;
       observe(sc, db, 1.0, 5000 + draw);
       State s = make_state(sc, 0.0, 0.002, 0.004, 0.005);
       const UpdateStats st = up.update(s, all_features(db), TdObservation::ImagePlane, vp);
@@ -145,7 +145,7 @@ TEST(TdDebias, CorrectedUpdatesLeaveTdUnbiased) {
 TEST(TdDebias, ItsPredictionStencilIsItsDerivative) {
   const Scene sc = make_scene(12, 40, 2.5, 0.0, 41);
   ASSERT_GE(sc.points.size(), 30u);
-  ov_core::FeatureDatabase db;
+  ovton::core::FeatureDatabase db;
   std::mt19937 rng(9);
   std::normal_distribution<double> n(0.0, 0.3);
   // Points 0-19 seen throughout (their first observations dropped below, so they are "well tracked": ITS's
@@ -173,7 +173,7 @@ TEST(TdDebias, ItsPredictionStencilIsItsDerivative) {
   const double focal = 0.5 * (sc.calib.intrinsics(0) + sc.calib.intrinsics(1));
   int checked = 0;
   for (size_t id = 20; id < 30; ++id) {
-    const ov_core::Feature &f = *db.get(id);
+    const ovton::core::Feature &f = *db.get(id);
     Eigen::Vector2d v;
     int src = kVelocityNone;
     if (!fvon.velocity(f, 0, v, src) || src != kVelocityItsFvon)

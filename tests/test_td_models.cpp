@@ -12,7 +12,7 @@
 #include <iostream>
 #include <random>
 
-using namespace ov_msckf_ton;
+using namespace ovton::msckf;
 
 namespace {
 
@@ -74,7 +74,7 @@ TEST(TdModels, EachModelPutsTdWhereItsPropagationEnds) {
   s.td_rate = 2e-4;
   const int64_t t_cam = 1050000000;
   const double td_end = drift->td_at_image(s, t_cam, 1000000000);
-  const double dt = ov_core::ns_to_s(t_cam - s.t_imu_ns) + td_end;
+  const double dt = ovton::core::ns_to_s(t_cam - s.t_imu_ns) + td_end;
   EXPECT_NEAR(td_end, s.td + s.td_rate * dt, 1e-15);
   drift->propagate(s, td_end, dt);
   EXPECT_NEAR(s.td, td_end, 1e-15);
@@ -92,7 +92,7 @@ TEST(TdModels, EachModelPutsTdWhereItsPropagationEnds) {
   rw->propagate(r, r.td, 0.05);
   EXPECT_NEAR(r.td_variance() - v0, 1e-6 * 0.05, 1e-18);
   // Oracle needs the truth and reads it.
-  EXPECT_THROW(make_td_model(with_process(TdMode::Oracle, TdProcess::Auto)), ov_core::UsageError);
+  EXPECT_THROW(make_td_model(with_process(TdMode::Oracle, TdProcess::Auto)), ovton::core::UsageError);
   auto oracle = make_td_model(with_process(TdMode::Oracle, TdProcess::Auto), [](int64_t t) { return 1e-12 * t; });
   EXPECT_DOUBLE_EQ(oracle->td_at_image(r, 5000000000, -1), 5e-3);
 }
@@ -297,26 +297,26 @@ TEST(TdModels, NoiseAdapterConvergesToTheTrueRandomWalk) {
 TEST(Nees, SamplesDrawnFromTheCovarianceAverageTheirDimension) {
   std::mt19937 rng(11);
   std::normal_distribution<double> n(0, 1);
-  std::vector<ov_core::StateSample> gt(2);
+  std::vector<ovton::core::StateSample> gt(2);
   gt[0].t_ns = 0;
   gt[1].t_ns = 2000000000;
   gt[1].p = Eigen::Vector3d(1, 0, 0);
-  std::vector<ov_core::TdSample> td_truth = {{0, 0.01}, {2000000000, 0.01}};
-  ov_eval::NeesAccumulator acc(gt, td_truth);
+  std::vector<ovton::core::TdSample> td_truth = {{0, 0.01}, {2000000000, 0.01}};
+  ovton::eval::NeesAccumulator acc(gt, td_truth);
   Eigen::Matrix<double, 6, 6> A;
   for (int i = 0; i < 36; ++i)
     A(i / 6, i % 6) = 0.01 * n(rng);
   const Eigen::Matrix<double, 6, 6> P = A * A.transpose() + 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
   const Eigen::Matrix<double, 6, 6> L = P.llt().matrixL();
   for (int k = 0; k < 4000; ++k) {
-    ov_core::StateSample e;
+    ovton::core::StateSample e;
     e.t_ns = 1000000000;
     Eigen::Matrix<double, 6, 1> z;
     for (int i = 0; i < 6; ++i)
       z(i) = n(rng);
     const Eigen::Matrix<double, 6, 1> err = L * z; // truth = estimate + err
     e.p = Eigen::Vector3d(0.5, 0, 0) - err.tail<3>();
-    e.q_WB = Eigen::Quaterniond(ov_core::so3_exp(-err.head<3>()));
+    e.q_WB = Eigen::Quaterniond(ovton::core::so3_exp(-err.head<3>()));
     e.P_pose = P;
     e.has_pose_cov = true;
     e.has_td = true;

@@ -12,7 +12,7 @@
 #include <iostream>
 #include <memory>
 
-using namespace ov_msckf_ton;
+using namespace ovton::msckf;
 
 namespace {
 
@@ -22,24 +22,24 @@ class TdSearchSim : public ::testing::Test {
 protected:
   static void SetUpTestSuite() {
     dir_ = std::make_unique<ovtest::TempDir>();
-    ov_sim::SimOptions o = ovtest::feature_sim((*dir_) / "sim", 12.0, 11);
+    ovton::sim::SimOptions o = ovtest::feature_sim((*dir_) / "sim", 12.0, 11);
     if (ovtest::have_shared_data()) {
       o.gt_file = ovtest::shared_data() + "/euroc_groundtruth/V1_02_medium.txt";
       o.start_s = 5.0;
     }
     o.td.td0_s = 0.010;
-    ov_sim::write_simulation(o);
-    data_ = std::make_unique<ov_core::Dataset>(ov_core::load_dataset(o.out_dir));
+    ovton::sim::write_simulation(o);
+    data_ = std::make_unique<ovton::core::Dataset>(ovton::core::load_dataset(o.out_dir));
   }
   static void TearDownTestSuite() {
     data_.reset();
     dir_.reset();
   }
   static std::unique_ptr<ovtest::TempDir> dir_;
-  static std::unique_ptr<ov_core::Dataset> data_;
+  static std::unique_ptr<ovton::core::Dataset> data_;
 };
 std::unique_ptr<ovtest::TempDir> TdSearchSim::dir_;
-std::unique_ptr<ov_core::Dataset> TdSearchSim::data_;
+std::unique_ptr<ovton::core::Dataset> TdSearchSim::data_;
 
 } // namespace
 
@@ -57,7 +57,7 @@ TEST_F(TdSearchSim, FindsTheOffsetFromPriorsUpTo150msAway) {
 }
 
 TEST_F(TdSearchSim, NoRotationChangeKeepsThePriorAndSaysWhy) {
-  std::vector<ov_core::ImuData> still = data_->imu;
+  std::vector<ovton::core::ImuData> still = data_->imu;
   for (auto &m : still)
     m.wm = Eigen::Vector3d(0.01, -0.02, 0.005); // a constant rate: nothing to line up in time
   const TdSearchResult r = search_td(data_->images, still, data_->cam, 0.05);
@@ -78,13 +78,13 @@ TEST_F(TdSearchSim, NoRotationChangeKeepsThePriorAndSaysWhy) {
 TEST(TdSearchBuiltin, AgileFlightInASmallRoomIsNotConfidentlyWrong) {
   for (const auto &[seed, imu_errors] : {std::pair{1u, false}, std::pair{3u, false}, std::pair{7u, true}}) {
     ovtest::TempDir dir;
-    ov_sim::SimOptions o = ovtest::feature_sim(dir / "sim", 10.0, seed);
+    ovton::sim::SimOptions o = ovtest::feature_sim(dir / "sim", 10.0, seed);
     o.agility = 1.0;
     o.td.td0_s = 0.010;
     if (imu_errors)
-      o.imu_errors = ov_sim::euroc_v1_01_imu_errors();
-    ov_sim::write_simulation(o);
-    const ov_core::Dataset data = ov_core::load_dataset(o.out_dir);
+      o.imu_errors = ovton::sim::euroc_v1_01_imu_errors();
+    ovton::sim::write_simulation(o);
+    const ovton::core::Dataset data = ovton::core::load_dataset(o.out_dir);
     const TdSearchResult r = search_td(data.images, data.imu, data.cam, 0.0);
     std::cout << "[td search, built-in agile flight, seed " << seed << (imu_errors ? ", EuRoC IMU errors" : "") << "] "
               << r.summary() << "\n";
@@ -99,11 +99,11 @@ TEST(TdSearchBuiltin, AgileFlightInASmallRoomIsNotConfidentlyWrong) {
 // does: the true offset becomes EuRoC's own (well under 1 ms, docs/robustness.md) plus the shift.
 TEST(TdSearchReal, MovingEurocImagesShifted100ms) {
   OVTEST_REQUIRE_SHARED_DATA();
-  const ov_core::Dataset real = ov_core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_moving");
+  const ovton::core::Dataset real = ovton::core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_moving");
   for (double shift : {0.100, -0.100}) {
-    std::vector<ov_core::ImageEntry> images = real.images;
+    std::vector<ovton::core::ImageEntry> images = real.images;
     for (auto &e : images)
-      e.t_cam_ns -= ov_core::s_to_ns(shift); // t_imu = t_cam + t_d
+      e.t_cam_ns -= ovton::core::s_to_ns(shift); // t_imu = t_cam + t_d
     const TdSearchResult r = search_td(images, real.imu, real.cam, 0.0);
     ASSERT_TRUE(r.found) << r.summary();
     EXPECT_NEAR(r.td_s, shift, 0.002) << r.summary();

@@ -11,7 +11,7 @@
 #include <iostream>
 #include <memory>
 
-using namespace ov_msckf_ton;
+using namespace ovton::msckf;
 
 namespace {
 
@@ -25,19 +25,19 @@ struct ModeRun {
   long tpn_clamped = 0;
 };
 
-ModeRun run_mode(const ov_core::Dataset &data, TdMode mode, const VioOptions &base = VioOptions()) {
+ModeRun run_mode(const ovton::core::Dataset &data, TdMode mode, const VioOptions &base = VioOptions()) {
   VioOptions opt = base;
   opt.td.mode = mode;
   opt.init.mode = InitMode::GroundTruth;
   VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);
   ModeRun r;
-  vio.set_state_callback([&](const ov_core::StateSample &s) {
+  vio.set_state_callback([&](const ovton::core::StateSample &s) {
     r.td_hat.push_back(s.td_s);
     const TpnDriver *t = vio.tpn();
     r.tpn_next.push_back(t && t->has_prediction() ? t->prediction() : std::nan(""));
   });
-  ov_core::Replay(data).run(vio);
+  ovton::core::Replay(data).run(vio);
   EXPECT_TRUE(vio.initialized()) << vio.init_message();
   EXPECT_EQ(vio.counters().images_before_init, 0);
   r.counters = vio.counters();
@@ -48,23 +48,23 @@ ModeRun run_mode(const ov_core::Dataset &data, TdMode mode, const VioOptions &ba
   return r;
 }
 
-std::unique_ptr<ov_core::Dataset> simulate(const ovtest::TempDir &dir, ov_sim::TdModelOptions td, double duration_s,
-                                           double pixel_noise = 1.0) {
-  ov_sim::SimOptions o;
+std::unique_ptr<ovton::core::Dataset> simulate(const ovtest::TempDir &dir, ovton::sim::TdModelOptions td,
+                                               double duration_s, double pixel_noise = 1.0) {
+  ovton::sim::SimOptions o;
   o.out_dir = dir / "sim";
   o.duration_s = duration_s;
   o.seed = 11;
   o.features_only = true;
   o.td = td;
   o.features.pixel_noise = pixel_noise;
-  ov_sim::write_simulation(o);
-  return std::make_unique<ov_core::Dataset>(ov_core::load_dataset(o.out_dir));
+  ovton::sim::write_simulation(o);
+  return std::make_unique<ovton::core::Dataset>(ovton::core::load_dataset(o.out_dir));
 }
 
 /// The 8 s, constant +10 ms simulation the FVON tests share.
-std::unique_ptr<ov_core::Dataset> simulate_constant_10ms(const ovtest::TempDir &dir) {
-  ov_sim::TdModelOptions td;
-  td.kind = ov_sim::TdModelKind::Constant;
+std::unique_ptr<ovton::core::Dataset> simulate_constant_10ms(const ovtest::TempDir &dir) {
+  ovton::sim::TdModelOptions td;
+  td.kind = ovton::sim::TdModelKind::Constant;
   td.td0_s = 0.010;
   return simulate(dir, td, 8.0);
 }
@@ -178,8 +178,8 @@ template <typename Ref> PredictionErrors prediction_errors(const ModeRun &r, Ref
 
 TEST(TonFilter, TpnOnNoiseFreeDrift) {
   ovtest::TempDir dir;
-  ov_sim::TdModelOptions td;
-  td.kind = ov_sim::TdModelKind::Drift;
+  ovton::sim::TdModelOptions td;
+  td.kind = ovton::sim::TdModelKind::Drift;
   td.td0_s = 0.010;
   td.bias_s_per_s = 1e-4;
   td.noise_s_per_sqrt_s = 0.0;
@@ -216,12 +216,12 @@ TEST(TonFilter, TpnOnNoiseFreeDrift) {
   // Table I's 1000 epochs per frame, as the filter uses by default (fast_networks() lowers them for speed).
   TpnDriver shadow{TpnDriverOptions()};
   ModeRun sir;
-  vio.set_state_callback([&](const ov_core::StateSample &st) {
+  vio.set_state_callback([&](const ovton::core::StateSample &st) {
     sir.td_hat.push_back(st.td_s);
     shadow.step(st.td_s);
     sir.tpn_next.push_back(shadow.has_prediction() ? shadow.prediction() : std::nan(""));
   });
-  ov_core::Replay(*data).run(vio);
+  ovton::core::Replay(*data).run(vio);
   const PredictionErrors open_est = prediction_errors(sir, [&](size_t k) { return sir.td_hat[k]; });
   const PredictionErrors open_truth = prediction_errors(sir, truth);
   std::cout << "[ton filter] TPN beside sir, " << open_est.n << " predictions: mean |t_d^TPN(K) - t_d(K)| "

@@ -16,7 +16,7 @@
 #include <limits>
 #include <random>
 
-using namespace ov_msckf_ton::ton;
+using namespace ovton::msckf::ton;
 
 namespace {
 

@@ -16,7 +16,7 @@
 #include <random>
 #include <vector>
 
-using namespace ov_msckf_ton::ton;
+using namespace ovton::msckf::ton;
 
 namespace {
 

@@ -19,7 +19,7 @@
 #include <map>
 #include <random>
 
-using namespace ov_core;
+using namespace ovton::core;
 
 namespace {
 

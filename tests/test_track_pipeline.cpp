@@ -17,7 +17,7 @@
 #include <memory>
 #include <stdexcept>
 
-using namespace ov_core;
+using namespace ovton::core;
 
 namespace {
 
@@ -25,11 +25,11 @@ namespace {
 const Dataset &flight() {
   static ovtest::TempDir dir;
   static const Dataset data = [] {
-    ov_sim::SimOptions o;
+    ovton::sim::SimOptions o;
     o.out_dir = dir / "sim";
     o.duration_s = 3.0;
     o.seed = 3;
-    ov_sim::write_simulation(o);
+    ovton::sim::write_simulation(o);
     return load_dataset(o.out_dir);
   }();
   return data;
@@ -192,12 +192,12 @@ TEST(TrackPipeline, StopsCleanlyWhenDroppedEarly) {
 // `ovton run` does), give the trajectory of a filter that decodes and tracks on its own thread.
 TEST(TrackPipeline, FilterGivesTheSameTrajectoryOnAnyThreads) {
   const Dataset &d = flight();
-  ov_msckf_ton::VioOptions opt;
-  opt.td.mode = ov_msckf_ton::TdMode::Sr;
-  opt.init.mode = ov_msckf_ton::InitMode::GroundTruth;
+  ovton::msckf::VioOptions opt;
+  opt.td.mode = ovton::msckf::TdMode::Sr;
+  opt.init.mode = ovton::msckf::InitMode::GroundTruth;
   enum Threads { kOne, kDecoding, kDecodingAndTracking };
   const auto run = [&](Threads threads) {
-    ov_msckf_ton::VioManager vio(opt, d.cam, d.imu_calib);
+    ovton::msckf::VioManager vio(opt, d.cam, d.imu_calib);
     vio.set_groundtruth(d.groundtruth);
     std::vector<StateSample> traj;
     vio.set_state_callback([&](const StateSample &s) { traj.push_back(s); });

@@ -6,8 +6,8 @@
 
 #include <opencv2/imgproc.hpp>
 
-using ov_eval::gradient_stats;
-using ov_eval::track_statistics;
+using ovton::eval::gradient_stats;
+using ovton::eval::track_statistics;
 
 namespace {
 
@@ -57,14 +57,14 @@ TEST(TrackStats, NewImagesEveryFrameMeanEverythingIsNew) {
 
 TEST(TrackStats, SpanAndOptionsAreChecked) {
   std::vector<std::pair<int64_t, cv::Mat>> frames = {{0, texture(100, 100, 1)}, {10, texture(100, 100, 1)}};
-  ov_eval::TrackStatsOptions o;
+  ovton::eval::TrackStatsOptions o;
   o.t_begin_ns = 5;
-  EXPECT_THROW(track_statistics(frames, o), ov_core::UsageError); // one image left
+  EXPECT_THROW(track_statistics(frames, o), ovton::core::UsageError); // one image left
   o = {};
   o.win_size = 1;
-  EXPECT_THROW(track_statistics(frames, o), ov_core::UsageError);
+  EXPECT_THROW(track_statistics(frames, o), ovton::core::UsageError);
   std::vector<std::pair<int64_t, std::string>> files = {{0, "/no/such.png"}, {1, "/no/such2.png"}};
-  EXPECT_THROW(track_statistics(files), ov_core::DataError);
+  EXPECT_THROW(track_statistics(files), ovton::core::DataError);
 }
 
 TEST(TrackStats, GradientAndNoiseStatistics) {

@@ -21,16 +21,16 @@
 #include <random>
 #include <sstream>
 
-using namespace ov_msckf_ton;
-using ov_core::so3_exp;
-using ov_core::so3_log;
+using namespace ovton::msckf;
+using ovton::core::so3_exp;
+using ovton::core::so3_log;
 
 using namespace updtest;
 
 TEST(UpdateJacobians, CloneAndFeatureJacobiansMatchFiniteDifferences) {
   std::mt19937 rng(7);
   std::normal_distribution<double> n(0, 1);
-  const ov_core::CameraCalib calib = euroc_cam0();
+  const ovton::core::CameraCalib calib = euroc_cam0();
   const Eigen::Matrix3d R_BC = calib.T_BC.topLeftCorner<3, 3>();
   const Eigen::Vector3d p_BC = calib.T_BC.topRightCorner<3, 1>();
   for (int trial = 0; trial < 10; ++trial) {
@@ -68,15 +68,15 @@ TEST(UpdateJacobians, StackedFeatureJacobianIncludingTdColumnMatchesFiniteDiffer
   ASSERT_EQ(sc.points.size(), 5u);
   State s = make_state(sc, 0.0, 0.01, 0.02, 0.02);
   s.td = 0.007; // t̂_d moved since cloning: V·(t̂_d − td_ref) is non-zero
-  ov_core::FeatureDatabase db;
+  ovton::core::FeatureDatabase db;
   observe(sc, db, 0.0, 1);
-  const ov_core::Feature &f = *db.get(2);
+  const ovton::core::Feature &f = *db.get(2);
   const Eigen::Vector3d p_f = sc.points[2] + Eigen::Vector3d(0.01, -0.02, 0.03);
   UpdaterMSCKF up(sc.calib);
   // Every row needs a velocity for the feature to carry t_d: the first one borrows the second's (as FVON would
   // predict one).
   struct FillFirst : VelocityProvider {
-    bool velocity(const ov_core::Feature &feat, size_t i, Eigen::Vector2d &v, int &src) const override {
+    bool velocity(const ovton::core::Feature &feat, size_t i, Eigen::Vector2d &v, int &src) const override {
       v = feat.obs[i == 0 ? 1 : i].vel_xy;
       src = i == 0 ? kVelocityItsFvon : kVelocityTracked;
       return true;
@@ -133,7 +133,7 @@ TEST(UpdateJacobians, StackedFeatureJacobianIncludingTdColumnMatchesFiniteDiffer
 TEST(UpdateNullspace, ProjectionAnnihilatesFeatureJacobianAndKeepsResidualConsistent) {
   const Scene sc = make_scene(8, 3, 1.0, 0.0, 5);
   const State s = make_state(sc, 0.0, 0.01, 0.02, 0.02);
-  ov_core::FeatureDatabase db;
+  ovton::core::FeatureDatabase db;
   observe(sc, db, 0.0, 2);
   UpdaterMSCKF up(sc.calib);
   VelocityProvider vp;
@@ -247,7 +247,7 @@ TEST(UpdateTriangulation, RejectsDegenerateGeometry) {
   TriangulationOptions near = opt;
   near.max_depth = 2.0;
   EXPECT_EQ(triangulate(poses, xy, 0, near).quality, TriangulationQuality::BadDepth);
-  EXPECT_THROW(triangulate(poses, std::vector<Eigen::Vector2d>(2), 0, opt), ov_core::UsageError);
+  EXPECT_THROW(triangulate(poses, std::vector<Eigen::Vector2d>(2), 0, opt), ovton::core::UsageError);
 }
 
 TEST(UpdateMsckf, ChiSquareTableMatchesKnownQuantiles) {
@@ -260,7 +260,7 @@ TEST(UpdateMsckf, ChiSquareTableMatchesKnownQuantiles) {
   EXPECT_NEAR((Jd - Eigen::Vector2d(euroc_cam0().intrinsics.head<2>()).asDiagonal().toDenseMatrix()).norm(), 0, 1e-9);
   UpdaterMSCKFOptions bad;
   bad.min_observations = 1;
-  EXPECT_THROW(UpdaterMSCKF(euroc_cam0(), bad), ov_core::UsageError);
+  EXPECT_THROW(UpdaterMSCKF(euroc_cam0(), bad), ovton::core::UsageError);
 }
 
 TEST(UpdateMsckf, FullUpdateCorrectsPerturbedCloneAndKeepsCovariancePsd) {
@@ -272,7 +272,7 @@ TEST(UpdateMsckf, FullUpdateCorrectsPerturbedCloneAndKeepsCovariancePsd) {
   bad.R = bad.R * so3_exp(Eigen::Vector3d(0.01, -0.008, 0.005));
   bad.p += Eigen::Vector3d(0.04, -0.03, 0.02);
   const auto [eth0, ep0] = clone_error(sc, bad, 0.0);
-  ov_core::FeatureDatabase db;
+  ovton::core::FeatureDatabase db;
   observe(sc, db, 0.0, 3);
   UpdaterMSCKF up(sc.calib);
   VelocityProvider vp;
@@ -304,7 +304,7 @@ TEST(UpdateMsckf, ChiSquareGatesPlantedOutlier) {
   const Scene sc = make_scene(8, 30, 1.0, 0.0, 33);
   ASSERT_GE(sc.points.size(), 25u);
   State s = make_state(sc, 0.0, 0.002, 0.005, 0.02);
-  ov_core::FeatureDatabase db;
+  ovton::core::FeatureDatabase db;
   observe(sc, db, 0.0, 4);
   // Rebuild feature 7 with a 20 px jump in one observation.
   const size_t out_id = 7;
@@ -346,7 +346,7 @@ TEST(UpdateMsckf, ChiSquareGatesPlantedOutlier) {
 class TrueVelocities : public VelocityProvider {
 public:
   explicit TrueVelocities(const Scene &sc) : sc_(sc) {}
-  bool velocity(const ov_core::Feature &f, size_t i, Eigen::Vector2d &v, int &src) const override {
+  bool velocity(const ovton::core::Feature &f, size_t i, Eigen::Vector2d &v, int &src) const override {
     const double t = sc_.t_of(f.obs[i].t_cam_ns) + sc_.td_true, h = 1e-5;
     Eigen::Vector2d a, b;
     sc_.project(sc_.pose_at(t + h), sc_.points[f.id], a);
@@ -364,7 +364,7 @@ TEST(UpdateMsckf, ImagePlaneUpdatePullsTdTowardTruth) {
   const double td_true = 0.010;
   const Scene sc = make_scene(10, 50, 2.5, td_true, 55);
   ASSERT_GE(sc.points.size(), 40u);
-  ov_core::FeatureDatabase db;
+  ovton::core::FeatureDatabase db;
   observe(sc, db, 0.3, 5);
   UpdaterMSCKF up(sc.calib);
   VelocityProvider vp;
@@ -411,7 +411,7 @@ TEST(UpdateMsckf, ImagePlaneUpdatePullsTdTowardTruth) {
 /// FVON-style provider: claims every observation, first ones as F2F predictions.
 class AllVelocities : public VelocityProvider {
 public:
-  bool velocity(const ov_core::Feature &f, size_t i, Eigen::Vector2d &v, int &src) const override {
+  bool velocity(const ovton::core::Feature &f, size_t i, Eigen::Vector2d &v, int &src) const override {
     if (f.obs[i].vel_valid) {
       v = f.obs[i].vel_xy;
       src = kVelocityTracked;
@@ -425,7 +425,7 @@ public:
 
 TEST(UpdateMsckf, VelocityProviderSourcesAreCounted) {
   const Scene sc = make_scene(6, 10, 2.0, 0.0, 9);
-  ov_core::FeatureDatabase db;
+  ovton::core::FeatureDatabase db;
   observe(sc, db, 0.0, 6);
   UpdaterMSCKF up(sc.calib);
   State s = make_state(sc, 0.0, 0.005, 0.01, 0.02);
@@ -438,7 +438,7 @@ TEST(UpdateMsckf, VelocityProviderSourcesAreCounted) {
 TEST(UpdateMsckf, ResidualLogHasHeaderAndOneRowPerObservation) {
   const Scene sc = make_scene(7, 12, 1.0, 0.0, 77);
   ASSERT_GE(sc.points.size(), 10u);
-  ov_core::FeatureDatabase db;
+  ovton::core::FeatureDatabase db;
   observe(sc, db, 0.0, 7);
   UpdaterMSCKF up(sc.calib);
   VelocityProvider vp;
@@ -490,20 +490,20 @@ TEST(UpdateMsckf, ResidualLogHasHeaderAndOneRowPerObservation) {
     ++rows;
   }
   EXPECT_EQ(rows, expected_rows);
-  EXPECT_THROW(ResidualLogWriter("/nonexistent_dir_ovton/x.csv"), ov_core::DataError);
+  EXPECT_THROW(ResidualLogWriter("/nonexistent_dir_ovton/x.csv"), ovton::core::DataError);
 }
 
 TEST(UpdateVelocity, CentralDifferenceIsCentredAndSkipsTheObservation) {
   // Image motion x(t) = a + b t + c t²: the central difference is exact at t_k for equal intervals, the backward
   // difference (eq. 2) is half a frame late. The central value must not depend on observation k's own position.
-  ov_core::FeatureDatabase db;
+  ovton::core::FeatureDatabase db;
   const double a = 0.1, b = 0.8, c = 3.0;
   for (int k = 0; k < 5; ++k) {
     const double t = 0.05 * k;
     const Eigen::Vector2d xy(a + b * t + c * t * t, -0.2);
     db.add_observation(7, 1000000000LL + 50000000LL * k, 458.0 * xy, xy);
   }
-  const ov_core::Feature &f = *db.get(7);
+  const ovton::core::Feature &f = *db.get(7);
   CentralVelocityProvider central;
   VelocityProvider backward;
   Eigen::Vector2d vc, vb;
@@ -523,7 +523,7 @@ TEST(UpdateVelocity, CentralDifferenceIsCentredAndSkipsTheObservation) {
   EXPECT_NEAR(vb.x(), f.obs[1].vel_xy.x(), 1e-12);
   ASSERT_TRUE(next.velocity(f, 3, vb, src));
   EXPECT_NEAR(vb.x(), f.obs[3].vel_xy.x(), 1e-12);
-  ov_core::FeatureDatabase single;
+  ovton::core::FeatureDatabase single;
   single.add_observation(9, 1000000000LL, Eigen::Vector2d(100, 100), Eigen::Vector2d(0.1, 0.1));
   EXPECT_FALSE(next.velocity(*single.get(9), 0, vb, src)) << "a lone observation has nothing to borrow";
 }

@@ -11,7 +11,7 @@
 #include <random>
 #include <string>
 
-using namespace ov_msckf_ton;
+using namespace ovton::msckf;
 using namespace updtest;
 
 namespace {
@@ -73,7 +73,7 @@ UpdateMonteCarlo update_monte_carlo(double noise_px, int trials, double lin_nois
       c.R_fej = truth.clones.at(t).R;
       c.p_fej = truth.clones.at(t).p + std::max(0.0, lin_noise_m) * Eigen::Vector3d(N01(rng), N01(rng), N01(rng));
     }
-    ov_core::FeatureDatabase db;
+    ovton::core::FeatureDatabase db;
     if (rho > 0)
       observe_ar1(sc, db, noise_px, rho, seed * 7919u + static_cast<unsigned>(k));
     else

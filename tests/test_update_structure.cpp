@@ -11,7 +11,7 @@
 #include <cmath>
 #include <random>
 
-using namespace ov_msckf_ton;
+using namespace ovton::msckf;
 
 namespace {
 
@@ -110,7 +110,7 @@ TEST(UpdateStructure, ColumnEkfUpdateEqualsTheDenseUpdate) {
     EXPECT_NEAR(sparse.td, (K * r)(15), 1e-12);
     EXPECT_LT((sparse.landmarks[1].p_W - (K * r).segment<3>(37)).norm(), 1e-12);
     EXPECT_THROW(state_helper::ekf_update(sparse, {0, 99}, Eigen::MatrixXd::Zero(1, 2), Eigen::VectorXd::Zero(1), 1.0),
-                 ov_core::UsageError);
+                 ovton::core::UsageError);
   }
 }
 
@@ -134,7 +134,7 @@ TEST(UpdateStructure, WhitenedTrackRowsHaveIndependentErrors) {
   UpdaterMSCKF::whiten_track_rows(I, 0.0);
   EXPECT_EQ(I, Eigen::MatrixXd::Identity(rows, rows));
   Eigen::MatrixXd odd(3, 2);
-  EXPECT_THROW(UpdaterMSCKF::whiten_track_rows(odd, rho), ov_core::UsageError);
+  EXPECT_THROW(UpdaterMSCKF::whiten_track_rows(odd, rho), ovton::core::UsageError);
 
   FeatureLinearization lin;
   lin.obs.resize(m);
@@ -186,7 +186,7 @@ TEST(UpdateStructure, ReportedCovarianceIsTheJosephFormOfTheFiltersGain) {
       H.col(cols[j]) = Hc.col(j);
     const Eigen::MatrixXd P0 = nominal.P;
     const Eigen::MatrixXd G = Hc.transpose() * dR * Hc;
-    EXPECT_THROW(state_helper::ekf_update(nominal, cols, Hc, r, sigma2, {nullptr, &G}), ov_core::UsageError);
+    EXPECT_THROW(state_helper::ekf_update(nominal, cols, Hc, r, sigma2, {nullptr, &G}), ovton::core::UsageError);
     state_helper::ekf_update(nominal, cols, Hc, r, sigma2);
     State joseph_rows = joseph;
     state_helper::ekf_update(joseph, cols, Hc, r, sigma2, {nullptr, &G});
@@ -214,8 +214,8 @@ TEST(UpdateStructure, ReportedCovarianceIsTheJosephFormOfTheFiltersGain) {
     state_helper::ekf_update(same, cols, Hc, r, sigma2);
     EXPECT_LT((same.P_report.cast<double>() - same.P).norm(), tol * P0.norm());
     const Eigen::MatrixXd wrong = Eigen::MatrixXd::Identity(nc + 1, nc + 1);
-    EXPECT_THROW(state_helper::ekf_update(joseph, cols, Hc, r, sigma2, {nullptr, &wrong}), ov_core::UsageError);
-    EXPECT_THROW(state_helper::ekf_update(joseph, cols, Hc, r, sigma2, {&wrong, nullptr}), ov_core::UsageError);
+    EXPECT_THROW(state_helper::ekf_update(joseph, cols, Hc, r, sigma2, {nullptr, &wrong}), ovton::core::UsageError);
+    EXPECT_THROW(state_helper::ekf_update(joseph, cols, Hc, r, sigma2, {&wrong, nullptr}), ovton::core::UsageError);
   }
 }
 
@@ -238,5 +238,5 @@ TEST(UpdateStructure, ProjectedTrackNoiseFactorCarriesTheArOneCorrelation) {
   const Eigen::MatrixXd B = UpdaterMSCKF::projected_track_noise_factor(qr, rho);
   EXPECT_LT((B * B.transpose() - Q2.transpose() * C * Q2).norm(), 1e-12 * C.norm());
   EXPECT_LT((UpdaterMSCKF::projected_track_noise_factor(qr, 0.0) - Q2.transpose()).norm(), 1e-12);
-  EXPECT_THROW(UpdaterMSCKF::projected_track_noise_factor(qr, 1.0), ov_core::UsageError);
+  EXPECT_THROW(UpdaterMSCKF::projected_track_noise_factor(qr, 1.0), ovton::core::UsageError);
 }

@@ -62,7 +62,7 @@ inline void expect_data_error(F f, const std::string &file_part, long line, cons
   try {
     f();
     ADD_FAILURE() << "expected a DataError for " << why;
-  } catch (const ov_core::DataError &e) {
+  } catch (const ovton::core::DataError &e) {
     const std::string msg = e.what();
     EXPECT_NE(msg.find(file_part), std::string::npos) << why << ": message does not name the file: " << msg;
     if (line > 0) {

@@ -10,11 +10,11 @@
 
 #include <cmath>
 
-using namespace ov_msckf_ton;
+using namespace ovton::msckf;
 
 TEST(VelocityLog, RoundTripKeepsMissingVelocitiesMissing) {
   ovtest::TempDir tmp;
-  ov_core::VelocityLogRow a;
+  ovton::core::VelocityLogRow a;
   a.t_cam_ns = 1403715285262142976;
   a.feature_id = 42;
   a.track_length = 5;
@@ -26,16 +26,16 @@ TEST(VelocityLog, RoundTripKeepsMissingVelocitiesMissing) {
   a.used_source = 2;
   a.fvon_source = 2;
   a.focal_px = 457.975;
-  ov_core::VelocityLogRow b = a;
+  ovton::core::VelocityLogRow b = a;
   b.obs_index = 1;
   b.eq2_x = 3.0;
   b.eq2_y = 4.0;
   b.gated = 1;
   {
-    ov_core::VelocityLogWriter w(tmp / "v.csv");
+    ovton::core::VelocityLogWriter w(tmp / "v.csv");
     w.write({a, b});
   }
-  const auto rows = ov_core::read_velocity_log(tmp / "v.csv");
+  const auto rows = ovton::core::read_velocity_log(tmp / "v.csv");
   ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[0].t_cam_ns, a.t_cam_ns);
   EXPECT_EQ(rows[0].feature_id, 42u);
@@ -46,11 +46,11 @@ TEST(VelocityLog, RoundTripKeepsMissingVelocitiesMissing) {
   EXPECT_DOUBLE_EQ(rows[1].eq2_y, 4.0);
   EXPECT_EQ(rows[1].gated, 1);
   // A truncated row names the file and line.
-  ovtest::write_text(tmp / "bad.csv", ov_core::VelocityLogWriter::header() + "\n1,2,3\n");
+  ovtest::write_text(tmp / "bad.csv", ovton::core::VelocityLogWriter::header() + "\n1,2,3\n");
   try {
-    ov_core::read_velocity_log(tmp / "bad.csv");
+    ovton::core::read_velocity_log(tmp / "bad.csv");
     FAIL() << "short row accepted";
-  } catch (const ov_core::DataError &e) {
+  } catch (const ovton::core::DataError &e) {
     EXPECT_EQ(e.line(), 2);
     EXPECT_NE(std::string(e.what()).find("bad.csv"), std::string::npos);
   }
@@ -60,28 +60,28 @@ TEST(VelocityTruth, NoiseFreeTracksScoreNearZeroAndNetworksAreScored) {
   // A noise-free feature-level flight: eq. 2 and `next` differ from the true instantaneous velocity only by half a
   // frame of image acceleration; FVON (mode fvon) predicts with both networks for every new feature.
   ovtest::TempDir tmp;
-  const ov_core::Dataset data = ovtest::feature_flight(tmp / "sim", 6.0, 3, 0.0);
+  const ovton::core::Dataset data = ovtest::feature_flight(tmp / "sim", 6.0, 3, 0.0);
   VioOptions opt = ovtest::gt_run_options(TdMode::Fvon, VioOptions().update.sigma_px);
   opt.ton.its_epochs = 100;
   opt.ton.f2f_epochs = 150;
   VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);
   {
-    ov_core::VelocityLogWriter log(tmp / "vel.csv");
+    ovton::core::VelocityLogWriter log(tmp / "vel.csv");
     vio.set_velocity_log(&log);
-    ov_core::Replay(data).run(vio);
+    ovton::core::Replay(data).run(vio);
   }
-  const auto rows = ov_core::read_velocity_log(tmp / "vel.csv");
+  const auto rows = ovton::core::read_velocity_log(tmp / "vel.csv");
   ASSERT_GT(rows.size(), 1000u);
-  const ov_eval::VelocityEvalResult r = ov_eval::evaluate_velocities(rows, data);
-  std::cout << ov_eval::velocity_table(r);
+  const ovton::eval::VelocityEvalResult r = ovton::eval::evaluate_velocities(rows, data);
+  std::cout << ovton::eval::velocity_table(r);
   EXPECT_GT(r.features_scored, r.features / 2);
   const auto score = [&](const std::string &obs, const std::string &rule) {
     for (const auto &s : r.scores)
       if (s.observations == obs && s.rule == rule)
         return s;
     ADD_FAILURE() << "no score for " << obs << " " << rule;
-    return ov_eval::VelocityScore{};
+    return ovton::eval::VelocityScore{};
   };
   const auto eq2 = score("tracked", "eq2"), next = score("first", "next");
   EXPECT_GT(eq2.count, 1000);
@@ -92,11 +92,11 @@ TEST(VelocityTruth, NoiseFreeTracksScoreNearZeroAndNetworksAreScored) {
   EXPECT_GT(score("first", "its_fvon").count, 0);
   EXPECT_GT(score("first", "f2f_fvon").count, 0);
   // A scored velocity that is wrong shows: zero velocity is off by the whole speed.
-  std::vector<ov_core::VelocityLogRow> zeroed = rows;
+  std::vector<ovton::core::VelocityLogRow> zeroed = rows;
   for (auto &row : zeroed)
     if (std::isfinite(row.eq2_x))
       row.eq2_x = row.eq2_y = 0.0;
-  const auto z = ov_eval::evaluate_velocities(zeroed, data);
+  const auto z = ovton::eval::evaluate_velocities(zeroed, data);
   for (const auto &s : z.scores)
     if (s.rule == "eq2") {
       EXPECT_NEAR(s.rms_px_s, s.true_rms_px_s, 1e-9);

@@ -9,7 +9,7 @@
 
 #include <sstream>
 
-using namespace ov_msckf_ton;
+using namespace ovton::msckf;
 
 TEST(VioOptions, ShippedConfigLoadsAndUnknownKeysFail) {
   std::ostringstream printed;
@@ -26,7 +26,7 @@ TEST(VioOptions, ShippedConfigLoadsAndUnknownKeysFail) {
     try {
       load_vio_options(tmp / name);
       ADD_FAILURE() << name << " accepted";
-    } catch (const ov_core::DataError &e) {
+    } catch (const ovton::core::DataError &e) {
       EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
       if (line > 0) {
         EXPECT_EQ(e.line(), line) << e.what();
@@ -53,19 +53,19 @@ TEST(VioOptions, ShippedConfigLoadsAndUnknownKeysFail) {
   EXPECT_EQ(resolve_td_process(spec.td.mode, spec.td.process), TdProcess::RandomWalk);
   EXPECT_EQ(resolve_td_process(TdMode::Ton, TdProcess::Auto), TdProcess::Tpn);
   EXPECT_EQ(resolve_td_process(TdMode::Drift, TdProcess::Auto), TdProcess::Drift);
-  EXPECT_THROW(parse_mode_spec("oracle+drift"), ov_core::UsageError);
-  EXPECT_THROW(parse_mode_spec("sr+wobble"), ov_core::UsageError);
+  EXPECT_THROW(parse_mode_spec("oracle+drift"), ovton::core::UsageError);
+  EXPECT_THROW(parse_mode_spec("sr+wobble"), ovton::core::UsageError);
 }
 
 TEST(StaticInit, RealEurocStillStartMatchesGroundTruth) {
   OVTEST_REQUIRE_SHARED_DATA();
-  const ov_core::Dataset d = ov_core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_micro");
-  std::deque<ov_core::ImuData> imu(d.imu.begin(), d.imu.begin() + 400); // the first 2 s
+  const ovton::core::Dataset d = ovton::core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_micro");
+  std::deque<ovton::core::ImuData> imu(d.imu.begin(), d.imu.begin() + 400); // the first 2 s
   const int64_t t_end = imu.back().t_imu_ns;
   const StaticInitResult r = static_initialize(imu, t_end, 1.0, 1.0, 0.1);
   ASSERT_TRUE(r.ok) << r.why;
   // Gravity direction in the body: from the estimate and from the ground truth (yaw does not matter).
-  const ov_core::StateSample &g = d.groundtruth.front();
+  const ovton::core::StateSample &g = d.groundtruth.front();
   const Eigen::Vector3d z_est = r.R_WB.transpose() * Eigen::Vector3d::UnitZ();
   const Eigen::Vector3d z_gt = g.q_WB.toRotationMatrix().transpose() * Eigen::Vector3d::UnitZ();
   const double angle_deg = std::acos(std::min(1.0, z_est.dot(z_gt))) * 180 / M_PI;
@@ -76,7 +76,7 @@ TEST(StaticInit, RealEurocStillStartMatchesGroundTruth) {
   const Eigen::Vector3d x_W = r.R_WB * Eigen::Vector3d::UnitX();
   EXPECT_NEAR(x_W.y(), 0.0, 1e-12);
   // A moving stretch is refused with a reason.
-  std::deque<ov_core::ImuData> moving = imu;
+  std::deque<ovton::core::ImuData> moving = imu;
   for (size_t i = 0; i < moving.size(); ++i)
     moving[i].am.x() += (i % 2 ? 2.0 : -2.0);
   const StaticInitResult m = static_initialize(moving, t_end, 1.0, 1.0, 0.1);
@@ -86,12 +86,12 @@ TEST(StaticInit, RealEurocStillStartMatchesGroundTruth) {
 
 TEST(VioRun, RealEurocStillStartStaysPut) {
   OVTEST_REQUIRE_SHARED_DATA();
-  const ov_core::Dataset d = ov_core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_micro");
+  const ovton::core::Dataset d = ovton::core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_micro");
   const VioOptions opt = load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
   VioManager vio(opt, d.cam, d.imu_calib);
-  std::vector<ov_core::StateSample> traj;
-  vio.set_state_callback([&](const ov_core::StateSample &s) { traj.push_back(s); });
-  ov_core::Replay(d).run(vio);
+  std::vector<ovton::core::StateSample> traj;
+  vio.set_state_callback([&](const ovton::core::StateSample &s) { traj.push_back(s); });
+  ovton::core::Replay(d).run(vio);
   ASSERT_TRUE(vio.initialized()) << vio.init_message();
   ASSERT_GT(traj.size(), 50u);
   double max_move = 0.0;
@@ -101,7 +101,7 @@ TEST(VioRun, RealEurocStillStartStaysPut) {
             << vio.counters().zupts << " zero-velocity updates\n";
   EXPECT_LT(max_move, 0.05);
   // Gravity from static initialisation agrees with the ground truth's tilt.
-  const ov_core::StateSample &g = d.groundtruth.front();
+  const ovton::core::StateSample &g = d.groundtruth.front();
   const Eigen::Vector3d z_est = traj.front().q_WB.toRotationMatrix().transpose() * Eigen::Vector3d::UnitZ();
   const Eigen::Vector3d z_gt = g.q_WB.toRotationMatrix().transpose() * Eigen::Vector3d::UnitZ();
   EXPECT_LT(std::acos(std::min(1.0, z_est.dot(z_gt))) * 180 / M_PI, 1.0);

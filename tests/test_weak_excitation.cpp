@@ -20,19 +20,19 @@
 // answer); with the centred 0.1 s mean it ends near the truth with an honest sigma (7.9 ± 1.1 ms, 2.6 s here).
 TEST(WeakExcitation, VibratingGyroDoesNotMakeTdLookObservable) {
   ovtest::TempDir tmp;
-  ov_sim::SimOptions o = ovtest::feature_sim(tmp / "sim", 20.0, 1);
-  ov_sim::apply_realism("euroc", o); // the IMU error model measured on real V1_01, its flight vibration included
+  ovton::sim::SimOptions o = ovtest::feature_sim(tmp / "sim", 20.0, 1);
+  ovton::sim::apply_realism("euroc", o); // the IMU error model measured on real V1_01, its flight vibration included
   o.td.td0_s = 0.010;
-  ov_sim::write_simulation(o);
-  const ov_core::Dataset data = ov_core::load_dataset(o.out_dir);
+  ovton::sim::write_simulation(o);
+  const ovton::core::Dataset data = ovton::core::load_dataset(o.out_dir);
   const auto final_td = [&](double window_s) {
-    ov_msckf_ton::VioOptions opt = ovtest::gt_run_options(ov_msckf_ton::TdMode::Sr, 0.0);
+    ovton::msckf::VioOptions opt = ovtest::gt_run_options(ovton::msckf::TdMode::Sr, 0.0);
     opt.update.sigma_px = 1.0;
     opt.td.jacobian_rate_window_s = window_s;
-    ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
+    ovton::msckf::VioManager vio(opt, data.cam, data.imu_calib);
     vio.set_groundtruth(data.groundtruth);
-    ov_core::Replay(data).run(vio);
-    const ov_msckf_ton::State &s = vio.state();
+    ovton::core::Replay(data).run(vio);
+    const ovton::msckf::State &s = vio.state();
     return std::make_pair(s.td, s.td_sigma());
   };
   const auto [td_reading, sd_reading] = final_td(0.0);

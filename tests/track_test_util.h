@@ -13,12 +13,12 @@ namespace ovtest {
 constexpr int kTrackW = 752, kTrackH = 480;
 
 /// EuRoC cam0 intrinsics without distortion, so that an image-space shift is the same shift in normalised units.
-inline ov_core::CameraCalib pinhole_calib() {
-  ov_core::CameraCalib c;
+inline ovton::core::CameraCalib pinhole_calib() {
+  ovton::core::CameraCalib c;
   c.width = kTrackW;
   c.height = kTrackH;
   c.rate_hz = 20;
-  c.intrinsics = ov_sim::euroc_cam0_calib().intrinsics;
+  c.intrinsics = ovton::sim::euroc_cam0_calib().intrinsics;
   c.dist_coeffs.setZero();
   return c;
 }

@@ -19,14 +19,14 @@
 
 namespace updtest {
 
-using namespace ov_msckf_ton;
-using ov_core::so3_exp;
-using ov_core::so3_log;
+using namespace ovton::msckf;
+using ovton::core::so3_exp;
+using ovton::core::so3_log;
 
 /// EuRoC cam0 with the rotation of its T_BS re-orthonormalised: the Jacobians take R_BC⁻¹ = R_BCᵀ, and the
 /// finite-difference checks below compare at 1e-7.
-inline ov_core::CameraCalib euroc_cam0() {
-  ov_core::CameraCalib c = ov_sim::euroc_cam0_calib();
+inline ovton::core::CameraCalib euroc_cam0() {
+  ovton::core::CameraCalib c = ovton::sim::euroc_cam0_calib();
   const Eigen::Quaterniond q(Eigen::Matrix3d(c.T_BC.topLeftCorner<3, 3>()));
   c.T_BC.topLeftCorner<3, 3>() = q.normalized().toRotationMatrix();
   return c;
@@ -52,8 +52,8 @@ inline Pose body_pose(double t, double rate) {
 constexpr int64_t kT0 = 1403636579763555584; // a EuRoC-sized stamp: differences must stay exact in int64
 
 struct Scene {
-  ov_core::CameraCalib calib = euroc_cam0();
-  ov_core::CameraModel cam{calib};
+  ovton::core::CameraCalib calib = euroc_cam0();
+  ovton::core::CameraModel cam{calib};
   Eigen::Matrix3d R_BC = calib.T_BC.topLeftCorner<3, 3>();
   Eigen::Vector3d p_BC = calib.T_BC.topRightCorner<3, 1>();
   double rate = 1.0;
@@ -126,7 +126,7 @@ inline State make_state(const Scene &sc, double td_ref, double sig_th, double si
 }
 
 /// Observes every point in every image (at IMU time t_cam + td_true) with Gaussian pixel noise.
-inline void observe(const Scene &sc, ov_core::FeatureDatabase &db, double noise_px, unsigned seed) {
+inline void observe(const Scene &sc, ovton::core::FeatureDatabase &db, double noise_px, unsigned seed) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, noise_px);
   for (int64_t t : sc.stamps) {
@@ -142,7 +142,7 @@ inline void observe(const Scene &sc, ov_core::FeatureDatabase &db, double noise_
 
 /// As observe, with each point's pixel errors AR(1) over the images (e_k = ρ e_{k−1} + √(1 − ρ²) w_k, marginal σ
 /// noise_px, u and v apart): KLT's tracks drift this way.
-inline void observe_ar1(const Scene &sc, ov_core::FeatureDatabase &db, double noise_px, double rho, unsigned seed) {
+inline void observe_ar1(const Scene &sc, ovton::core::FeatureDatabase &db, double noise_px, double rho, unsigned seed) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, noise_px);
   std::vector<Eigen::Vector2d> e(sc.points.size());
@@ -164,8 +164,8 @@ inline void observe_ar1(const Scene &sc, ov_core::FeatureDatabase &db, double no
   }
 }
 
-inline std::vector<const ov_core::Feature *> all_features(const ov_core::FeatureDatabase &db) {
-  std::vector<const ov_core::Feature *> out;
+inline std::vector<const ovton::core::Feature *> all_features(const ovton::core::FeatureDatabase &db) {
+  std::vector<const ovton::core::Feature *> out;
   db.features_older_than(std::numeric_limits<int64_t>::max(), out);
   return out;
 }

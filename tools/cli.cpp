@@ -3,7 +3,7 @@
 
 #include <iostream>
 
-namespace ovton {
+namespace ovton::cli {
 
 bool parse_command_line(const Args &args, const boost::program_options::options_description &desc,
                         boost::program_options::variables_map &vm) {
@@ -18,11 +18,11 @@ bool parse_command_line(const Args &args, const boost::program_options::options_
 
 bool parse_on_off(const std::string &value, const char *option) {
   if (value != "on" && value != "off")
-    throw ov_core::UsageError(std::string(option) + " must be on or off, not '" + value + "'");
+    throw ovton::core::UsageError(std::string(option) + " must be on or off, not '" + value + "'");
   return value == "on";
 }
 
-void add_bag_options(boost::program_options::options_description &desc, ov_core::BagOptions &opt) {
+void add_bag_options(boost::program_options::options_description &desc, ovton::core::BagOptions &opt) {
   desc.add_options()("cam-topic", boost::program_options::value(&opt.cam_topic),
                      "ROS bag: sensor_msgs/Image topic (default: the only one, the calibration's rostopic, or "
                      "/cam0/image_raw)") //
@@ -33,4 +33,4 @@ void add_bag_options(boost::program_options::options_description &desc, ov_core:
        "camchain-imucam-BAG.yaml + imu-BAG.yaml, camchain-imucam.yaml + imu.yaml)");
 }
 
-} // namespace ovton
+} // namespace ovton::cli

@@ -27,7 +27,7 @@
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
 
-namespace ovton {
+namespace ovton::cli {
 
 namespace {
 
@@ -78,12 +78,12 @@ void generate(const std::string &dir, double seconds, bool quiet) {
     std::cerr << "benchmark: reusing the dataset in " << dir << " (delete it to render a new one)\n";
     return;
   }
-  ov_sim::SimOptions o;
+  ovton::sim::SimOptions o;
   o.out_dir = dir;
   o.duration_s = seconds;
   std::string last_stage;
   size_t last_pct = 101;
-  const auto rep = ov_sim::write_simulation(o, [&](const std::string &stage, size_t done, size_t total) {
+  const auto rep = ovton::sim::write_simulation(o, [&](const std::string &stage, size_t done, size_t total) {
     if (quiet || total == 0)
       return;
     const size_t pct = done * 100 / total;
@@ -99,10 +99,10 @@ void generate(const std::string &dir, double seconds, bool quiet) {
             << rep.trajectory << " into " << dir << " in " << num(rep.total_seconds, 1) << " s\n";
 }
 
-ModeBench bench_mode(const ov_core::Dataset &data, RunRequest req, const std::string &mode) {
+ModeBench bench_mode(const ovton::core::Dataset &data, RunRequest req, const std::string &mode) {
   ModeBench b;
   b.mode = mode;
-  ov_msckf_ton::apply_mode_spec(ov_msckf_ton::parse_mode_spec(mode), req.opt);
+  ovton::msckf::apply_mode_spec(ovton::msckf::parse_mode_spec(mode), req.opt);
   req.label = "benchmark " + mode;
 
   b.peak_own = reset_peak_rss();
@@ -223,14 +223,16 @@ void write_json(const std::string &file, const std::vector<ModeBench> &res, cons
                 const std::string &load_end) {
   std::ofstream out(file);
   if (!out)
-    throw ov_core::UsageError("cannot write " + file);
-  out << "{\n  \"dataset\": " << ov_core::json_string(dataset) << ",\n  \"config\": " << ov_core::json_string(config)
-      << ",\n  \"init\": " << ov_core::json_string(init) << ",\n  \"cores\": " << std::thread::hardware_concurrency()
-      << ",\n  \"loadavg_start\": " << ov_core::json_string(load_start)
-      << ",\n  \"loadavg_end\": " << ov_core::json_string(load_end) << ",\n  \"same_process\": true,\n  \"modes\": [";
+    throw ovton::core::UsageError("cannot write " + file);
+  out << "{\n  \"dataset\": " << ovton::core::json_string(dataset)
+      << ",\n  \"config\": " << ovton::core::json_string(config) << ",\n  \"init\": " << ovton::core::json_string(init)
+      << ",\n  \"cores\": " << std::thread::hardware_concurrency()
+      << ",\n  \"loadavg_start\": " << ovton::core::json_string(load_start)
+      << ",\n  \"loadavg_end\": " << ovton::core::json_string(load_end)
+      << ",\n  \"same_process\": true,\n  \"modes\": [";
   for (size_t i = 0; i < res.size(); ++i) {
     const auto &b = res[i];
-    out << (i ? "," : "") << "\n    {\"mode\": " << ov_core::json_string(b.mode) << ", \"images\": " << b.images
+    out << (i ? "," : "") << "\n    {\"mode\": " << ovton::core::json_string(b.mode) << ", \"images\": " << b.images
         << ", \"images_before_init\": " << b.images_before_init << ", \"images_pretracked\": " << b.images_pretracked
         << ", \"updates\": " << b.updates << ", \"features_used\": " << b.features_used
         << ", \"features_per_frame\": " << num(b.features_per_frame())
@@ -244,13 +246,13 @@ void write_json(const std::string &file, const std::vector<ModeBench> &res, cons
         << "},\n     \"rss_mb\": {\"start\": " << num(b.rss_start, 2) << ", \"p25\": " << num(b.rss_quarter[0], 2)
         << ", \"p50\": " << num(b.rss_quarter[1], 2) << ", \"p75\": " << num(b.rss_quarter[2], 2)
         << ", \"p100\": " << num(b.rss_quarter[3], 2) << ", \"peak\": " << num(b.peak, 2)
-        << ", \"peak_scope\": " << ov_core::json_string(b.peak_own ? "mode" : "process")
+        << ", \"peak_scope\": " << ovton::core::json_string(b.peak_own ? "mode" : "process")
         << "},\n     \"interrupted\": " << (b.interrupted ? "true" : "false") << "}";
   }
   out << "\n  ]\n}\n";
   out.close();
   if (!out)
-    throw ov_core::UsageError("failed writing " + file);
+    throw ovton::core::UsageError("failed writing " + file);
 }
 
 } // namespace
@@ -278,25 +280,25 @@ int cmd_benchmark(const Args &args) {
       ("no-track-thread", po::bool_switch(&no_track_thread),
        "with --prefetch: track on the filter's thread, only decode on a second one") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bars");
-  ov_core::BagOptions bag_opt;
+  ovton::core::BagOptions bag_opt;
   add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
   req.track_thread = !no_track_thread;
   if (dataset.empty() && generate_dir.empty())
-    throw ov_core::UsageError("give --dataset DIR, or --generate DIR to render a dataset to benchmark");
+    throw ovton::core::UsageError("give --dataset DIR, or --generate DIR to render a dataset to benchmark");
   if (!dataset.empty() && !generate_dir.empty())
-    throw ov_core::UsageError("--dataset and --generate are exclusive");
+    throw ovton::core::UsageError("--dataset and --generate are exclusive");
   if (!(gen_seconds > 0))
-    throw ov_core::UsageError("--generate-seconds must be positive");
+    throw ovton::core::UsageError("--generate-seconds must be positive");
   if (!init.empty())
-    ov_msckf_ton::parse_init_mode(init); // fail before any work on a typo
+    ovton::msckf::parse_init_mode(init); // fail before any work on a typo
   std::vector<std::string> modes;        // fail before any work on a typo
   for (const auto &spec : parse_compare_modes(modes_str))
     modes.push_back(spec.name);
 
-  req.opt = config.empty() ? ov_msckf_ton::VioOptions{} : ov_msckf_ton::load_vio_options(config);
+  req.opt = config.empty() ? ovton::msckf::VioOptions{} : ovton::msckf::load_vio_options(config);
   if (!generate_dir.empty()) {
     // The built-in flight starts moving: a static initialisation would never succeed.
     if (init.empty())
@@ -305,18 +307,18 @@ int cmd_benchmark(const Args &args) {
     dataset = generate_dir;
   }
   if (!init.empty())
-    req.opt.init.mode = ov_msckf_ton::parse_init_mode(init);
+    req.opt.init.mode = ovton::msckf::parse_init_mode(init);
   req.progress = !quiet;
 
   // One thread, so that the numbers say what one core does and modes do not compete with each other.
   cv::setNumThreads(0);
 
-  const ov_core::Dataset data = ov_core::load_recording(dataset, bag_opt);
+  const ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
   apply_dataset_defaults(data, false, req.opt);
   const std::string load_start = loadavg();
   std::cout << "dataset " << dataset << ": " << data.images.size() << " images " << data.cam.width << "x"
             << data.cam.height << ", " << data.imu.size() << " IMU readings; init "
-            << ov_msckf_ton::to_string(req.opt.init.mode) << "; config "
+            << ovton::msckf::to_string(req.opt.init.mode) << "; config "
             << (config.empty() ? "built-in defaults" : config) << "\nmachine: " << std::thread::hardware_concurrency()
             << " cores, load average " << load_start << "; "
             << (!req.prefetch      ? "one thread"
@@ -327,7 +329,7 @@ int cmd_benchmark(const Args &args) {
 
   // The JSON is rewritten after every mode, so an interrupted or failing benchmark keeps the modes already done;
   // writing it once before the first mode finds an unwritable path before minutes of work.
-  const std::string init_name = ov_msckf_ton::to_string(req.opt.init.mode);
+  const std::string init_name = ovton::msckf::to_string(req.opt.init.mode);
   std::vector<ModeBench> res;
   const auto save = [&] {
     if (!json.empty())
@@ -350,4 +352,4 @@ int cmd_benchmark(const Args &args) {
   return res.back().interrupted ? 130 : 0;
 }
 
-} // namespace ovton
+} // namespace ovton::cli

@@ -18,7 +18,7 @@
 
 namespace po = boost::program_options;
 
-namespace ovton {
+namespace ovton::cli {
 
 namespace {
 
@@ -58,7 +58,7 @@ int cmd_compare(const Args &args) {
       ("jobs,j", po::value(&req.jobs)->default_value(2), "runs at a time")                                       //
       ("max-images", po::value(&req.max_images), "stop each run after this many images")                         //
       ("align", po::value(&align)->default_value(align), "trajectory alignment for APE/ARE: posyaw|se3");
-  ov_core::BagOptions bag_opt;
+  ovton::core::BagOptions bag_opt;
   add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm)) {
@@ -69,14 +69,14 @@ int cmd_compare(const Args &args) {
   // Checked before the dataset is loaded, so that a typo costs nothing.
   req.modes = parse_compare_modes(modes);
   if (req.jobs < 1)
-    throw ov_core::UsageError("--jobs must be at least 1");
+    throw ovton::core::UsageError("--jobs must be at least 1");
   if (align != "posyaw" && align != "se3" && align != "sim3")
-    throw ov_core::UsageError("--align must be posyaw, se3 or sim3");
-  req.report.eval.align = ov_eval::parse_align_mode(align);
+    throw ovton::core::UsageError("--align must be posyaw, se3 or sim3");
+  req.report.eval.align = ovton::eval::parse_align_mode(align);
 
-  req.base = config.empty() ? ov_msckf_ton::VioOptions{} : ov_msckf_ton::load_vio_options(config);
+  req.base = config.empty() ? ovton::msckf::VioOptions{} : ovton::msckf::load_vio_options(config);
   if (!init.empty())
-    req.base.init.mode = ov_msckf_ton::parse_init_mode(init);
+    req.base.init.mode = ovton::msckf::parse_init_mode(init);
   req.info.command_line = shell_command(args);
   req.info.config = config;
   std::error_code ec;
@@ -86,10 +86,10 @@ int cmd_compare(const Args &args) {
   // The results folder is checked before the dataset is loaded and any mode runs.
   std::filesystem::create_directories(req.out_dir, ec);
   if (ec)
-    throw ov_core::DataError(req.out_dir, "cannot create the results folder: " + ec.message());
-  ov_core::require_writable((std::filesystem::path(req.out_dir) / "results.md").string());
+    throw ovton::core::DataError(req.out_dir, "cannot create the results folder: " + ec.message());
+  ovton::core::require_writable((std::filesystem::path(req.out_dir) / "results.md").string());
 
-  const ov_core::Dataset data = ov_core::load_recording(dataset, bag_opt);
+  const ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
   apply_dataset_defaults(data, false, req.base);
   std::cerr << "compare: " << req.modes.size() << " modes on " << data.root << " (" << data.images.size()
             << " images), " << std::min<size_t>(req.jobs, req.modes.size()) << " at a time on "
@@ -98,7 +98,7 @@ int cmd_compare(const Args &args) {
   install_interrupt_handler();
   const CompareResult res = run_compare(data, req);
 
-  std::cout << ov_eval::results_markdown_table(res.rows) << "\n";
+  std::cout << ovton::eval::results_markdown_table(res.rows) << "\n";
   std::cout << "results: " << res.files.md << ", " << res.files.csv << "\n";
   if (res.interrupted) {
     std::cerr << "compare: interrupted; the report covers the runs that finished\n";
@@ -112,4 +112,4 @@ int cmd_compare(const Args &args) {
   return 0;
 }
 
-} // namespace ovton
+} // namespace ovton::cli

@@ -11,10 +11,10 @@
 
 namespace po = boost::program_options;
 
-int ovton::cmd_diagnose(const ovton::Args &args) {
+int ovton::cli::cmd_diagnose(const ovton::cli::Args &args) {
   std::string log_file, dataset_dir, out_dir, calib_file;
   bool nominal = false;
-  ov_eval::DiagnoseOptions opt;
+  ovton::eval::DiagnoseOptions opt;
   po::options_description desc(
       "usage: ovton diagnose --log FILE [--dataset DIR] [--out DIR]\n\n"
       "Tests candidate effects on the log that `ovton run --residual-log FILE` wrote. With --dataset, the\n"
@@ -50,15 +50,15 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
   if (log_file.empty())
-    throw ov_core::UsageError("--log is required (see ovton diagnose --help)");
+    throw ovton::core::UsageError("--log is required (see ovton diagnose --help)");
   if (!(opt.min_sigma > 0) || !(opt.min_explained >= 0 && opt.min_explained < 1) || opt.time_bins < 1)
-    throw ov_core::UsageError("--min-sigma must be > 0, --min-explained in [0, 1), --time-bins >= 1");
+    throw ovton::core::UsageError("--min-sigma must be > 0, --min-explained in [0, 1), --time-bins >= 1");
   if (!(opt.gravity_mag > 9.7 && opt.gravity_mag < 9.9))
-    throw ov_core::UsageError("--gravity must be between 9.7 and 9.9 m/s^2 (Earth's surface)");
+    throw ovton::core::UsageError("--gravity must be between 9.7 and 9.9 m/s^2 (Earth's surface)");
   if (!dataset_dir.empty()) {
-    ov_core::LoadOptions lo;
+    ovton::core::LoadOptions lo;
     lo.check_images_exist = false;
-    const ov_core::Dataset data = ov_core::load_dataset(dataset_dir, lo);
+    const ovton::core::Dataset data = ovton::core::load_dataset(dataset_dir, lo);
     opt.image_height = data.cam.height;
     opt.fu = data.cam.intrinsics(0), opt.fv = data.cam.intrinsics(1);
     opt.cu = data.cam.intrinsics(2), opt.cv = data.cam.intrinsics(3);
@@ -70,18 +70,18 @@ int ovton::cmd_diagnose(const ovton::Args &args) {
     std::filesystem::path p(log_file);
     out_dir = (p.parent_path() / (p.stem().string() + "_diagnose")).string();
   }
-  const ov_eval::ResidualLog log = ov_eval::load_residual_log(log_file);
-  if (calib_file.empty() && !nominal && std::filesystem::exists(ov_core::calibration_log_path(log_file)))
-    calib_file = ov_core::calibration_log_path(log_file);
+  const ovton::eval::ResidualLog log = ovton::eval::load_residual_log(log_file);
+  if (calib_file.empty() && !nominal && std::filesystem::exists(ovton::core::calibration_log_path(log_file)))
+    calib_file = ovton::core::calibration_log_path(log_file);
   if (!calib_file.empty() && !nominal) {
-    opt.calibration = ov_core::load_calibration_log(calib_file);
+    opt.calibration = ovton::core::load_calibration_log(calib_file);
     std::cout << "filter's calibration: " << calib_file << " (" << opt.calibration.size() << " updates)\n";
   }
-  const ov_eval::DiagnoseReport rep = ov_eval::diagnose(log, opt);
+  const ovton::eval::DiagnoseReport rep = ovton::eval::diagnose(log, opt);
   std::cout << "log " << log_file << ": " << rep.rows_used << " observations in " << rep.tracks_used << " tracks over "
             << rep.duration_s << " s, residual RMS " << rep.residual_rms_px << " px\n\n"
-            << ov_eval::format_ranking(rep) << "\n";
-  for (const auto &f : ov_eval::write_diagnose_report(rep, out_dir))
+            << ovton::eval::format_ranking(rep) << "\n";
+  for (const auto &f : ovton::eval::write_diagnose_report(rep, out_dir))
     std::cout << "wrote " << f << "\n";
   return 0;
 }

@@ -11,14 +11,14 @@
 
 namespace po = boost::program_options;
 
-namespace ovton {
+namespace ovton::cli {
 
 int cmd_export(const Args &args) {
   po::options_description desc("ovton export: write a dataset folder as a ROS 1 bag (sensor_msgs/Image mono8 + "
                                "sensor_msgs/Imu, bag time = header stamp) and Kalibr files beside it");
   std::string dataset, bag;
   bool quiet = false, no_kalibr = false;
-  ov_core::BagWriteOptions opt;
+  ovton::core::BagWriteOptions opt;
   desc.add_options()("help,h", "this help")                                                                      //
       ("dataset,d", po::value(&dataset)->required(), "dataset folder (EuRoC, SCube or `ovton simulate` output)") //
       ("bag,o", po::value(&bag)->required(), "bag file to write")                                                //
@@ -33,10 +33,10 @@ int cmd_export(const Args &args) {
     return 0; // --help
   opt.kalibr_files = !no_kalibr;
 
-  const ov_core::Dataset d = ov_core::load_dataset(dataset);
+  const ovton::core::Dataset d = ovton::core::load_dataset(dataset);
   install_interrupt_handler();
   ProgressBar bar("export", quiet);
-  const auto rep = ov_core::write_bag(d, bag, opt, [&](size_t i, size_t n) {
+  const auto rep = ovton::core::write_bag(d, bag, opt, [&](size_t i, size_t n) {
     bar.update(i, n, "");
     return !interrupted();
   });
@@ -48,4 +48,4 @@ int cmd_export(const Args &args) {
   return 0;
 }
 
-} // namespace ovton
+} // namespace ovton::cli

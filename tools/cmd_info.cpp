@@ -14,7 +14,7 @@
 
 namespace po = boost::program_options;
 
-namespace ovton {
+namespace ovton::cli {
 
 int cmd_info(const Args &args) {
   po::options_description desc(
@@ -26,20 +26,21 @@ int cmd_info(const Args &args) {
       ("td-search", "also search the camera-IMU time offset (images' rotation rate against the gyro)") //
       ("td-init-ms", po::value(&prior_ms), "centre of the search [ms] (default: the dataset's prior, else 0)")(
           "td-range-ms", po::value(&range_ms), "half width of the search [ms] (default 200)");
-  ov_core::BagOptions bag_opt;
+  ovton::core::BagOptions bag_opt;
   add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
 
-  const ov_core::Dataset d = ov_core::load_recording(dir, bag_opt);
-  const double t0 = ov_core::ns_to_s(d.images.front().t_cam_ns), t1 = ov_core::ns_to_s(d.images.back().t_cam_ns);
+  const ovton::core::Dataset d = ovton::core::load_recording(dir, bag_opt);
+  const double t0 = ovton::core::ns_to_s(d.images.front().t_cam_ns),
+               t1 = ovton::core::ns_to_s(d.images.back().t_cam_ns);
   std::cout << std::fixed << std::setprecision(3);
   std::cout << "dataset      " << d.root << " (" << d.kind << ")\n"
             << "images       " << d.images.size() << " over " << (t1 - t0) << " s, " << d.cam.width << "x"
             << d.cam.height << " @ " << d.cam.rate_hz << " Hz\n"
             << "imu          " << d.imu.size() << " readings over "
-            << ov_core::ns_to_s(d.imu.back().t_imu_ns - d.imu.front().t_imu_ns) << " s @ " << d.imu_calib.rate_hz
+            << ovton::core::ns_to_s(d.imu.back().t_imu_ns - d.imu.front().t_imu_ns) << " s @ " << d.imu_calib.rate_hz
             << " Hz\n"
             << "intrinsics   " << d.cam.intrinsics.transpose() << "\n"
             << std::setprecision(8) << "distortion   " << to_string(d.cam.distortion) << " "
@@ -55,11 +56,11 @@ int cmd_info(const Args &args) {
             << "\n";
   if (vm.count("td-search")) {
     if (!(range_ms > 0 && range_ms <= 1000) || !(std::abs(prior_ms) <= 10000))
-      throw ov_core::UsageError("--td-range-ms must be in (0, 1000] and --td-init-ms within +-10000");
-    ov_msckf_ton::TdSearchOptions so;
+      throw ovton::core::UsageError("--td-range-ms must be in (0, 1000] and --td-init-ms within +-10000");
+    ovton::msckf::TdSearchOptions so;
     so.range_s = range_ms * 1e-3;
     const auto r =
-        ov_msckf_ton::search_td(d.images, d.imu, d.cam, vm.count("td-init-ms") ? prior_ms * 1e-3 : d.td_prior_s, so);
+        ovton::msckf::search_td(d.images, d.imu, d.cam, vm.count("td-init-ms") ? prior_ms * 1e-3 : d.td_prior_s, so);
     std::cout << "t_d search   " << r.summary() << "\n";
     if (!r.found && r.pairs > 0)
       std::cout << "             best candidate " << r.td_s * 1e3 << " ms, sigma " << r.sigma_s * 1e3 << " ms\n";
@@ -69,4 +70,4 @@ int cmd_info(const Args &args) {
   return 0;
 }
 
-} // namespace ovton
+} // namespace ovton::cli

@@ -9,13 +9,13 @@
 
 namespace po = boost::program_options;
 
-namespace ovton {
+namespace ovton::cli {
 
 int cmd_perturb(const Args &args) {
   po::options_description desc(
       "ovton perturb: copy a real EuRoC folder with cam0 stamps rewritten by a time-offset model\n"
       "(images are symlinked; the original stamps are taken as true IMU-clock times; t_imu = t_cam + td)");
-  ov_sim::PerturbOptions o;
+  ovton::sim::PerturbOptions o;
   std::string td_model = "drift";
   double td0_ms = 10.0, td_bias = 0.1, td_noise = 0.1;
   desc.add_options()("help,h", "this help")                                                     //
@@ -29,14 +29,14 @@ int cmd_perturb(const Args &args) {
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
-  o.td.kind = ov_sim::parse_td_model(td_model);
+  o.td.kind = ovton::sim::parse_td_model(td_model);
   o.td.td0_s = td0_ms * 1e-3;
   o.td.bias_s_per_s = td_bias * 1e-3;
   o.td.noise_s_per_sqrt_s = td_noise * 1e-3;
-  const auto rep = ov_sim::perturb_dataset(o);
+  const auto rep = ovton::sim::perturb_dataset(o);
   std::cout << "wrote " << o.out_dir << ": " << rep.n_images << " images restamped, td " << rep.td_first_s * 1e3
             << " ms -> " << rep.td_last_s * 1e3 << " ms\n";
   return 0;
 }
 
-} // namespace ovton
+} // namespace ovton::cli

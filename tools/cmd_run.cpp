@@ -23,7 +23,7 @@
 
 namespace po = boost::program_options;
 
-namespace ovton {
+namespace ovton::cli {
 
 int cmd_run(const Args &args) {
   po::options_description desc("ovton run: replay a dataset folder through the MSCKF and write its trajectory");
@@ -70,7 +70,7 @@ int cmd_run(const Args &args) {
        "threads of OpenCV's own pool inside the tracker (0: none, its work on the calling thread; default: "
        "OpenCV's choice, 0 with --no-prefetch)") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bar, no option listing");
-  ov_core::BagOptions bag_opt;
+  ovton::core::BagOptions bag_opt;
   add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
@@ -84,22 +84,22 @@ int cmd_run(const Args &args) {
   else if (no_prefetch)
     cv::setNumThreads(0);
   if (search_tracks != "on" && search_tracks != "off")
-    throw ov_core::UsageError("--search-tracks must be on or off");
+    throw ovton::core::UsageError("--search-tracks must be on or off");
   req.reuse_search_tracks = search_tracks == "on";
   req.keep_search_images_bytes = std::min<size_t>(keep_mb, size_t{1} << 30) << 20;
   if (format != "csv" && format != "tum")
-    throw ov_core::UsageError("--format must be csv or tum");
+    throw ovton::core::UsageError("--format must be csv or tum");
   req.tum = format == "tum";
   req.progress = !quiet;
 
-  req.opt = config.empty() ? ov_msckf_ton::VioOptions{} : ov_msckf_ton::load_vio_options(config);
+  req.opt = config.empty() ? ovton::msckf::VioOptions{} : ovton::msckf::load_vio_options(config);
   if (!mode.empty())
-    ov_msckf_ton::apply_mode_spec(ov_msckf_ton::parse_mode_spec(mode), req.opt);
+    ovton::msckf::apply_mode_spec(ovton::msckf::parse_mode_spec(mode), req.opt);
   if (!init.empty())
-    req.opt.init.mode = ov_msckf_ton::parse_init_mode(init);
+    req.opt.init.mode = ovton::msckf::parse_init_mode(init);
   if (!std::isnan(td_init_ms)) {
     if (!(std::abs(td_init_ms) <= 10000))
-      throw ov_core::UsageError("--td-init-ms must be a number within +-10000 ms");
+      throw ovton::core::UsageError("--td-init-ms must be a number within +-10000 ms");
     req.opt.td.init_s = td_init_ms * 1e-3;
   }
   if (!td_search.empty())
@@ -112,38 +112,38 @@ int cmd_run(const Args &args) {
     if (!o->empty())
       outputs.push_back(*o);
   for (size_t i = 0; i < outputs.size(); ++i) {
-    ov_core::require_writable(outputs[i]);
+    ovton::core::require_writable(outputs[i]);
     for (size_t j = 0; j < i; ++j)
       if (std::filesystem::weakly_canonical(outputs[i]) == std::filesystem::weakly_canonical(outputs[j]))
-        throw ov_core::UsageError("two outputs are the same file: " + outputs[i]);
+        throw ovton::core::UsageError("two outputs are the same file: " + outputs[i]);
   }
 
-  const ov_core::Dataset data = ov_core::load_recording(dataset, bag_opt);
+  const ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
   apply_dataset_defaults(data, !std::isnan(td_init_ms), req.opt);
   if (!quiet)
-    ov_msckf_ton::print_vio_options(req.opt, std::cerr);
+    ovton::msckf::print_vio_options(req.opt, std::cerr);
 
   install_interrupt_handler();
   RunResult r;
   try {
     r = run_dataset(data, req);
-  } catch (const ov_core::EstimatorFailure &e) {
-    throw ov_core::EstimatorFailure(e.t_ns(), std::string(e.what()) + "; the rows before it are in " + req.output);
+  } catch (const ovton::core::EstimatorFailure &e) {
+    throw ovton::core::EstimatorFailure(e.t_ns(), std::string(e.what()) + "; the rows before it are in " + req.output);
   }
 
   const auto &c = r.counters;
   const auto &tm = r.times;
   std::cout << std::fixed << std::setprecision(3);
-  std::cout << "mode " << ov_msckf_ton::to_string(req.opt.td.mode) << ": " << r.replay.images_fed << " images ("
+  std::cout << "mode " << ovton::msckf::to_string(req.opt.td.mode) << ": " << r.replay.images_fed << " images ("
             << c.images_before_init << " before initialisation, " << r.replay.images_skipped << " beyond the IMU log), "
             << c.updates << " updates, " << c.features_used << " features used, " << c.features_gated << " gated, "
             << c.zupts << " zero-velocity updates, " << c.td_rows << " observations constraining t_d\n";
   if (c.slam_initialised > 0)
     std::cout << "SLAM: " << c.slam_initialised << " landmarks initialised, " << c.slam_updates
               << " landmark observations used, " << c.slam_gated << " gated\n";
-  std::cout << "t_d rows by velocity source: tracked " << c.td_rows_by_source[ov_msckf_ton::kVelocityTracked]
-            << ", ITS-FVON " << c.td_rows_by_source[ov_msckf_ton::kVelocityItsFvon] << ", F2F-FVON "
-            << c.td_rows_by_source[ov_msckf_ton::kVelocityF2fFvon] << " (" << c.td_features << " features); networks "
+  std::cout << "t_d rows by velocity source: tracked " << c.td_rows_by_source[ovton::msckf::kVelocityTracked]
+            << ", ITS-FVON " << c.td_rows_by_source[ovton::msckf::kVelocityItsFvon] << ", F2F-FVON "
+            << c.td_rows_by_source[ovton::msckf::kVelocityF2fFvon] << " (" << c.td_features << " features); networks "
             << (tm.frames ? tm.networks / tm.frames : 0.0) << " ms/frame\n";
   std::cout << "initialisation: " << r.init_message << "\n";
   if (r.td_search)
@@ -153,8 +153,8 @@ int cmd_run(const Args &args) {
   if (acc.examined() > 0)
     std::cout << "update acceptance " << 100.0 * acc.acceptance() << " % of " << acc.examined() << " features ("
               << acc.gated << " gated, " << acc.failed_triangulation << " failed triangulation)\n";
-  if (req.opt.init.mode != ov_msckf_ton::InitMode::GroundTruth && !r.traj.empty() && !data.images.empty()) {
-    const auto ic = ov_eval::check_initialisation(r.traj.front(), data.groundtruth, data.images.front().t_cam_ns);
+  if (req.opt.init.mode != ovton::msckf::InitMode::GroundTruth && !r.traj.empty() && !data.images.empty()) {
+    const auto ic = ovton::eval::check_initialisation(r.traj.front(), data.groundtruth, data.images.front().t_cam_ns);
     if (ic.ok)
       std::cout << "initialisation vs ground truth: after " << ic.data_s << " s of images, roll/pitch error "
                 << ic.tilt_err_deg << " deg, velocity error " << ic.vel_err_m_s << " m/s (true speed " << ic.speed_m_s
@@ -177,7 +177,7 @@ int cmd_run(const Args &args) {
   if (!nees_log.empty()) {
     std::ofstream out(nees_log);
     if (!out)
-      throw ov_core::DataError(nees_log, "cannot open for writing");
+      throw ovton::core::DataError(nees_log, "cannot open for writing");
     out << "t_ns,nees_orientation,nees_position,nees_td\n";
     for (const auto &n : r.nees.per_frame)
       out << n.t_ns << ',' << n.ori << ',' << n.pos << ',' << n.td << '\n';
@@ -191,13 +191,13 @@ int cmd_run(const Args &args) {
   }
   if (data.has_groundtruth() && r.traj.size() > 2) {
     try {
-      const auto e = ov_eval::evaluate(r.traj, data.groundtruth, data.td_truth, ov_eval::EvalOptions{});
+      const auto e = ovton::eval::evaluate(r.traj, data.groundtruth, data.td_truth, ovton::eval::EvalOptions{});
       std::cout << "APE " << e.ape_rmse_m << " m, ARE " << e.are_rmse_deg << " deg (posyaw, " << e.n_matched
                 << " poses)";
       if (e.has_tpe)
         std::cout << ", TPE " << e.tpe_rmse_mm << " mm";
       std::cout << "\n";
-    } catch (const ov_core::UsageError &e) {
+    } catch (const ovton::core::UsageError &e) {
       std::cout << "evaluation skipped: " << e.what() << "\n";
     }
   }
@@ -205,4 +205,4 @@ int cmd_run(const Args &args) {
   return r.interrupted ? 130 : 0;
 }
 
-} // namespace ovton
+} // namespace ovton::cli

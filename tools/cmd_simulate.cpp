@@ -21,7 +21,7 @@
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
 
-namespace ovton {
+namespace ovton::cli {
 
 namespace {
 
@@ -57,7 +57,7 @@ Eigen::Vector3d parse_xyz(const std::string &text, const char *option) {
   char c1 = 0, c2 = 0;
   std::istringstream in(text);
   if (!(in >> v.x() >> c1 >> v.y() >> c2 >> v.z()) || c1 != ',' || c2 != ',' || !(in >> std::ws).eof())
-    throw ov_core::UsageError(std::string("--") + option + " expects three numbers 'x,y,z', got '" + text + "'");
+    throw ovton::core::UsageError(std::string("--") + option + " expects three numbers 'x,y,z', got '" + text + "'");
   return v;
 }
 
@@ -91,7 +91,7 @@ int cmd_simulate(const Args &args) {
   po::options_description desc(
       "ovton simulate: write a synthetic EuRoC-format folder (images or features, IMU, ground truth, true offset)\n"
       "Convention: t_imu = t_cam + td; image k shows the scene at IMU time t_k and is stamped t_k - td(k)");
-  ov_sim::SimOptions o;
+  ovton::sim::SimOptions o;
   std::string out, gt, td_model = "constant", cam_yaml, imu_yaml;
   double td0_ms = 10.0, td_bias = 0.1, td_noise = 0.1, readout_ms = 0.0, focal_error_pct = 0.0, gyro_scale_pct = 0.0;
   int bench_frames = 100;
@@ -183,51 +183,52 @@ int cmd_simulate(const Args &args) {
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
   if (vm.count("match-imu") && !o.align_gt_to.empty())
-    throw ov_core::UsageError("--match-imu measures --gt as it is: leave out --align-gt");
+    throw ovton::core::UsageError("--match-imu measures --gt as it is: leave out --align-gt");
   if (vm.count("match-imu")) {
     if (gt.empty() || o.imu_from.empty())
-      throw ov_core::UsageError("--match-imu needs --gt and --imu-from (a real log and its ground truth)");
-    ov_core::LoadOptions lo;
+      throw ovton::core::UsageError("--match-imu needs --gt and --imu-from (a real log and its ground truth)");
+    ovton::core::LoadOptions lo;
     lo.check_images_exist = false;
-    const ov_core::Dataset real = ov_core::load_dataset(o.imu_from, lo);
-    ov_sim::ImuMatchOptions mo;
+    const ovton::core::Dataset real = ovton::core::load_dataset(o.imu_from, lo);
+    ovton::sim::ImuMatchOptions mo;
     mo.knot_dt_s = o.knot_dt_s;
-    const std::string yaml = "imu_log: " + o.imu_from + "\nground_truth: " + gt + "\n" +
-                             ov_sim::imu_match_yaml(ov_sim::match_imu(real.imu, ov_core::read_trajectory(gt), mo));
+    const std::string yaml =
+        "imu_log: " + o.imu_from + "\nground_truth: " + gt + "\n" +
+        ovton::sim::imu_match_yaml(ovton::sim::match_imu(real.imu, ovton::core::read_trajectory(gt), mo));
     std::cout << yaml;
     if (!out.empty()) {
       fs::create_directories(out);
       std::ofstream f(fs::path(out) / "imu_match.yaml");
       f << yaml;
       if (!f)
-        throw ov_core::DataError((fs::path(out) / "imu_match.yaml").string(), "cannot write");
+        throw ovton::core::DataError((fs::path(out) / "imu_match.yaml").string(), "cannot write");
     }
     return 0;
   }
   const bool bench = vm.count("benchmark") > 0;
   if (out.empty() && !bench)
-    throw ov_core::UsageError("--out is required");
+    throw ovton::core::UsageError("--out is required");
   if (vm.count("builtin") && !gt.empty())
-    throw ov_core::UsageError("--gt and --builtin are exclusive");
+    throw ovton::core::UsageError("--gt and --builtin are exclusive");
   if (vm.count("features-only") && vm.count("no-images"))
-    throw ov_core::UsageError("--features-only and --no-images are exclusive");
+    throw ovton::core::UsageError("--features-only and --no-images are exclusive");
   if (!o.align_gt_to.empty() && gt.empty())
-    throw ov_core::UsageError("--align-gt needs --gt (the reference to align)");
+    throw ovton::core::UsageError("--align-gt needs --gt (the reference to align)");
   if (!vm["align-blend-hz"].defaulted() && o.align_gt_to.empty())
-    throw ov_core::UsageError("--align-blend-hz applies with --align-gt");
+    throw ovton::core::UsageError("--align-blend-hz applies with --align-gt");
   if (!o.imu_from.empty() && gt.empty())
-    throw ov_core::UsageError("--imu-from needs --gt with the ground truth of the same sequence");
+    throw ovton::core::UsageError("--imu-from needs --gt with the ground truth of the same sequence");
   if (o.agility != 0.0 && !gt.empty())
-    throw ov_core::UsageError("--agility applies to the built-in flight, not to --gt");
+    throw ovton::core::UsageError("--agility applies to the built-in flight, not to --gt");
   o.gt_file = gt;
-  ov_sim::apply_realism(realism, o);
+  ovton::sim::apply_realism(realism, o);
   {
     // Hand overrides of the preset; sim.yaml records every value, and the preset's name says it was modified.
     bool modified = false;
     auto &c = o.camera_effects;
     const auto need_effects = [&](const char *name) {
       if (!c.enabled)
-        throw ov_core::UsageError(std::string("--") + name + " needs camera effects (--realism euroc or harsh)");
+        throw ovton::core::UsageError(std::string("--") + name + " needs camera effects (--realism euroc or harsh)");
       modified = true;
     };
     const auto camera_option = [&](const char *name, double &field) {
@@ -237,7 +238,7 @@ int cmd_simulate(const Args &args) {
       }
     };
     if (vm.count("texture")) {
-      o.scene.texture.style = ov_sim::parse_texture_style(texture);
+      o.scene.texture.style = ovton::sim::parse_texture_style(texture);
       modified = true;
     }
     const auto scene_option = [&](const char *name, double &field) {
@@ -266,23 +267,23 @@ int cmd_simulate(const Args &args) {
     if (vm.count("imu-errors")) {
       const std::string v = vm["imu-errors"].as<std::string>();
       if (v != "euroc" && v != "none")
-        throw ov_core::UsageError("--imu-errors must be euroc or none");
-      o.imu_errors = v == "euroc" ? ov_sim::euroc_v1_01_imu_errors() : ov_sim::ImuErrorModel{};
+        throw ovton::core::UsageError("--imu-errors must be euroc or none");
+      o.imu_errors = v == "euroc" ? ovton::sim::euroc_v1_01_imu_errors() : ovton::sim::ImuErrorModel{};
       modified = true;
     }
     if (vm.count("imu-errors-drop")) {
-      ov_sim::drop_imu_error_parts(o.imu_errors, vm["imu-errors-drop"].as<std::string>());
+      ovton::sim::drop_imu_error_parts(o.imu_errors, vm["imu-errors-drop"].as<std::string>());
       modified = true;
     }
     if (vm.count("imu-declare")) {
       const std::string v = vm["imu-declare"].as<std::string>();
       if (v != "fitted" && v != "datasheet")
-        throw ov_core::UsageError("--imu-declare must be fitted or datasheet");
+        throw ovton::core::UsageError("--imu-declare must be fitted or datasheet");
       o.declare_imu_errors = v == "fitted";
       modified = true;
     }
-    if (!o.texture_from.empty() && o.scene.texture.style != ov_sim::TextureStyle::Room)
-      throw ov_core::UsageError("--texture-from needs the room texture (--realism euroc, or --texture room)");
+    if (!o.texture_from.empty() && o.scene.texture.style != ovton::sim::TextureStyle::Room)
+      throw ovton::core::UsageError("--texture-from needs the room texture (--realism euroc, or --texture room)");
     if (modified || !o.texture_from.empty())
       o.realism += " (modified)";
   }
@@ -290,7 +291,7 @@ int cmd_simulate(const Args &args) {
   o.overwrite = vm.count("force") > 0;
   o.no_images = vm.count("no-images") > 0;
   o.imu_noise = o.imu_bias_walk = vm.count("no-imu-noise") == 0;
-  o.td.kind = ov_sim::parse_td_model(td_model);
+  o.td.kind = ovton::sim::parse_td_model(td_model);
   o.td.td0_s = td0_ms * 1e-3;
   o.td.bias_s_per_s = td_bias * 1e-3;
   o.td.noise_s_per_sqrt_s = td_noise * 1e-3;
@@ -306,18 +307,18 @@ int cmd_simulate(const Args &args) {
   o.focal_error = focal_error_pct * 1e-2;
   o.gyro_scale = gyro_scale_pct * 1e-2;
   if (!cam_yaml.empty()) {
-    o.cam = ov_core::load_euroc_camera_yaml(cam_yaml);
+    o.cam = ovton::core::load_euroc_camera_yaml(cam_yaml);
     o.cam_source = cam_yaml;
   }
   if (!imu_yaml.empty()) {
-    o.imu = ov_core::load_euroc_imu_yaml(imu_yaml);
+    o.imu = ovton::core::load_euroc_imu_yaml(imu_yaml);
     o.imu_source = imu_yaml;
   }
 
   ProgressPrinter progress(vm.count("quiet") > 0);
   if (!bench) {
     o.out_dir = out;
-    const auto rep = ov_sim::write_simulation(o, std::ref(progress));
+    const auto rep = ovton::sim::write_simulation(o, std::ref(progress));
     std::cout << "wrote " << out << ": " << rep.n_images << " frames, " << rep.n_imu << " IMU readings"
               << (o.features_only ? ", " + std::to_string(rep.n_observations) + " feature observations" : "")
               << " along " << rep.trajectory << " in " << rep.total_seconds << " s\n";
@@ -330,7 +331,7 @@ int cmd_simulate(const Args &args) {
   if (tmp)
     o.overwrite = true;
   o.duration_s = o.first_image_s + (bench_frames - 0.5) / o.cam.rate_hz;
-  const auto rep = ov_sim::write_simulation(o, std::ref(progress));
+  const auto rep = ovton::sim::write_simulation(o, std::ref(progress));
   const auto sizes = sizes_by_part(fs::path(o.out_dir) / "mav0");
   const double minutes = o.duration_s / 60.0;
   uintmax_t total = 0;
@@ -353,4 +354,4 @@ int cmd_simulate(const Args &args) {
   return 0;
 }
 
-} // namespace ovton
+} // namespace ovton::cli

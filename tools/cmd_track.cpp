@@ -23,12 +23,12 @@
 
 namespace po = boost::program_options;
 
-int ovton::cmd_track(const ovton::Args &args) {
+int ovton::cli::cmd_track(const ovton::cli::Args &args) {
   std::string dataset_dir, config, out_file, tracks_file, md_file, rewrite;
   uint64_t seed = 1;
   bool score = false;
   long max_images = 0;
-  ov_eval::TrackTruthOptions so;
+  ovton::eval::TrackTruthOptions so;
   po::options_description desc(
       "usage: ovton track --dataset DIR [--config F] [--out features.csv] [--score] [--tracks F]\n\n"
       "Runs the KLT front end of `ovton run` (the config's tracker section) over a folder's images and writes\n"
@@ -59,30 +59,30 @@ int ovton::cmd_track(const ovton::Args &args) {
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
   if (dataset_dir.empty())
-    throw ov_core::UsageError("--dataset is required (see ovton track --help)");
+    throw ovton::core::UsageError("--dataset is required (see ovton track --help)");
   if (tracks_file.empty() && out_file.empty() && !score && rewrite.empty())
-    throw ov_core::UsageError("nothing to do: give --out, --score or --tracks");
-  ov_core::LoadOptions lo;
+    throw ovton::core::UsageError("nothing to do: give --out, --score or --tracks");
+  ovton::core::LoadOptions lo;
   lo.check_images_exist = tracks_file.empty();
-  const ov_core::Dataset data = ov_core::load_dataset(dataset_dir, lo);
+  const ovton::core::Dataset data = ovton::core::load_dataset(dataset_dir, lo);
 
-  std::vector<ov_eval::TrackPoint> points;
+  std::vector<ovton::eval::TrackPoint> points;
   if (!tracks_file.empty()) {
-    points = ov_eval::read_track_points(tracks_file);
+    points = ovton::eval::read_track_points(tracks_file);
     score = score || (rewrite.empty() && out_file.empty());
   } else {
-    const ov_msckf_ton::VioOptions opt =
-        config.empty() ? ov_msckf_ton::VioOptions{} : ov_msckf_ton::load_vio_options(config);
-    const ov_core::CameraModel camera(data.cam);
-    ov_core::TrackKLT tracker(camera, opt.track);
+    const ovton::msckf::VioOptions opt =
+        config.empty() ? ovton::msckf::VioOptions{} : ovton::msckf::load_vio_options(config);
+    const ovton::core::CameraModel camera(data.cam);
+    ovton::core::TrackKLT tracker(camera, opt.track);
     tracker.set_rotation_prior(make_rotation_prior(data, opt));
     long n = 0, feats = 0;
     for (const auto &e : data.images) {
       if (max_images > 0 && n >= max_images)
         break;
-      const cv::Mat gray = ov_core::load_image(e);
+      const cv::Mat gray = ovton::core::load_image(e);
       if (gray.empty())
-        throw ov_core::DataError(e.path, "unreadable image");
+        throw ovton::core::DataError(e.path, "unreadable image");
       const auto &tracked = tracker.track(e.t_cam_ns, gray);
       ++n;
       feats += static_cast<long>(tracked.size());
@@ -97,8 +97,8 @@ int ovton::cmd_track(const ovton::Args &args) {
   }
   if (!rewrite.empty()) {
     if (out_file.empty())
-      throw ov_core::UsageError("--rewrite needs --out");
-    ov_eval::TrackRewrite how = ov_eval::TrackRewrite::Truth;
+      throw ovton::core::UsageError("--rewrite needs --out");
+    ovton::eval::TrackRewrite how = ovton::eval::TrackRewrite::Truth;
     double sigma = 0, rho = 0;
     const auto num = [&](size_t from) {
       const size_t c = rewrite.find(':', from);
@@ -106,27 +106,27 @@ int ovton::cmd_track(const ovton::Args &args) {
     };
     try {
       if (rewrite == "truth")
-        how = ov_eval::TrackRewrite::Truth;
+        how = ovton::eval::TrackRewrite::Truth;
       else if (rewrite == "shuffle")
-        how = ov_eval::TrackRewrite::Shuffle;
+        how = ovton::eval::TrackRewrite::Shuffle;
       else if (rewrite.rfind("white:", 0) == 0) {
-        how = ov_eval::TrackRewrite::White;
+        how = ovton::eval::TrackRewrite::White;
         sigma = num(6);
       } else if (rewrite.rfind("ar1:", 0) == 0 && rewrite.find(':', 4) != std::string::npos) {
-        how = ov_eval::TrackRewrite::Ar1;
+        how = ovton::eval::TrackRewrite::Ar1;
         sigma = num(4);
         rho = num(rewrite.find(':', 4) + 1);
       } else
         throw std::invalid_argument(rewrite);
     } catch (const std::logic_error &) {
-      throw ov_core::UsageError("--rewrite: expected truth, white:S, ar1:S:RHO or shuffle, got '" + rewrite + "'");
+      throw ovton::core::UsageError("--rewrite: expected truth, white:S, ar1:S:RHO or shuffle, got '" + rewrite + "'");
     }
-    points = ov_eval::rewrite_tracks(points, data, how, sigma, rho, seed, so);
+    points = ovton::eval::rewrite_tracks(points, data, how, sigma, rho, seed, so);
   }
   if (!out_file.empty()) {
     std::ofstream out(out_file);
     if (!out)
-      throw ov_core::DataError(out_file, "cannot open for writing");
+      throw ovton::core::DataError(out_file, "cannot open for writing");
     out << "#timestamp_ns,feature_id,u,v\n";
     char buf[128];
     for (const auto &p : points) {
@@ -136,17 +136,17 @@ int ovton::cmd_track(const ovton::Args &args) {
       out << buf;
     }
     if (!out)
-      throw ov_core::DataError(out_file, "write failed");
+      throw ovton::core::DataError(out_file, "write failed");
   }
   if (score) {
-    const ov_eval::TrackTruthResult r = ov_eval::score_tracks(points, data, so);
-    const std::string table = ov_eval::track_truth_table(r);
+    const ovton::eval::TrackTruthResult r = ovton::eval::score_tracks(points, data, so);
+    const std::string table = ovton::eval::track_truth_table(r);
     std::cout << table;
     if (!md_file.empty()) {
       std::ofstream md(md_file);
       md << table;
       if (!md)
-        throw ov_core::DataError(md_file, "cannot write");
+        throw ovton::core::DataError(md_file, "cannot write");
     }
   }
   return 0;

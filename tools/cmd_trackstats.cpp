@@ -14,7 +14,7 @@
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
 
-namespace ovton {
+namespace ovton::cli {
 
 namespace {
 
@@ -23,13 +23,13 @@ void write_file(const fs::path &p, const std::string &text) {
   f << text;
   f.close();
   if (!f)
-    throw ov_core::DataError(p.string(), "cannot write");
+    throw ovton::core::DataError(p.string(), "cannot write");
 }
 
 int64_t seconds_to_ns_option(double s, const char *name) {
   if (!std::isfinite(s))
-    throw ov_core::UsageError(std::string("--") + name + " must be finite");
-  return ov_core::s_to_ns(s);
+    throw ovton::core::UsageError(std::string("--") + name + " must be finite");
+  return ovton::core::s_to_ns(s);
 }
 
 } // namespace
@@ -40,7 +40,7 @@ int cmd_trackstats(const Args &args) {
       "(Shi-Tomasi + pyramidal LK, forward-backward check): tracked points, new-feature share, track lengths,\n"
       "forward-backward error, image gradients and noise");
   std::string dataset, out;
-  ov_eval::TrackStatsOptions o;
+  ovton::eval::TrackStatsOptions o;
   double from_s = NAN, to_s = NAN;
   desc.add_options()("help,h", "this help")                                                                   //
       ("dataset,d", po::value(&dataset)->required(), "EuRoC folder (the one holding mav0/)")                  //
@@ -60,25 +60,25 @@ int cmd_trackstats(const Args &args) {
     o.t_begin_ns = seconds_to_ns_option(from_s, "from-s");
   if (vm.count("to-s"))
     o.t_end_ns = seconds_to_ns_option(to_s, "to-s");
-  const ov_core::Dataset data = ov_core::load_dataset(dataset);
+  const ovton::core::Dataset data = ovton::core::load_dataset(dataset);
   std::vector<std::pair<int64_t, std::string>> images;
   for (const auto &im : data.images) {
     if (im.features)
-      throw ov_core::UsageError(dataset + " is a feature-level folder (cam0/features.csv): no images to track");
+      throw ovton::core::UsageError(dataset + " is a feature-level folder (cam0/features.csv): no images to track");
     images.emplace_back(im.t_cam_ns, im.path);
   }
-  const ov_eval::TrackStatsResult r = ov_eval::track_statistics(images, o);
-  const std::string yaml = ov_eval::summary_yaml(r.summary, o);
+  const ovton::eval::TrackStatsResult r = ovton::eval::track_statistics(images, o);
+  const std::string yaml = ovton::eval::summary_yaml(r.summary, o);
   std::cout << "dataset: " << dataset << "\n" << yaml;
   if (!out.empty()) {
     fs::create_directories(out);
     write_file(fs::path(out) / "summary.yaml", "dataset: " + dataset + "\n" + yaml);
-    write_file(fs::path(out) / "frames.csv", ov_eval::frames_csv(r));
-    ov_eval::save_trackstats_plot(r, fs::path(dataset).filename().string(),
-                                  (fs::path(out) / "trackstats.png").string());
+    write_file(fs::path(out) / "frames.csv", ovton::eval::frames_csv(r));
+    ovton::eval::save_trackstats_plot(r, fs::path(dataset).filename().string(),
+                                      (fs::path(out) / "trackstats.png").string());
     std::cout << "wrote " << out << "/{summary.yaml,frames.csv,trackstats.png}\n";
   }
   return 0;
 }
 
-} // namespace ovton
+} // namespace ovton::cli

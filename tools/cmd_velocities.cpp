@@ -11,9 +11,9 @@
 
 namespace po = boost::program_options;
 
-int ovton::cmd_velocities(const ovton::Args &args) {
+int ovton::cli::cmd_velocities(const ovton::cli::Args &args) {
   std::string log_file, dataset_dir, md_file;
-  ov_eval::VelocityEvalOptions opt;
+  ovton::eval::VelocityEvalOptions opt;
   po::options_description desc(
       "usage: ovton velocities --log FILE --dataset DIR [--md FILE]\n\n"
       "Scores every image velocity in a velocity log (ovton run --velocity-log; in modes fvon/ton both networks\n"
@@ -35,19 +35,19 @@ int ovton::cmd_velocities(const ovton::Args &args) {
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
   if (log_file.empty() || dataset_dir.empty())
-    throw ov_core::UsageError("--log and --dataset are required (see ovton velocities --help)");
-  ov_core::LoadOptions lo;
+    throw ovton::core::UsageError("--log and --dataset are required (see ovton velocities --help)");
+  ovton::core::LoadOptions lo;
   lo.check_images_exist = false;
-  const ov_core::Dataset data = ov_core::load_dataset(dataset_dir, lo);
-  const auto rows = ov_core::read_velocity_log(log_file);
-  const ov_eval::VelocityEvalResult r = ov_eval::evaluate_velocities(rows, data, opt);
-  const std::string table = ov_eval::velocity_table(r);
+  const ovton::core::Dataset data = ovton::core::load_dataset(dataset_dir, lo);
+  const auto rows = ovton::core::read_velocity_log(log_file);
+  const ovton::eval::VelocityEvalResult r = ovton::eval::evaluate_velocities(rows, data, opt);
+  const std::string table = ovton::eval::velocity_table(r);
   std::cout << table;
   if (!md_file.empty()) {
     std::ofstream out(md_file);
     out << table;
     if (!out)
-      throw ov_core::DataError(md_file, "cannot write");
+      throw ovton::core::DataError(md_file, "cannot write");
   }
   return 0;
 }

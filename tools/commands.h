@@ -1,10 +1,10 @@
 #pragma once
 // Subcommands of `ovton`. Each parses its own flags (Boost.Program_options) and returns an exit code;
-// library errors (ov_core::DataError, UsageError) propagate to main(), which prints them.
+// library errors (ovton::core::DataError, UsageError) propagate to main(), which prints them.
 #include <string>
 #include <vector>
 
-namespace ovton {
+namespace ovton::cli {
 
 using Args = std::vector<std::string>; ///< arguments after the subcommand name
 
@@ -21,4 +21,4 @@ int cmd_track(const Args &args);
 int cmd_trackstats(const Args &args);
 int cmd_export(const Args &args);
 
-} // namespace ovton
+} // namespace ovton::cli

@@ -14,12 +14,12 @@
 
 namespace fs = std::filesystem;
 
-namespace ovton {
+namespace ovton::cli {
 
 namespace {
 
 /// One line for the log: the numbers a user watching a long comparison wants before the table is written.
-std::string done_line(const ov_eval::RunRecord &rec, const ov_eval::ReportRow &row, size_t done, size_t total) {
+std::string done_line(const ovton::eval::RunRecord &rec, const ovton::eval::ReportRow &row, size_t done, size_t total) {
   char buf[512];
   int n =
       std::snprintf(buf, sizeof(buf), "compare [%zu/%zu] %s: %s", done, total, rec.name.c_str(), rec.status.c_str());
@@ -40,46 +40,46 @@ std::string done_line(const ov_eval::RunRecord &rec, const ov_eval::ReportRow &r
 
 } // namespace
 
-std::vector<ov_msckf_ton::ModeSpec> parse_compare_modes(const std::string &list) {
+std::vector<ovton::msckf::ModeSpec> parse_compare_modes(const std::string &list) {
   // Every MODE+PROCESS combination is valid; the name list checks emptiness and repeats, the spec parser the rest.
   std::vector<std::string> valid;
   std::stringstream ss(list);
   for (std::string item; std::getline(ss, item, ',');) {
     const size_t b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
     if (b != std::string::npos)
-      valid.push_back(ov_msckf_ton::parse_mode_spec(item.substr(b, e - b + 1)).name);
+      valid.push_back(ovton::msckf::parse_mode_spec(item.substr(b, e - b + 1)).name);
   }
-  std::vector<ov_msckf_ton::ModeSpec> modes;
+  std::vector<ovton::msckf::ModeSpec> modes;
   for (const auto &name :
-       ov_eval::parse_name_list(list, valid.empty() ? ov_msckf_ton::all_td_mode_names() : valid, "mode"))
-    modes.push_back(ov_msckf_ton::parse_mode_spec(name));
+       ovton::eval::parse_name_list(list, valid.empty() ? ovton::msckf::all_td_mode_names() : valid, "mode"))
+    modes.push_back(ovton::msckf::parse_mode_spec(name));
   return modes;
 }
 
-CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &req) {
-  using ov_msckf_ton::TdMode;
+CompareResult run_compare(const ovton::core::Dataset &data, const CompareRequest &req) {
+  using ovton::msckf::TdMode;
   if (req.modes.empty())
-    throw ov_core::UsageError("compare: no mode to run");
+    throw ovton::core::UsageError("compare: no mode to run");
   // Every run would fail the same way: say it once, before spending any time.
-  if (req.base.init.mode == ov_msckf_ton::InitMode::GroundTruth &&
+  if (req.base.init.mode == ovton::msckf::InitMode::GroundTruth &&
       (!data.has_groundtruth() || !data.groundtruth.front().has_velocity))
-    throw ov_core::UsageError("ground-truth initialisation needs full-state ground truth in " + data.root +
-                              " (use --init static)");
+    throw ovton::core::UsageError("ground-truth initialisation needs full-state ground truth in " + data.root +
+                                  " (use --init static)");
   std::error_code ec;
   fs::create_directories(req.out_dir, ec);
   if (ec)
-    throw ov_core::DataError(req.out_dir, "cannot create the output folder: " + ec.message());
+    throw ovton::core::DataError(req.out_dir, "cannot create the output folder: " + ec.message());
 
-  ov_eval::ReportInfo info = req.info;
+  ovton::eval::ReportInfo info = req.info;
 
   std::vector<std::string> to_run;
-  std::map<std::string, ov_eval::RunRecord> skipped;
-  std::map<std::string, ov_msckf_ton::ModeSpec> spec_of;
+  std::map<std::string, ovton::eval::RunRecord> skipped;
+  std::map<std::string, ovton::msckf::ModeSpec> spec_of;
   for (const auto &spec : req.modes) {
     const std::string &name = spec.name;
     spec_of[name] = spec;
     if (spec.mode == TdMode::Oracle && !data.has_td_truth()) {
-      ov_eval::RunRecord rec;
+      ovton::eval::RunRecord rec;
       rec.name = name;
       rec.status = "skipped: no td_truth/data.csv";
       info.notes.push_back("oracle skipped: " + data.root +
@@ -95,13 +95,13 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
   info.jobs = std::max(1, std::min(req.jobs, static_cast<int>(to_run.size())));
 
   // One coarse t_d search for every mode that estimates t_d (off keeps its fixed value, oracle reads the truth).
-  ov_msckf_ton::VioOptions searched = req.base, unsearched = req.base;
+  ovton::msckf::VioOptions searched = req.base, unsearched = req.base;
   searched.td.mode = TdMode::Sr;
   unsearched.td.search = false;
   // What the search did is shared read-only by every mode's filter instead of being done again: its tracks when its
   // window starts at the first image (tracks do not depend on t_d), else the images it decoded.
-  auto decoded = std::make_shared<ov_core::DecodedImages>();
-  auto tracked = std::make_shared<ov_core::TrackedStart>();
+  auto decoded = std::make_shared<ovton::core::DecodedImages>();
+  auto tracked = std::make_shared<ovton::core::TrackedStart>();
   if (const auto s = run_td_search(data, searched, decoded.get(), RunRequest::kKeepSearchImagesBytes, tracked.get())) {
     info.notes.push_back("coarse t_d search (shared by the modes that estimate t_d): " + s->summary() +
                          (tracked->tracker
@@ -113,9 +113,9 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
 
   const auto run_one = [&](const std::string &name) {
     RunRequest rr;
-    const ov_msckf_ton::ModeSpec &spec = spec_of.at(name);
+    const ovton::msckf::ModeSpec &spec = spec_of.at(name);
     rr.opt = spec.mode == TdMode::Off || spec.mode == TdMode::Oracle ? unsearched : searched;
-    ov_msckf_ton::apply_mode_spec(spec, rr.opt);
+    ovton::msckf::apply_mode_spec(spec, rr.opt);
     rr.output = (fs::path(req.out_dir) / ("traj_" + name + ".csv")).string();
     rr.max_images = req.max_images;
     if (tracked->tracker)
@@ -126,7 +126,7 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
     // A diverged filter (EstimatorFailure) or a run without a single pose (DataError) throws: run_parallel makes
     // that the mode's status, "failed: <why>".
     RunResult r = run_dataset(data, rr);
-    ov_eval::RunRecord rec;
+    ovton::eval::RunRecord rec;
     rec.name = name;
     rec.traj = std::move(r.traj);
     rec.traj_file = rr.output;
@@ -137,13 +137,13 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
       rec.status = "interrupted";
     return rec;
   };
-  const auto on_done = [&](const ov_eval::RunRecord &rec, size_t done, size_t total) {
+  const auto on_done = [&](const ovton::eval::RunRecord &rec, size_t done, size_t total) {
     if (!req.log)
       return;
-    const auto rows = ov_eval::evaluate_runs({rec}, data, req.report);
+    const auto rows = ovton::eval::evaluate_runs({rec}, data, req.report);
     *req.log << done_line(rec, rows.front(), done, total) << "\n" << std::flush;
   };
-  std::vector<ov_eval::RunRecord> ran = ov_eval::run_parallel(to_run, req.jobs, run_one, on_done, interrupted);
+  std::vector<ovton::eval::RunRecord> ran = ovton::eval::run_parallel(to_run, req.jobs, run_one, on_done, interrupted);
 
   CompareResult res;
   size_t k = 0;
@@ -155,9 +155,9 @@ CompareResult run_compare(const ov_core::Dataset &data, const CompareRequest &re
     res.failed += r.status.rfind("failed", 0) == 0;
     res.interrupted = res.interrupted || r.status == "interrupted" || r.status.rfind("not run", 0) == 0;
   }
-  res.rows = ov_eval::evaluate_runs(res.runs, data, req.report);
-  res.files = ov_eval::write_report(req.out_dir, res.runs, res.rows, data, info, req.report);
+  res.rows = ovton::eval::evaluate_runs(res.runs, data, req.report);
+  res.files = ovton::eval::write_report(req.out_dir, res.runs, res.rows, data, info, req.report);
   return res;
 }
 
-} // namespace ovton
+} // namespace ovton::cli

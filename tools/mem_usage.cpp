@@ -5,7 +5,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
-namespace ovton {
+namespace ovton::cli {
 
 double current_rss_mb() {
   std::FILE *f = std::fopen("/proc/self/statm", "r");
@@ -42,4 +42,4 @@ bool reset_peak_rss() {
   return std::fclose(f) == 0 && ok;
 }
 
-} // namespace ovton
+} // namespace ovton::cli

@@ -2,7 +2,7 @@
 // Resident memory and CPU time of this process, for the benchmark's "does memory stay flat" and cost columns. Linux
 // only; elsewhere the memory functions return NaN and the benchmark prints "n/a".
 
-namespace ovton {
+namespace ovton::cli {
 
 /// Current resident set size [MB] from /proc/self/statm (cheap: one small read, fine to call every frame).
 double current_rss_mb();
@@ -18,4 +18,4 @@ bool reset_peak_rss();
 /// CPU time (user + system, all threads) of this process so far [s], from getrusage.
 double process_cpu_s();
 
-} // namespace ovton
+} // namespace ovton::cli

@@ -11,24 +11,26 @@
 namespace {
 
 struct Command {
-  std::function<int(const ovton::Args &)> run;
+  std::function<int(const ovton::cli::Args &)> run;
   const char *help;
 };
 
 const std::map<std::string, Command> &commands() {
   static const std::map<std::string, Command> cmds = {
-      {"run", {ovton::cmd_run, "replay a dataset through the MSCKF and write a trajectory CSV"}},
-      {"compare", {ovton::cmd_compare, "run a dataset under several time-offset modes: tables and plots"}},
-      {"info", {ovton::cmd_info, "load a dataset folder, validate it and print what it holds"}},
-      {"eval", {ovton::cmd_eval, "APE/ARE/RPE/TPE/CIT of a trajectory against ground truth"}},
-      {"simulate", {ovton::cmd_simulate, "write a synthetic EuRoC-format folder with a known time offset"}},
-      {"export", {ovton::cmd_export, "write a dataset folder as a ROS 1 bag (with Kalibr calibration files)"}},
-      {"perturb", {ovton::cmd_perturb, "rewrite a real folder's image stamps with a time-offset model"}},
-      {"benchmark", {ovton::cmd_benchmark, "per-frame cost by stage, x real time and memory, mode by mode"}},
-      {"diagnose", {ovton::cmd_diagnose, "rank candidate effects behind the residuals of `run --residual-log`"}},
-      {"track", {ovton::cmd_track, "the KLT front end alone: tracks as features.csv, scored against the truth"}},
-      {"velocities", {ovton::cmd_velocities, "score the image velocities of `run --velocity-log` against the truth"}},
-      {"trackstats", {ovton::cmd_trackstats, "how long a KLT keeps features on a folder's images; gradients, noise"}},
+      {"run", {ovton::cli::cmd_run, "replay a dataset through the MSCKF and write a trajectory CSV"}},
+      {"compare", {ovton::cli::cmd_compare, "run a dataset under several time-offset modes: tables and plots"}},
+      {"info", {ovton::cli::cmd_info, "load a dataset folder, validate it and print what it holds"}},
+      {"eval", {ovton::cli::cmd_eval, "APE/ARE/RPE/TPE/CIT of a trajectory against ground truth"}},
+      {"simulate", {ovton::cli::cmd_simulate, "write a synthetic EuRoC-format folder with a known time offset"}},
+      {"export", {ovton::cli::cmd_export, "write a dataset folder as a ROS 1 bag (with Kalibr calibration files)"}},
+      {"perturb", {ovton::cli::cmd_perturb, "rewrite a real folder's image stamps with a time-offset model"}},
+      {"benchmark", {ovton::cli::cmd_benchmark, "per-frame cost by stage, x real time and memory, mode by mode"}},
+      {"diagnose", {ovton::cli::cmd_diagnose, "rank candidate effects behind the residuals of `run --residual-log`"}},
+      {"track", {ovton::cli::cmd_track, "the KLT front end alone: tracks as features.csv, scored against the truth"}},
+      {"velocities",
+       {ovton::cli::cmd_velocities, "score the image velocities of `run --velocity-log` against the truth"}},
+      {"trackstats",
+       {ovton::cli::cmd_trackstats, "how long a KLT keeps features on a folder's images; gradients, noise"}},
   };
   return cmds;
 }
@@ -57,16 +59,16 @@ int main(int argc, char **argv) {
     usage(std::cerr);
     return 2;
   }
-  ovton::Args args(argv + 2, argv + argc);
+  ovton::cli::Args args(argv + 2, argv + argc);
   try {
     return it->second.run(args);
-  } catch (const ov_core::DataError &e) {
+  } catch (const ovton::core::DataError &e) {
     std::cerr << "ovton " << name << ": data error: " << e.what() << "\n";
     return 3;
-  } catch (const ov_core::EstimatorFailure &e) {
+  } catch (const ovton::core::EstimatorFailure &e) {
     std::cerr << "ovton " << name << ": estimate failed: " << e.what() << "\n";
     return 4;
-  } catch (const ov_core::UsageError &e) {
+  } catch (const ovton::core::UsageError &e) {
     std::cerr << "ovton " << name << ": " << e.what() << "\n";
     return 2;
   } catch (const boost::program_options::error &e) {

@@ -4,7 +4,7 @@
 #include <csignal>
 #include <cstdio>
 
-namespace ovton {
+namespace ovton::cli {
 
 namespace {
 std::atomic<bool> g_interrupted{false};
@@ -42,4 +42,4 @@ void ProgressBar::finish() {
     std::fprintf(stderr, "\n");
 }
 
-} // namespace ovton
+} // namespace ovton::cli

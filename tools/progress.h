@@ -4,7 +4,7 @@
 #include <chrono>
 #include <string>
 
-namespace ovton {
+namespace ovton::cli {
 
 void install_interrupt_handler();
 bool interrupted();
@@ -23,4 +23,4 @@ private:
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_{};
 };
 
-} // namespace ovton
+} // namespace ovton::cli

@@ -11,38 +11,39 @@
 #include <cstdio>
 #include <memory>
 
-namespace ovton {
+namespace ovton::cli {
 
-void apply_dataset_defaults(const ov_core::Dataset &data, bool td_init_given, ov_msckf_ton::VioOptions &opt) {
+void apply_dataset_defaults(const ovton::core::Dataset &data, bool td_init_given, ovton::msckf::VioOptions &opt) {
   if (!td_init_given && data.td_prior_s != 0.0)
     opt.td.init_s = data.td_prior_s;
 }
 
-std::shared_ptr<const ov_core::GyroRotationPrior> make_rotation_prior(const ov_core::Dataset &data,
-                                                                      const ov_msckf_ton::VioOptions &opt) {
+std::shared_ptr<const ovton::core::GyroRotationPrior> make_rotation_prior(const ovton::core::Dataset &data,
+                                                                          const ovton::msckf::VioOptions &opt) {
   if (!opt.track.gyro_prior || data.imu.size() < 2)
     return nullptr;
   const Eigen::Matrix3d R_IC = data.imu_calib.T_BI.block<3, 3>(0, 0).transpose() * data.cam.T_BC.block<3, 3>(0, 0);
-  return std::make_shared<ov_core::GyroRotationPrior>(data.imu, R_IC, opt.td.init_s);
+  return std::make_shared<ovton::core::GyroRotationPrior>(data.imu, R_IC, opt.td.init_s);
 }
 
-std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset &data, ov_msckf_ton::VioOptions &opt,
-                                                          ov_core::DecodedImages *keep, size_t keep_bytes,
-                                                          ov_core::TrackedStart *tracked) {
-  using ov_msckf_ton::TdMode;
+std::optional<ovton::msckf::TdSearchResult> run_td_search(const ovton::core::Dataset &data,
+                                                          ovton::msckf::VioOptions &opt,
+                                                          ovton::core::DecodedImages *keep, size_t keep_bytes,
+                                                          ovton::core::TrackedStart *tracked) {
+  using ovton::msckf::TdMode;
   const bool due = opt.td.search && opt.td.mode != TdMode::Off && opt.td.mode != TdMode::Oracle;
   opt.td.search = false;
   if (!due)
     return std::nullopt;
-  ov_msckf_ton::TdSearchOptions so;
+  ovton::msckf::TdSearchOptions so;
   so.range_s = opt.td.search_range_s;
   so.track = opt.track;
   so.rotation_prior = make_rotation_prior(data, opt); // at the prior offset: the search has not found its own yet
   size_t kept_bytes = 0;
   bool first_load = true, keeping = keep != nullptr;
-  const auto load = [&](const ov_core::ImageEntry &e) {
-    cv::Mat img = ov_core::load_gray_image(e, data.cam.width, data.cam.height);
-    const auto index = ov_core::entry_index(data.images, e);
+  const auto load = [&](const ovton::core::ImageEntry &e) {
+    cv::Mat img = ovton::core::load_gray_image(e, data.cam.width, data.cam.height);
+    const auto index = ovton::core::entry_index(data.images, e);
     // A search that starts loading at the first image has its window there and hands its tracks over (search_td):
     // the filter then needs none of these images, and keeping them would only hold their memory.
     if (first_load && tracked && index == size_t{0})
@@ -55,7 +56,7 @@ std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset
     }
     return img;
   };
-  const auto r = ov_msckf_ton::search_td(data.images, data.imu, data.cam, opt.td.init_s, so, load, tracked);
+  const auto r = ovton::msckf::search_td(data.images, data.imu, data.cam, opt.td.init_s, so, load, tracked);
   if (r.found) {
     opt.td.init_s = r.td_s;
     // The filter's prior must cover the search's own error.
@@ -64,11 +65,11 @@ std::optional<ov_msckf_ton::TdSearchResult> run_td_search(const ov_core::Dataset
   return r;
 }
 
-RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
-  ov_msckf_ton::VioOptions opt = req.opt;
+RunResult run_dataset(const ovton::core::Dataset &data, const RunRequest &req) {
+  ovton::msckf::VioOptions opt = req.opt;
   RunResult res;
-  std::shared_ptr<const ov_core::DecodedImages> decoded = req.decoded;
-  ov_core::TrackedStart tracked; // the search's tracks, when the filter can go on from them
+  std::shared_ptr<const ovton::core::DecodedImages> decoded = req.decoded;
+  ovton::core::TrackedStart tracked; // the search's tracks, when the filter can go on from them
   if (req.tracked && req.tracked->tracker) {
     tracked.frames = req.tracked->frames;
     tracked.tracker = req.tracked->tracker->clone();
@@ -76,7 +77,7 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   if (decoded || req.tracked)
     res.td_search = run_td_search(data, opt);
   else {
-    auto kept = std::make_shared<ov_core::DecodedImages>();
+    auto kept = std::make_shared<ovton::core::DecodedImages>();
     res.td_search = run_td_search(data, opt, kept.get(), req.keep_search_images_bytes,
                                   req.reuse_search_tracks ? &tracked : nullptr);
     if (!kept->empty())
@@ -85,76 +86,76 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   res.images_predecoded = decoded ? decoded->size() : 0;
   if (res.td_search && req.progress) // before the run, so that it is seen even when the run fails
     std::fprintf(stderr, "coarse t_d search: %s\n", res.td_search->summary().c_str());
-  ov_msckf_ton::VioManager vio(opt, data.cam, data.imu_calib);
+  ovton::msckf::VioManager vio(opt, data.cam, data.imu_calib);
   const auto prior = make_rotation_prior(data, opt);
   vio.set_rotation_prior(prior);
   if (data.has_td_truth())
     vio.set_td_oracle([&data](int64_t t) { return data.td_truth_at(t); });
-  else if (opt.td.mode == ov_msckf_ton::TdMode::Oracle)
-    throw ov_core::UsageError("mode oracle needs " + data.root + " to have td_truth/data.csv");
-  std::unique_ptr<ov_eval::NeesAccumulator> nees;
-  if (opt.init.mode == ov_msckf_ton::InitMode::GroundTruth) {
+  else if (opt.td.mode == ovton::msckf::TdMode::Oracle)
+    throw ovton::core::UsageError("mode oracle needs " + data.root + " to have td_truth/data.csv");
+  std::unique_ptr<ovton::eval::NeesAccumulator> nees;
+  if (opt.init.mode == ovton::msckf::InitMode::GroundTruth) {
     if (!data.has_groundtruth() || !data.groundtruth.front().has_velocity)
-      throw ov_core::UsageError("ground-truth initialisation needs full-state ground truth in " + data.root);
+      throw ovton::core::UsageError("ground-truth initialisation needs full-state ground truth in " + data.root);
     vio.set_groundtruth(data.groundtruth);
-    nees = std::make_unique<ov_eval::NeesAccumulator>(data.groundtruth, data.td_truth);
+    nees = std::make_unique<ovton::eval::NeesAccumulator>(data.groundtruth, data.td_truth);
   }
-  std::unique_ptr<ov_core::TrajectoryWriter> writer;
+  std::unique_ptr<ovton::core::TrajectoryWriter> writer;
   if (!req.output.empty())
-    writer = std::make_unique<ov_core::TrajectoryWriter>(req.output, req.tum ? ov_core::TrajectoryFormat::Tum
-                                                                             : ov_core::TrajectoryFormat::Csv);
-  vio.set_state_callback([&](const ov_core::StateSample &s) {
+    writer = std::make_unique<ovton::core::TrajectoryWriter>(req.output, req.tum ? ovton::core::TrajectoryFormat::Tum
+                                                                                 : ovton::core::TrajectoryFormat::Csv);
+  vio.set_state_callback([&](const ovton::core::StateSample &s) {
     if (writer)
       writer->write(s);
     if (nees)
       nees->add(s);
     res.traj.push_back(s);
   });
-  std::unique_ptr<ov_msckf_ton::ResidualLogWriter> rlog;
+  std::unique_ptr<ovton::msckf::ResidualLogWriter> rlog;
   if (!req.residual_log.empty()) {
-    rlog = std::make_unique<ov_msckf_ton::ResidualLogWriter>(req.residual_log);
+    rlog = std::make_unique<ovton::msckf::ResidualLogWriter>(req.residual_log);
     vio.set_residual_log(rlog.get());
   }
-  std::unique_ptr<ov_core::VelocityLogWriter> vlog;
+  std::unique_ptr<ovton::core::VelocityLogWriter> vlog;
   if (!req.velocity_log.empty()) {
-    vlog = std::make_unique<ov_core::VelocityLogWriter>(req.velocity_log);
+    vlog = std::make_unique<ovton::core::VelocityLogWriter>(req.velocity_log);
     vio.set_velocity_log(vlog.get());
   }
 
-  std::unique_ptr<ov_core::ImagePrefetcher> prefetcher;
+  std::unique_ptr<ovton::core::ImagePrefetcher> prefetcher;
   if (req.prefetch && !data.images.empty() && !data.images.front().features)
-    prefetcher = std::make_unique<ov_core::ImagePrefetcher>(data.images, 2, decoded);
+    prefetcher = std::make_unique<ovton::core::ImagePrefetcher>(data.images, 2, decoded);
   // An image of the wrong size is reported with its file here, not as a tracker error without one.
-  const auto image_of = [&prefetcher, &data, &decoded](const ov_core::ImageEntry &e) {
+  const auto image_of = [&prefetcher, &data, &decoded](const ovton::core::ImageEntry &e) {
     if (!prefetcher) {
-      if (const auto index = decoded ? ov_core::entry_index(data.images, e) : std::nullopt)
+      if (const auto index = decoded ? ovton::core::entry_index(data.images, e) : std::nullopt)
         if (const auto it = decoded->find(*index); it != decoded->end())
           return it->second; // checked when the search decoded it
-      return ov_core::load_gray_image(e, data.cam.width, data.cam.height);
+      return ovton::core::load_gray_image(e, data.cam.width, data.cam.height);
     }
     cv::Mat img = prefetcher->get(e);
-    ov_core::check_gray_image(img, e, data.cam.width, data.cam.height);
+    ovton::core::check_gray_image(img, e, data.cam.width, data.cam.height);
     return img;
   };
   // Tracking on a thread of its own, and/or going on from the search's tracks; else the filter tracks the images
   // itself. Declared after the prefetcher it draws from, so that it stops first.
-  std::unique_ptr<ov_core::TrackPipeline> pipeline;
+  std::unique_ptr<ovton::core::TrackPipeline> pipeline;
   const bool threaded = prefetcher && req.track_thread;
   if (threaded || tracked.tracker) {
     if (!tracked.tracker)
-      tracked.tracker = std::make_unique<ov_core::TrackKLT>(ov_core::CameraModel(data.cam), opt.track);
+      tracked.tracker = std::make_unique<ovton::core::TrackKLT>(ovton::core::CameraModel(data.cam), opt.track);
     tracked.tracker->set_rotation_prior(prior); // at the offset the search found
     res.images_pretracked = tracked.frames.size();
-    pipeline = std::make_unique<ov_core::TrackPipeline>(
+    pipeline = std::make_unique<ovton::core::TrackPipeline>(
         data.images, std::move(tracked), [&image_of, &data](size_t i) { return image_of(data.images[i]); }, threaded);
-    vio.set_frame_source([&pipeline](const ov_core::ImageEntry &e) { return pipeline->take(e); });
+    vio.set_frame_source([&pipeline](const ovton::core::ImageEntry &e) { return pipeline->take(e); });
   } else {
     vio.set_image_source(image_of);
   }
-  ProgressBar bar(req.label.empty() ? "run " + ov_msckf_ton::to_string(opt.td.mode) : req.label, !req.progress);
+  ProgressBar bar(req.label.empty() ? "run " + ovton::msckf::to_string(opt.td.mode) : req.label, !req.progress);
   const auto t0 = std::chrono::steady_clock::now();
   size_t last_i = 0;
-  res.replay = ov_core::Replay(data).run(vio, [&](size_t i, size_t n) {
+  res.replay = ovton::core::Replay(data).run(vio, [&](size_t i, size_t n) {
     last_i = i;
     char extra[64];
     std::snprintf(extra, sizeof(extra), "t_d %.3f ms", vio.state().td * 1e3);
@@ -167,7 +168,7 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   res.interrupted = interrupted();
   if (last_i > 0)
-    res.data_span_s = ov_core::ns_to_s(data.images[last_i - 1].t_cam_ns - data.images.front().t_cam_ns);
+    res.data_span_s = ovton::core::ns_to_s(data.images[last_i - 1].t_cam_ns - data.images.front().t_cam_ns);
   res.counters = vio.counters();
   res.times = vio.times();
   if (nees)
@@ -176,10 +177,10 @@ RunResult run_dataset(const ov_core::Dataset &data, const RunRequest &req) {
   res.acceptance = vio.health().total();
   // A header-only trajectory is not a result: say why nothing was estimated.
   if (res.traj.empty() && !res.interrupted)
-    throw ov_core::DataError(data.root, "no pose was estimated from " + std::to_string(res.replay.images_fed) +
-                                            " images (" + std::to_string(res.replay.images_skipped) +
-                                            " beyond the IMU log); initialisation: " + res.init_message);
+    throw ovton::core::DataError(data.root, "no pose was estimated from " + std::to_string(res.replay.images_fed) +
+                                                " images (" + std::to_string(res.replay.images_skipped) +
+                                                " beyond the IMU log); initialisation: " + res.init_message);
   return res;
 }
 
-} // namespace ovton
+} // namespace ovton::cli

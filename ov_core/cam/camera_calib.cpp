@@ -1,9 +1,9 @@
 #include "ov_core/cam/camera_calib.h"
 
-namespace ov_core {
+namespace ovton::core {
 
 std::string to_string(DistortionModel m) {
   return m == DistortionModel::RadTan ? "radtan" : "equidistant";
 }
 
-} // namespace ov_core
+} // namespace ovton::core

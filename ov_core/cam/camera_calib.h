@@ -2,7 +2,7 @@
 #include <Eigen/Core>
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 enum class DistortionModel { RadTan, Equidistant };
 
@@ -29,4 +29,4 @@ struct ImuCalib {
 
 std::string to_string(DistortionModel m);
 
-} // namespace ov_core
+} // namespace ovton::core

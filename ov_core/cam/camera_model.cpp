@@ -3,7 +3,7 @@
 #include <Eigen/LU>
 #include <cmath>
 
-namespace ov_core {
+namespace ovton::core {
 
 CameraModel::CameraModel(const CameraCalib &calib) : calib_(calib) {
   if (calib_.width <= 0 || calib_.height <= 0)
@@ -122,4 +122,4 @@ Eigen::Vector3d CameraModel::unproject(const Eigen::Vector2d &uv) const {
   return Eigen::Vector3d(xn.x(), xn.y(), 1.0).normalized();
 }
 
-} // namespace ov_core
+} // namespace ovton::core

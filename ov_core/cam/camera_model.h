@@ -4,7 +4,7 @@
 #include "ov_core/cam/camera_calib.h"
 #include <Eigen/Core>
 
-namespace ov_core {
+namespace ovton::core {
 
 class CameraModel {
 public:
@@ -43,4 +43,4 @@ private:
   CameraCalib calib_;
 };
 
-} // namespace ov_core
+} // namespace ovton::core

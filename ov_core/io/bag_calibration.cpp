@@ -11,7 +11,7 @@
 
 namespace fs = std::filesystem;
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -167,4 +167,4 @@ BagCalibration resolve_bag_calibration(const std::string &bag, const std::vector
                       stem + ".yaml, and camchain-imucam.yaml + imu.yaml there");
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 struct BagCalibration {
   CameraCalib cam;
@@ -26,4 +26,4 @@ struct BagCalibration {
 /// imu.yaml. Throws DataError naming the bag and every place looked at when nothing is found.
 BagCalibration resolve_bag_calibration(const std::string &bag, const std::vector<std::string> &calib);
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <unistd.h>
 
-namespace ov_core {
+namespace ovton::core {
 
 void require_file(const std::string &file) {
   std::error_code ec;
@@ -160,4 +160,4 @@ double TextTableReader::to_double(const std::string &field, const char *what) co
   return v;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

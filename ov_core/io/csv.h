@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// The UTF-8 byte order mark some editors and spreadsheets put at the start of a text file.
 inline constexpr const char *kUtf8Bom = "\xEF\xBB\xBF";
@@ -45,4 +45,4 @@ void require_file(const std::string &file);
 void require_writable(const std::string &file);
 std::string join_path(const std::string &a, const std::string &b);
 
-} // namespace ov_core
+} // namespace ovton::core

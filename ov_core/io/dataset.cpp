@@ -10,7 +10,7 @@
 
 namespace fs = std::filesystem;
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -457,4 +457,4 @@ Dataset load_dataset(const std::string &dir, const LoadOptions &opt) {
   return load_euroc(dir, opt);
 }
 
-} // namespace ov_core
+} // namespace ovton::core

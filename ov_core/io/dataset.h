@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 struct Dataset {
   std::string root;               ///< folder the user named
@@ -55,4 +55,4 @@ struct KalibrImu {
 KalibrCamera load_kalibr_camchain(const std::string &file, const std::string &cam_name = "cam0");
 KalibrImu load_kalibr_imu(const std::string &file);
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-namespace ov_core {
+namespace ovton::core {
 namespace {
 
 constexpr const char *kPluginFile = "libovton_imgcodecs.so";
@@ -79,4 +79,4 @@ int png_compression_param() {
   return codecs().png_compression;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// 8-bit grayscale pixels of the image file `path`: 8-bit gray PNGs by the fast decoder, any other file as
 /// cv::imread(IMREAD_GRAYSCALE) reads it. Empty when the file cannot be read or decoded (the caller names the file).
@@ -25,4 +25,4 @@ bool encode_image(const std::string &ext, const cv::Mat &img, std::vector<uchar>
 /// The PNG writer's zlib level (cv::IMWRITE_PNG_COMPRESSION) for write_image's params.
 int png_compression_param();
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -4,7 +4,7 @@
 
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 void check_gray_image(const cv::Mat &img, const ImageEntry &e, int width, int height) {
   if (img.empty())
@@ -22,4 +22,4 @@ cv::Mat load_gray_image(const ImageEntry &e, int width, int height) {
   return img;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -5,7 +5,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// Throws DataError naming e.path when `img` is empty (unreadable) or not width x height.
 void check_gray_image(const cv::Mat &img, const ImageEntry &e, int width, int height);
@@ -13,4 +13,4 @@ void check_gray_image(const cv::Mat &img, const ImageEntry &e, int width, int he
 /// Decodes e.path as 8-bit grayscale and checks it as above.
 cv::Mat load_gray_image(const ImageEntry &e, int width, int height);
 
-} // namespace ov_core
+} // namespace ovton::core

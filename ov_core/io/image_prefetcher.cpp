@@ -1,7 +1,7 @@
 #include "ov_core/io/image_prefetcher.h"
 #include "ov_core/io/image_store.h"
 
-namespace ov_core {
+namespace ovton::core {
 namespace {
 
 cv::Mat decode_entry(const ImageEntry &e) {
@@ -92,4 +92,4 @@ cv::Mat ImagePrefetcher::get(size_t index) {
   return decode(index);
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -14,7 +14,7 @@
 #include <thread>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// Images decoded before the replay (the coarse t_d search's window), by index into the dataset's list. Shared
 /// read-only: a cv::Mat handed out shares the pixels, which no consumer writes.
@@ -64,4 +64,4 @@ private:
   std::thread thread_; ///< last: started once everything above is constructed
 };
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -1,7 +1,7 @@
 #include "ov_core/io/image_store.h"
 #include "ov_core/io/image_codecs.h"
 
-namespace ov_core {
+namespace ovton::core {
 
 cv::Mat load_image(const ImageEntry &e) {
   if (e.store)
@@ -11,4 +11,4 @@ cv::Mat load_image(const ImageEntry &e) {
   return read_gray_image(e.path);
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -6,7 +6,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// A container of images that are not files of their own (a ROS bag). Implementations must be safe to call from
 /// several threads (the prefetcher decodes on its own thread; an index asked again is decoded on the caller's).
@@ -22,4 +22,4 @@ public:
 /// the caller names the file). Feature-level entries have no pixels (empty).
 cv::Mat load_image(const ImageEntry &e);
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -65,4 +65,4 @@ void write_kalibr_imu(const std::string &file, const ImuCalib &imu, const std::s
   write_text(file, o.str());
 }
 
-} // namespace ov_core
+} // namespace ovton::core

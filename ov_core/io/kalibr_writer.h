@@ -6,11 +6,11 @@
 
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// cam0 with T_cam_imu = T_BC⁻¹ (Kalibr's convention), timeshift_cam_imu = td_prior_s, and its rostopic.
 void write_kalibr_camchain(const std::string &file, const CameraCalib &cam, double td_prior_s,
                            const std::string &rostopic);
 void write_kalibr_imu(const std::string &file, const ImuCalib &imu, const std::string &rostopic);
 
-} // namespace ov_core
+} // namespace ovton::core

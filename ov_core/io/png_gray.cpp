@@ -11,7 +11,7 @@
 #include <libdeflate.h>
 #endif
 
-namespace ov_core {
+namespace ovton::core {
 
 #ifdef OVTON_HAVE_LIBDEFLATE
 
@@ -252,4 +252,4 @@ bool read_png_gray8(const std::string &, cv::Mat &) {
 
 #endif
 
-} // namespace ov_core
+} // namespace ovton::core

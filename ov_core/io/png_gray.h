@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// True when this build has the fast path (libdeflate found at configure time).
 bool png_gray_fast_path_available();
@@ -20,4 +20,4 @@ bool decode_png_gray8(const uint8_t *data, size_t size, cv::Mat &out);
 /// Reads `path` and decodes it as above; false when the file cannot be read or is not of that kind.
 bool read_png_gray8(const std::string &path, cv::Mat &out);
 
-} // namespace ov_core
+} // namespace ovton::core

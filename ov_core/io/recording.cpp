@@ -4,7 +4,7 @@
 
 #include <fstream>
 
-namespace ov_core {
+namespace ovton::core {
 
 bool is_rosbag_file(const std::string &path) {
   std::ifstream in(path, std::ios::binary);
@@ -21,4 +21,4 @@ Dataset load_recording(const std::string &path, const BagOptions &opt) {
   return load_dataset(path);
 }
 
-} // namespace ov_core
+} // namespace ovton::core

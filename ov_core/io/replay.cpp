@@ -4,7 +4,7 @@
 
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 ReplayStats Replay::run(ReplayConsumer &c, const std::function<bool(size_t, size_t)> &progress) const {
   ReplayStats st;
@@ -38,4 +38,4 @@ ReplayStats Replay::run(ReplayConsumer &c, const std::function<bool(size_t, size
   return st;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

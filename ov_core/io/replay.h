@@ -7,7 +7,7 @@
 #include <functional>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// What the replay feeds. td_for_image_s(t_cam) is asked before each image: the consumer's current t_d for it
 /// decides how much IMU it needs (t_imu = t_cam + t_d), so the replay never hands it an image it cannot propagate to.
@@ -41,4 +41,4 @@ private:
   const std::vector<ImuData> &imu_;
 };
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -12,7 +12,7 @@
 #include <type_traits>
 #include <variant>
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -216,9 +216,9 @@ ResidualLog load_residual_log(const std::string &file) {
   return log;
 }
 
-} // namespace ov_core
+} // namespace ovton::core
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -343,4 +343,4 @@ std::vector<CalibrationLogRow> load_calibration_log(const std::string &file) {
   return rows;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

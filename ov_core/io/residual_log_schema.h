@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// Why a feature did or did not enter the update.
 enum class ResidualStatus : int {
@@ -103,4 +103,4 @@ std::string format_calibration_row(const CalibrationLogRow &r);
 /// IMU state's columns). Throws DataError with file:line like load_residual_log.
 std::vector<CalibrationLogRow> load_calibration_log(const std::string &file);
 
-} // namespace ov_core
+} // namespace ovton::core

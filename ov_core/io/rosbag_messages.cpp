@@ -7,7 +7,7 @@
 #include <cstring>
 #include <limits>
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -131,4 +131,4 @@ sensor_msgs::Imu imu_to_message(const ImuData &d, const std::string &frame_id) {
   return m;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -9,7 +9,7 @@
 
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// Throws DataError(file, where + ...) unless the message is an image ovton can read (encoding mono8, mono16, bgr8,
 /// rgb8, bgra8 or rgba8; data size consistent with step and height) of the calibration's width x height.
@@ -27,4 +27,4 @@ sensor_msgs::Imu imu_to_message(const ImuData &d, const std::string &frame_id);
 /// A stamp in ROS time; throws UsageError for stamps ROS 1 cannot hold (negative, or past 2106).
 ros::Time to_ros_time(int64_t t_ns);
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -16,7 +16,7 @@
 #include <mutex>
 #include <set>
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -209,4 +209,4 @@ Dataset load_bag(const std::string &file, const BagOptions &opt) {
   return d;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

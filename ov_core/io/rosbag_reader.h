@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 struct BagOptions {
   std::string
@@ -36,4 +36,4 @@ Dataset load_bag(const std::string &file, const BagOptions &opt = {});
 /// empty (a folder carries its own calibration).
 Dataset load_recording(const std::string &path, const BagOptions &opt = {});
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -3,7 +3,7 @@
 #include "ov_core/io/rosbag_writer.h"
 #include "ov_core/types/errors.h"
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 [[noreturn]] void unsupported(const std::string &file) {
@@ -25,4 +25,4 @@ BagWriteReport write_bag(const Dataset &, const std::string &out, const BagWrite
   unsupported(out);
 }
 
-} // namespace ov_core
+} // namespace ovton::core

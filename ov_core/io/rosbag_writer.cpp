@@ -10,7 +10,7 @@
 
 namespace fs = std::filesystem;
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -78,4 +78,4 @@ BagWriteReport write_bag(const Dataset &d, const std::string &out, const BagWrit
   return rep;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -8,7 +8,7 @@
 #include <functional>
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 struct BagWriteOptions {
   std::string cam_topic = "/cam0/image_raw";
@@ -31,4 +31,4 @@ struct BagWriteReport {
 BagWriteReport write_bag(const Dataset &d, const std::string &out, const BagWriteOptions &opt = {},
                          const std::function<bool(size_t, size_t)> &progress = {});
 
-} // namespace ov_core
+} // namespace ovton::core

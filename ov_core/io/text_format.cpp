@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-namespace ov_core {
+namespace ovton::core {
 
 std::string format_fixed(double v, int decimals, const char *missing) {
   if (!std::isfinite(v))
@@ -45,4 +45,4 @@ std::string csv_number(double v) {
   return buf;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

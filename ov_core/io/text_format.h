@@ -3,7 +3,7 @@
 // the same everywhere: "n/a" in tables, null in JSON, an empty cell in CSV.
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// Fixed-point with `decimals` digits, or `missing` for NaN/inf.
 std::string format_fixed(double v, int decimals, const char *missing = "n/a");
@@ -14,4 +14,4 @@ std::string json_string(const std::string &s);
 /// Full precision (%.9g) for CSV, or an empty cell for NaN/inf (spreadsheets and pandas read it as missing).
 std::string csv_number(double v);
 
-} // namespace ov_core
+} // namespace ovton::core

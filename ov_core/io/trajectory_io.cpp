@@ -7,7 +7,7 @@
 #include <iomanip>
 #include <optional>
 
-namespace ov_core {
+namespace ovton::core {
 
 const char *const kTrajectoryCsvHeader =
     "timestamp_ns,px,py,pz,qw,qx,qy,qz,vx,vy,vz,bgx,bgy,bgz,bax,bay,baz,td_s,td_sigma_s";
@@ -207,4 +207,4 @@ void write_td_truth(const std::string &file, const std::vector<TdSample> &td) {
     throw DataError(file, "write failed");
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 enum class TrajectoryFormat { Csv, Tum };
 
@@ -39,4 +39,4 @@ void write_euroc_groundtruth(const std::string &file, const std::vector<StateSam
 std::vector<TdSample> read_td_truth(const std::string &file);
 void write_td_truth(const std::string &file, const std::vector<TdSample> &td);
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -95,4 +95,4 @@ std::vector<VelocityLogRow> read_velocity_log(const std::string &path) {
   return rows;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// One observation. Velocities are in undistorted pixels per second (normalised coordinates × the mean focal
 /// length, the unit FVON and its gate work in); NaN where the rule or network gave none.
@@ -45,4 +45,4 @@ private:
 /// Reads a velocity log; errors name the file and line.
 std::vector<VelocityLogRow> read_velocity_log(const std::string &path);
 
-} // namespace ov_core
+} // namespace ovton::core

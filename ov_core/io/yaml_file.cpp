@@ -5,7 +5,7 @@
 #include <map>
 #include <sstream>
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -68,4 +68,4 @@ YAML::Node load_yaml_file(const std::string &file) {
   return parse_yaml_text(ss.str(), file);
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -8,7 +8,7 @@
 
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// Parses `file` (a UTF-8 byte order mark and OpenCV's "%YAML:1.0" first line are accepted). Throws DataError with
 /// the file and line for a missing/unreadable file, a syntax error, a top level that is not a mapping, or a key that
@@ -40,4 +40,4 @@ template <typename F> auto with_yaml_file(const std::string &file, F &&f) -> dec
   }
 }
 
-} // namespace ov_core
+} // namespace ovton::core

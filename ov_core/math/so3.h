@@ -5,7 +5,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
-namespace ov_core {
+namespace ovton::core {
 
 inline Eigen::Matrix3d skew(const Eigen::Vector3d &w) {
   Eigen::Matrix3d S;
@@ -55,4 +55,4 @@ inline Eigen::Quaterniond to_quat(const Eigen::Matrix3d &R) {
   return q;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -129,4 +129,4 @@ size_t FeatureDatabase::num_observations() const {
   return n;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -7,7 +7,7 @@
 #include <unordered_map>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// One observation of a feature in one image, stamped in the camera clock.
 struct FeatureObservation {
@@ -91,4 +91,4 @@ private:
   std::unordered_map<size_t, FeatureObservation> last_seen_; ///< newest observation of removed features
 };
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ov_core {
+namespace ovton::core {
 
 GyroRotationPrior::GyroRotationPrior(const std::vector<ImuData> &imu, const Eigen::Matrix3d &R_IC, double td_s)
     : R_IC_(R_IC), td_ns_(static_cast<int64_t>(std::llround(td_s * 1e9))) {
@@ -43,4 +43,4 @@ std::optional<Eigen::Matrix3d> GyroRotationPrior::camera_rotation(int64_t t0_cam
   return (R_IC_.transpose() * R_I0_I * R_IC_).transpose();
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -10,7 +10,7 @@
 #include <optional>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 class GyroRotationPrior {
 public:
@@ -30,4 +30,4 @@ private:
   int64_t td_ns_;
 };
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -9,7 +9,7 @@
 #include <immintrin.h>
 #endif
 
-namespace ov_core {
+namespace ovton::core {
 namespace {
 
 // Eight floats: GCC/clang vector extensions, compiled to one AVX register where the build has AVX2 (OVTON_AVX2) and to
@@ -307,4 +307,4 @@ void lk_flow(const LkPyramid &prev, const LkPyramid &next, const std::vector<cv:
   });
 }
 
-} // namespace ov_core
+} // namespace ovton::core

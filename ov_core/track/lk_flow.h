@@ -11,7 +11,7 @@
 
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// One image's pyramid as lk_flow reads it: per level the grey values as a float plane with a border wide enough for
 /// any window that starts inside the level. (The Scharr derivatives of a window, OpenCV's calcSharrDeriv: [3 10 3]
@@ -56,4 +56,4 @@ struct LkParams {
 void lk_flow(const LkPyramid &prev, const LkPyramid &next, const std::vector<cv::Point2f> &pts,
              std::vector<cv::Point2f> &next_pts, std::vector<unsigned char> &status, const LkParams &p);
 
-} // namespace ov_core
+} // namespace ovton::core

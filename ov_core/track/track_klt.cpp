@@ -11,7 +11,7 @@
 #include <cmath>
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 namespace {
 
@@ -399,4 +399,4 @@ void TrackKLT::merge_and_detect() {
   stats_.t_detection_ms = ms_since(t0);
 }
 
-} // namespace ov_core
+} // namespace ovton::core

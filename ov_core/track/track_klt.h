@@ -13,7 +13,7 @@
 #include <memory>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 enum class ImageEqualization { None, Histogram, Clahe };
 
@@ -152,4 +152,4 @@ private:
   TrackStatsTotals totals_;
 };
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -128,4 +128,4 @@ TrackedFrame TrackPipeline::take(size_t index) {
   return f;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

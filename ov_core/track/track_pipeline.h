@@ -18,7 +18,7 @@
 #include <thread>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// One image as the tracking thread handed it over.
 struct TrackedFrame {
@@ -88,4 +88,4 @@ private:
   std::thread thread_; // last: started once everything above is constructed; none when not threaded
 };
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// Bad or missing input data. Carries the file and (1-based) line so the user can find the problem.
 class DataError : public std::runtime_error {
@@ -43,4 +43,4 @@ private:
   int64_t t_ns_;
 };
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// One IMU reading, stamped in the IMU clock. EuRoC order: gyro [rad/s] first, then accel [m/s^2].
 struct ImuData {
@@ -32,7 +32,7 @@ class ImageStore; // ov_core/io/image_store.h
 struct ImageEntry {
   int64_t t_cam_ns = 0;
   std::string path; ///< absolute or dataset-relative path of the image file; for a bag message, "BAG: message N"
-  /// Set when the pixels live in a container (a ROS bag message) instead of a file: ov_core::load_image() asks it.
+  /// Set when the pixels live in a container (a ROS bag message) instead of a file: ovton::core::load_image() asks it.
   std::shared_ptr<const ImageStore> store;
   size_t store_index = 0; ///< which image of the store
   /// Feature-level datasets: the frame's observations instead of pixels (the image file need not exist).
@@ -74,4 +74,4 @@ struct TdSample {
   double td_s = 0.0;
 };
 
-} // namespace ov_core
+} // namespace ovton::core

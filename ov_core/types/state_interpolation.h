@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 
 /// State at t, linear in position and velocity, slerp in rotation (biases and t_d from the earlier sample);
 /// false outside the samples' span. `traj` must be sorted by time.
@@ -27,4 +27,4 @@ inline bool interpolate_state(const std::vector<StateSample> &traj, int64_t t, S
   return true;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

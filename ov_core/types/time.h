@@ -9,7 +9,7 @@
 #include <optional>
 #include <string>
 
-namespace ov_core {
+namespace ovton::core {
 
 inline double ns_to_s(int64_t ns) {
   return static_cast<double>(ns) * 1e-9;
@@ -72,4 +72,4 @@ inline std::optional<int64_t> try_seconds_parts_to_ns(int64_t sec_abs, int64_t f
   return negative ? -*sum : *sum;
 }
 
-} // namespace ov_core
+} // namespace ovton::core

@@ -9,7 +9,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 namespace {
 /// Time constant of the specific force's low pass [s]: how slowly the filter's bias follows it. Chosen on one log
@@ -46,7 +46,7 @@ struct Interval {
 /// reading). The attitude is the gyro's (less the filter's bias), pulled towards the filter's at each row with the time
 /// constant kAttitudeTauS (a complementary filter; docs/diagnose.md, "Accelerometer scale against gravity").
 std::vector<Interval> intervals(const std::vector<const CalibrationLogRow *> &rows,
-                                const std::vector<ov_core::ImuData> &imu, int64_t t_zero) {
+                                const std::vector<ovton::core::ImuData> &imu, int64_t t_zero) {
   std::vector<Interval> out;
   size_t i = 0;
   const auto filter_attitude = [](const CalibrationLogRow &r) {
@@ -80,13 +80,13 @@ std::vector<Interval> intervals(const std::vector<const CalibrationLogRow *> &ro
       if (h > 0) {
         const double span = last ? 1.0 : double(imu[i + 1].t_imu_ns - imu[i].t_imu_ns);
         const double u = last ? 0.0 : (0.5 * double(t + t_next) - double(imu[i].t_imu_ns)) / span;
-        const ov_core::ImuData &n = last ? imu[i] : imu[i + 1];
+        const ovton::core::ImuData &n = last ? imu[i] : imu[i + 1];
         const Eigen::Vector3d w = (1 - u) * imu[i].wm + u * n.wm - bg;
         const Eigen::Vector3d am = (1 - u) * imu[i].am + u * n.am;
-        const Eigen::Matrix3d Rm = R * ov_core::so3_exp(0.5 * h * w);
+        const Eigen::Matrix3d Rm = R * ovton::core::so3_exp(0.5 * h * w);
         iv.A += Rm * am.asDiagonal() * h;
         iv.B += Rm * h;
-        R = R * ov_core::so3_exp(h * w);
+        R = R * ovton::core::so3_exp(h * w);
         t = t_next;
       }
       if (t_next >= b.t_imu_ns)
@@ -194,7 +194,7 @@ bool build_accel_design(const UsedData &data, const DiagnoseOptions &opt, const 
               "D_a and sigma instead";
         return false;
       }
-  const std::vector<ov_core::ImuData> imu = imu_through_calibration(opt.imu, opt.calibration);
+  const std::vector<ovton::core::ImuData> imu = imu_through_calibration(opt.imu, opt.calibration);
   struct Sample {
     double t;
     Eigen::Vector3d b, f;
@@ -255,4 +255,4 @@ bool build_accel_design(const UsedData &data, const DiagnoseOptions &opt, const 
   return true;
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

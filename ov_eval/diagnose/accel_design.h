@@ -6,7 +6,7 @@
 #include "ov_eval/diagnose/regression.h"
 #include "ov_eval/diagnose/tracks.h"
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 /// Three rows per update of the calibration log (one per body axis): the filter's b̂_a,j against the measured specific
 /// force f_j (the raw accelerometer through the filter's D_a, low-passed like the bias follows it), both with their
@@ -32,4 +32,4 @@ bool build_accel_design(const UsedData &data, const DiagnoseOptions &opt, const 
 bool build_accel_gravity_design(const UsedData &data, const DiagnoseOptions &opt, const DiagnoseReport &rep, Design &db,
                                 std::string &why);
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

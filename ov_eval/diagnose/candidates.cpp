@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 double Coefs::s(int i) const {
   return std::sqrt(std::max(0.0, fit.cov(at[i], at[i])));
@@ -300,4 +300,4 @@ std::vector<EffectEstimate> candidate_estimates(const CandidateDef &def, const s
   return def.estimates(c, rep, d);
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 /// Time bins of the piecewise offset candidate (td_piecewise): a drift (kV, kVt) and, for the inner bins
 /// b = 1 .. kTdBins − 2, their own offset beyond it (kTdBin0 + b − 1). The first and last bins carry none: with the
@@ -96,4 +96,4 @@ std::vector<EffectEstimate> candidate_estimates(const CandidateDef &def, const s
                                                 const std::vector<int> &joint, const DiagnoseReport &rep,
                                                 const Design &d);
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 const CalibrationLogRow *calibration_at(const std::vector<CalibrationLogRow> &rows, int64_t t_cam_ns) {
   if (rows.empty())
@@ -22,9 +22,9 @@ Eigen::Matrix3d mat3(const double *a) {
   return m;
 }
 
-std::vector<ov_core::ImuData> imu_through_calibration(const std::vector<ov_core::ImuData> &imu,
-                                                      const std::vector<CalibrationLogRow> &rows) {
-  std::vector<ov_core::ImuData> out = imu;
+std::vector<ovton::core::ImuData> imu_through_calibration(const std::vector<ovton::core::ImuData> &imu,
+                                                          const std::vector<CalibrationLogRow> &rows) {
+  std::vector<ovton::core::ImuData> out = imu;
   if (rows.empty())
     return out;
   for (auto &m : out) {
@@ -36,9 +36,9 @@ std::vector<ov_core::ImuData> imu_through_calibration(const std::vector<ov_core:
   return out;
 }
 
-Eigen::Vector3d gyro_at(const std::vector<ov_core::ImuData> &imu, double t_ns) {
+Eigen::Vector3d gyro_at(const std::vector<ovton::core::ImuData> &imu, double t_ns) {
   const auto it = std::lower_bound(imu.begin(), imu.end(), t_ns,
-                                   [](const ov_core::ImuData &m, double t) { return double(m.t_imu_ns) < t; });
+                                   [](const ovton::core::ImuData &m, double t) { return double(m.t_imu_ns) < t; });
   if (it == imu.begin())
     return imu.front().wm;
   if (it == imu.end())
@@ -48,14 +48,14 @@ Eigen::Vector3d gyro_at(const std::vector<ov_core::ImuData> &imu, double t_ns) {
   return a.wm + u * (b.wm - a.wm);
 }
 
-Eigen::Matrix3d body_rotation(const std::vector<ov_core::ImuData> &imu, double t0_ns, double t1_ns,
+Eigen::Matrix3d body_rotation(const std::vector<ovton::core::ImuData> &imu, double t0_ns, double t1_ns,
                               const Eigen::Vector3d &bias) {
   const double span = 1e-9 * (t1_ns - t0_ns);
   const int steps = std::max(1, static_cast<int>(std::abs(span) / 1e-3));
   const double dt = span / steps;
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   for (int k = 0; k < steps; ++k)
-    R = R * ov_core::so3_exp((gyro_at(imu, t0_ns + 1e9 * (k + 0.5) * dt) - bias) * dt);
+    R = R * ovton::core::so3_exp((gyro_at(imu, t0_ns + 1e9 * (k + 0.5) * dt) - bias) * dt);
   return R;
 }
 
@@ -65,4 +65,4 @@ double focal_estimate(const CalibrationLogRow &row, double fu, double fv) {
   return 0.5 * (row.intrinsics[0] / fu + row.intrinsics[1] / fv) - 1.0;
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -10,9 +10,9 @@
 #include <cstdint>
 #include <vector>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
-using ov_core::CalibrationLogRow;
+using ovton::core::CalibrationLogRow;
 
 /// The calibration the filter held for the image at t_cam_ns: the row of the first update at or after it (the first
 /// that can have used the image), the last row after the log's end; nullptr when there are no rows.
@@ -23,18 +23,18 @@ Eigen::Matrix3d mat3(const double *a);
 
 /// The raw IMU through the filter's IMU intrinsics at each reading: ω_m -> D_w·ω_m, a_m -> D_a·a_m (the biases are left
 /// in: the rate rows remove them per bin). The reading at IMU time t takes the calibration of camera time t − t̂_d.
-std::vector<ov_core::ImuData> imu_through_calibration(const std::vector<ov_core::ImuData> &imu,
-                                                      const std::vector<CalibrationLogRow> &rows);
+std::vector<ovton::core::ImuData> imu_through_calibration(const std::vector<ovton::core::ImuData> &imu,
+                                                          const std::vector<CalibrationLogRow> &rows);
 
 /// Gyro reading at IMU time t_ns (linear interpolation; clamped at the ends).
-Eigen::Vector3d gyro_at(const std::vector<ov_core::ImuData> &imu, double t_ns);
+Eigen::Vector3d gyro_at(const std::vector<ovton::core::ImuData> &imu, double t_ns);
 
 /// The body's rotation R_{B0 B1} from IMU time t0_ns to t1_ns: the gyro less `bias`, midpoint rule in ~1 ms steps.
-Eigen::Matrix3d body_rotation(const std::vector<ov_core::ImuData> &imu, double t0_ns, double t1_ns,
+Eigen::Matrix3d body_rotation(const std::vector<ovton::core::ImuData> &imu, double t0_ns, double t1_ns,
                               const Eigen::Vector3d &bias = Eigen::Vector3d::Zero());
 
 /// The filter's relative focal error ε̂ = ½·(f̂u/fu + f̂v/fv) − 1 against the nominal fu, fv, when it estimated the
 /// intrinsics (0 otherwise).
 double focal_estimate(const CalibrationLogRow &row, double fu, double fv);
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -10,7 +10,7 @@
 #include <cmath>
 #include <map>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 namespace {
 
@@ -29,7 +29,7 @@ struct FramePair {
 
 class Profile {
 public:
-  Profile(const ov_core::CameraModel &cam, std::vector<Pair> pairs, std::vector<FramePair> frames, int n_tracks)
+  Profile(const ovton::core::CameraModel &cam, std::vector<Pair> pairs, std::vector<FramePair> frames, int n_tracks)
       : cam_(cam), p_(std::move(pairs)), f_(std::move(frames)), n_tracks_(n_tracks) {}
 
   /// The weighted cost with depths and translations fitted at ε; the residuals and weights stay in e_, w_.
@@ -110,7 +110,7 @@ private:
     }
   }
 
-  const ov_core::CameraModel &cam_;
+  const ovton::core::CameraModel &cam_;
   std::vector<Pair> p_;
   std::vector<FramePair> f_;
   int n_tracks_;
@@ -127,8 +127,8 @@ TwoViewFocal focal_two_view(const UsedData &data, const DiagnoseOptions &opt, do
     out.why = "needs --dataset (the camera and the raw gyro)";
     return out;
   }
-  const ov_core::CameraModel cam(opt.camera);
-  const std::vector<ov_core::ImuData> imu = imu_through_calibration(opt.imu, opt.calibration);
+  const ovton::core::CameraModel cam(opt.camera);
+  const std::vector<ovton::core::ImuData> imu = imu_through_calibration(opt.imu, opt.calibration);
   std::vector<Pair> pairs;
   std::vector<FramePair> frames;
   std::map<std::pair<int64_t, int64_t>, int> frame_index;
@@ -231,4 +231,4 @@ void size_focal_from_two_views(const UsedData &data, const DiagnoseOptions &opt,
   add_note("sized from two views and the gyro (" + std::to_string(tv.pairs) + " pairs)");
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

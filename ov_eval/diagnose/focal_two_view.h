@@ -11,7 +11,7 @@
 
 #include <string>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 struct TwoViewFocal {
   bool ok = false;
@@ -29,4 +29,4 @@ TwoViewFocal focal_two_view(const UsedData &data, const DiagnoseOptions &opt, do
 void size_focal_from_two_views(const UsedData &data, const DiagnoseOptions &opt, const DiagnoseReport &rep,
                                CandidateResult &focal);
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -2,7 +2,7 @@
 
 #include <Eigen/LU>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 Eigen::Matrix<double, 2, 3> rot_flow(double x, double y) {
   Eigen::Matrix<double, 2, 3> B;
@@ -10,7 +10,7 @@ Eigen::Matrix<double, 2, 3> rot_flow(double x, double y) {
   return B;
 }
 
-ErrorDirs error_dirs(const ov_core::CameraModel *cam, const Eigen::Vector2d &x) {
+ErrorDirs error_dirs(const ovton::core::CameraModel *cam, const Eigen::Vector2d &x) {
   const Eigen::Vector2d k1 = x.squaredNorm() * x;
   if (!cam)
     return {x, k1};
@@ -20,4 +20,4 @@ ErrorDirs error_dirs(const ov_core::CameraModel *cam, const Eigen::Vector2d &x) 
   return {lu.solve(xd), lu.solve(k1)};
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

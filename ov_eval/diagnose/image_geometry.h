@@ -4,7 +4,7 @@
 
 #include <Eigen/Core>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 /// Rotational image flow of a normalised point per unit camera rotation (columns: rotation about x, y, z).
 Eigen::Matrix<double, 2, 3> rot_flow(double x, double y);
@@ -15,9 +15,9 @@ Eigen::Matrix<double, 2, 3> rot_flow(double x, double y);
 struct ErrorDirs {
   Eigen::Vector2d focal, k1;
 };
-ErrorDirs error_dirs(const ov_core::CameraModel *cam, const Eigen::Vector2d &x);
-inline Eigen::Vector2d focal_dir(const ov_core::CameraModel *cam, const Eigen::Vector2d &x) {
+ErrorDirs error_dirs(const ovton::core::CameraModel *cam, const Eigen::Vector2d &x);
+inline Eigen::Vector2d focal_dir(const ovton::core::CameraModel *cam, const Eigen::Vector2d &x) {
   return error_dirs(cam, x).focal;
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -14,7 +14,7 @@
 #include <map>
 #include <vector>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
@@ -222,7 +222,7 @@ private:
 /// flow at x. The data are perturbed by that for a step ε = kappa and fitted again. Only ω's response is used: with
 /// ψ's as well, a noise-free 1 % focal error read 0.80 % (without, 1.04 %; docs/diagnose.md). Leaves the fitter with
 /// the perturbed data's depth corrections.
-void add_focal_response(const FrameMap &frames, const ov_core::CameraModel &cam, FlowFitter &fitter, FitMap &fits,
+void add_focal_response(const FrameMap &frames, const ovton::core::CameraModel &cam, FlowFitter &fitter, FitMap &fits,
                         const FitMap &fits_psi,
                         const std::function<Eigen::Vector3d(int64_t, const FrameFit &)> &omega_bar,
                         const std::map<int64_t, Eigen::Vector3d> &omega_bar0, double kappa) {
@@ -264,7 +264,7 @@ void add_focal_response(const FrameMap &frames, const ov_core::CameraModel &cam,
 /// α a ±50 ms difference of it: docs/diagnose.md, "One set of ω rows").
 class GyroThroughImages {
 public:
-  explicit GyroThroughImages(const std::vector<ov_core::ImuData> &imu) : imu_(imu) {}
+  explicit GyroThroughImages(const std::vector<ovton::core::ImuData> &imu) : imu_(imu) {}
 
   /// In the camera frame, for the image with features `obs` fitted as `ff` (the fitter's current depth corrections),
   /// the camera-body rotation R_BC the filter held at the image.
@@ -301,7 +301,7 @@ private:
     return cache_.emplace(std::make_pair(t0, t1), body_rotation(imu_, t0, t1)).first->second;
   }
 
-  const std::vector<ov_core::ImuData> &imu_;
+  const std::vector<ovton::core::ImuData> &imu_;
   std::map<std::pair<double, double>, Eigen::Matrix3d> cache_;
 };
 
@@ -317,7 +317,7 @@ private:
 /// noise-free tracks 17.0 ms), now 19.2 ms (noise-free 20.1 ms).
 class GyroSlope {
 public:
-  explicit GyroSlope(const std::vector<ov_core::ImuData> &imu) : imu_(imu), angle_(imu.size()) {
+  explicit GyroSlope(const std::vector<ovton::core::ImuData> &imu) : imu_(imu), angle_(imu.size()) {
     if (!imu.empty())
       angle_[0].setZero();
     for (size_t i = 1; i < imu.size(); ++i) // trapezoid, per axis: only differences over ~50 ms are taken
@@ -337,19 +337,19 @@ private:
   /// The gyro's integral up to IMU time t [rad] (the rate held at the ends).
   Eigen::Vector3d angle_at(double t_ns) const {
     const auto it = std::lower_bound(imu_.begin(), imu_.end(), t_ns,
-                                     [](const ov_core::ImuData &m, double t) { return double(m.t_imu_ns) < t; });
+                                     [](const ovton::core::ImuData &m, double t) { return double(m.t_imu_ns) < t; });
     if (it == imu_.begin())
       return angle_.front() + 1e-9 * (t_ns - double(imu_.front().t_imu_ns)) * imu_.front().wm;
     if (it == imu_.end())
       return angle_.back() + 1e-9 * (t_ns - double(imu_.back().t_imu_ns)) * imu_.back().wm;
     const size_t i = static_cast<size_t>(it - imu_.begin());
-    const ov_core::ImuData &a = imu_[i - 1], &b = imu_[i];
+    const ovton::core::ImuData &a = imu_[i - 1], &b = imu_[i];
     const double dt = 1e-9 * (t_ns - double(a.t_imu_ns));
     const Eigen::Vector3d w = a.wm + dt / (1e-9 * double(b.t_imu_ns - a.t_imu_ns)) * (b.wm - a.wm);
     return angle_[i - 1] + 0.5 * dt * (a.wm + w);
   }
 
-  const std::vector<ov_core::ImuData> &imu_;
+  const std::vector<ovton::core::ImuData> &imu_;
   std::vector<Eigen::Vector3d> angle_;
 };
 
@@ -490,12 +490,12 @@ bool build_rate_design(const UsedData &data, const DiagnoseOptions &opt, const D
                        std::string &why) {
   const FlowData flow = collect_flow(data.tracks, rep);
   const Eigen::Matrix3d R_BC_nominal = opt.camera.T_BC.block<3, 3>(0, 0);
-  const ov_core::CameraModel cam(opt.camera);
+  const ovton::core::CameraModel cam(opt.camera);
   // The filter's calibration at each image, when the log has one (filter_calibration.h): the IMU through its
   // intrinsics, its camera-body rotation, its readout time and focal.
-  const std::vector<ov_core::ImuData> imu_cal =
-      opt.calibration.empty() ? std::vector<ov_core::ImuData>{} : imu_through_calibration(opt.imu, opt.calibration);
-  const std::vector<ov_core::ImuData> &imu = opt.calibration.empty() ? opt.imu : imu_cal;
+  const std::vector<ovton::core::ImuData> imu_cal =
+      opt.calibration.empty() ? std::vector<ovton::core::ImuData>{} : imu_through_calibration(opt.imu, opt.calibration);
+  const std::vector<ovton::core::ImuData> &imu = opt.calibration.empty() ? opt.imu : imu_cal;
   const auto R_BC_at = [&](int64_t t_cam) {
     const CalibrationLogRow *cal = calibration_at(opt.calibration, t_cam);
     return cal ? mat3(cal->R_BC) : R_BC_nominal;
@@ -567,4 +567,4 @@ bool build_rate_design(const UsedData &data, const DiagnoseOptions &opt, const D
   return true;
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -7,7 +7,7 @@
 
 #include <string>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 /// Rows of the rate design per image: ω_vis − ω̄_gyro (the gyro through the images' estimator) and ψ_vis, three axes
 /// each.
@@ -30,4 +30,4 @@ constexpr int kRateRowsPerImage = 6;
 bool build_rate_design(const UsedData &data, const DiagnoseOptions &opt, const DiagnoseReport &rep, Design &dr,
                        std::string &why);
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <exception>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
@@ -327,4 +327,4 @@ BinnedCurve binned_curve(const std::vector<int> &cols, const Design &d, const Fi
   return cur;
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 /// Rows to be explained (r) and the columns that may explain them (D), with the clusters the rows' errors are
 /// correlated within (a track for the residual, a second for the rates).
@@ -107,4 +107,4 @@ std::vector<size_t> stepwise(const Design &d, const std::vector<StepCandidate> &
 BinnedCurve binned_curve(const std::vector<int> &cols, const Design &d, const Fit &fit, const std::vector<int> &joint,
                          int bins);
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

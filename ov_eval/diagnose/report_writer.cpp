@@ -12,7 +12,7 @@
 #include <iomanip>
 #include <sstream>
 
-namespace ov_eval {
+namespace ovton::eval {
 
 namespace {
 
@@ -21,7 +21,7 @@ std::string estimates_text(const CandidateResult &c) {
   for (const auto &e : c.estimates) {
     if (!s.empty())
       s += "; ";
-    s += e.name + " " + ov_core::format_fixed(e.value, 3) + " ± " + ov_core::format_fixed(e.stderr_, 3) +
+    s += e.name + " " + ovton::core::format_fixed(e.value, 3) + " ± " + ovton::core::format_fixed(e.stderr_, 3) +
          (e.unit.empty() ? "" : " " + e.unit);
   }
   return s.empty() ? "-" : s;
@@ -90,7 +90,7 @@ void plot_td_bins(const DiagnoseReport &rep, const std::string &file) {
   for (const auto &c : rep.candidates)
     if (c.key == "td_drift" && c.estimates.size() >= 3)
       p.add_line(c.estimates[0].value, c.estimates[2].value - c.estimates[0].value * 0.5 * rep.duration_s,
-                 "td_drift fit: " + ov_core::format_fixed(c.estimates[0].value, 3) + " ms/s");
+                 "td_drift fit: " + ovton::core::format_fixed(c.estimates[0].value, 3) + " ms/s");
   p.add_hline(0.0);
   p.save_png(file);
 }
@@ -114,13 +114,13 @@ PlotList write_plots(const DiagnoseReport &rep, const std::string &out_dir) {
     if (c.curve.x.size() < 2)
       continue;
     const std::string name = "diagnose_" + std::to_string(c.rank) + "_" + c.key + ".png";
-    plot_curve(c, ov_core::join_path(out_dir, name));
+    plot_curve(c, ovton::core::join_path(out_dir, name));
     plots.push_back({c.key, name});
     ++plotted;
   }
   if (rep.td_bins.size() >= 2) {
     const std::string name = "diagnose_td_per_time_bin.png";
-    plot_td_bins(rep, ov_core::join_path(out_dir, name));
+    plot_td_bins(rep, ovton::core::join_path(out_dir, name));
     plots.push_back({"td_bins", name});
   }
   return plots;
@@ -134,12 +134,12 @@ std::string markdown_text(const DiagnoseReport &rep, const PlotList &plots) {
      << "- rows read " << rep.rows_read << "; used " << rep.rows_used << " observations in " << rep.tracks_used
      << " tracks (accepted + chi-square gated); " << rep.rows_triangulation_failed << " triangulation-failure rows and "
      << rep.rows_without_velocity << " rows without image velocity left out\n"
-     << "- span " << ov_core::format_fixed(rep.duration_s, 1) << " s; residual RMS "
-     << ov_core::format_fixed(rep.residual_rms_px, 3) << " px, robust sigma "
-     << ov_core::format_fixed(rep.robust_sigma_px, 3) << " px\n"
+     << "- span " << ovton::core::format_fixed(rep.duration_s, 1) << " s; residual RMS "
+     << ovton::core::format_fixed(rep.residual_rms_px, 3) << " px, robust sigma "
+     << ovton::core::format_fixed(rep.robust_sigma_px, 3) << " px\n"
      << "- intrinsics " << (rep.intrinsics_fitted ? "fitted from the log" : "from the dataset") << ": fu "
-     << ov_core::format_fixed(rep.fu, 1) << ", fv " << ov_core::format_fixed(rep.fv, 1) << ", cu "
-     << ov_core::format_fixed(rep.cu, 1) << ", cv " << ov_core::format_fixed(rep.cv, 1) << " px; image height "
+     << ovton::core::format_fixed(rep.fu, 1) << ", fv " << ovton::core::format_fixed(rep.fv, 1) << ", cu "
+     << ovton::core::format_fixed(rep.cu, 1) << ", cv " << ovton::core::format_fixed(rep.cv, 1) << " px; image height "
      << rep.image_height << " px; image velocity "
      << (o.use_logged_velocity ? "from the log's column" : "from the track's predicted positions") << "\n"
      << "- time candidates: "
@@ -147,8 +147,8 @@ std::string markdown_text(const DiagnoseReport &rep, const PlotList &plots) {
                              : "on the residual (no raw gyro: pass --dataset); a lower bound")
      << "\n"
      << "- verdict rule: EXPLAINED when selected by forward stepwise regression: significance >= "
-     << ov_core::format_fixed(o.min_sigma, 1)
-     << " sigma (Wald, track-clustered) and >= " << ov_core::format_fixed(100 * o.min_explained, 1)
+     << ovton::core::format_fixed(o.min_sigma, 1)
+     << " sigma (Wald, track-clustered) and >= " << ovton::core::format_fixed(100 * o.min_explained, 1)
      << " % of the Huber loss of its data (the residual; for time candidates from rates, the rate mismatch) removed "
         "beyond the candidates selected before it\n\n";
   const CandidateResult *first = top_effect(rep);
@@ -156,15 +156,15 @@ std::string markdown_text(const DiagnoseReport &rep, const PlotList &plots) {
     md << "**No candidate explains the residuals** (nothing passes both thresholds).\n\n";
   else
     md << "**Top effect: " << first->key << "** — " << first->description << "; " << estimates_text(*first)
-       << "; removes " << ov_core::format_fixed(100 * first->explained_added, 1) << " % of the "
+       << "; removes " << ovton::core::format_fixed(100 * first->explained_added, 1) << " % of the "
        << (rep.time_from_rates && first->key.rfind("td_", 0) == 0 ? "rate mismatch's" : "residual's") << " loss.\n\n";
   md << "| rank | candidate | verdict | explained alone [%] | added [%] | sigma | estimate (± 1 SE) | note |\n"
      << "|---:|---|---|---:|---:|---:|---|---|\n";
   for (const auto &c : rep.candidates)
     md << "| " << c.rank << " | " << c.key << " | " << (c.explained ? "**explained**" : "not explained") << " | "
-       << ov_core::format_fixed(100 * c.explained_alone, 2) << " | "
-       << ov_core::format_fixed(100 * c.explained_added, 2) << " | " << ov_core::format_fixed(c.sigma, 1) << " | "
-       << estimates_text(c) << " | " << c.note << " |\n";
+       << ovton::core::format_fixed(100 * c.explained_alone, 2) << " | "
+       << ovton::core::format_fixed(100 * c.explained_added, 2) << " | " << ovton::core::format_fixed(c.sigma, 1)
+       << " | " << estimates_text(c) << " | " << c.note << " |\n";
   md << "\nModels:\n\n";
   for (const auto &c : rep.candidates)
     md << "- `" << c.key << "`: " << c.description << "\n";
@@ -173,9 +173,9 @@ std::string markdown_text(const DiagnoseReport &rep, const PlotList &plots) {
        << "| t [s] | δt [ms] | SE [ms] | filter t̂_d [ms] | t̂_d + δt [ms] | observations |\n"
        << "|---:|---:|---:|---:|---:|---:|\n";
     for (const auto &b : rep.td_bins)
-      md << "| " << ov_core::format_fixed(b.t_s, 1) << " | " << ov_core::format_fixed(b.td_ms, 3) << " | "
-         << ov_core::format_fixed(b.td_se_ms, 3) << " | " << ov_core::format_fixed(b.td_filter_ms, 3) << " | "
-         << ov_core::format_fixed(b.td_filter_ms + b.td_ms, 3) << " | " << b.observations << " |\n";
+      md << "| " << ovton::core::format_fixed(b.t_s, 1) << " | " << ovton::core::format_fixed(b.td_ms, 3) << " | "
+         << ovton::core::format_fixed(b.td_se_ms, 3) << " | " << ovton::core::format_fixed(b.td_filter_ms, 3) << " | "
+         << ovton::core::format_fixed(b.td_filter_ms + b.td_ms, 3) << " | " << b.observations << " |\n";
   }
   if (!plots.empty()) {
     md << "\nPlots:\n\n";
@@ -192,51 +192,53 @@ std::string json_text(const DiagnoseReport &rep) {
   const auto &o = rep.options;
   const CandidateResult *first = top_effect(rep);
   std::ostringstream js;
-  js << "{\n  \"log\": " << ov_core::json_string(rep.log_file) << ",\n  \"rows_read\": " << rep.rows_read
+  js << "{\n  \"log\": " << ovton::core::json_string(rep.log_file) << ",\n  \"rows_read\": " << rep.rows_read
      << ",\n  \"rows_used\": " << rep.rows_used << ",\n  \"tracks_used\": " << rep.tracks_used
      << ",\n  \"rows_triangulation_failed\": " << rep.rows_triangulation_failed
      << ",\n  \"rows_without_velocity\": " << rep.rows_without_velocity
-     << ",\n  \"duration_s\": " << ov_core::json_number(rep.duration_s)
-     << ",\n  \"residual_rms_px\": " << ov_core::json_number(rep.residual_rms_px)
-     << ",\n  \"robust_sigma_px\": " << ov_core::json_number(rep.robust_sigma_px)
-     << ",\n  \"intrinsics\": {\"fu\": " << ov_core::json_number(rep.fu) << ", \"fv\": " << ov_core::json_number(rep.fv)
-     << ", \"cu\": " << ov_core::json_number(rep.cu) << ", \"cv\": " << ov_core::json_number(rep.cv)
+     << ",\n  \"duration_s\": " << ovton::core::json_number(rep.duration_s)
+     << ",\n  \"residual_rms_px\": " << ovton::core::json_number(rep.residual_rms_px)
+     << ",\n  \"robust_sigma_px\": " << ovton::core::json_number(rep.robust_sigma_px)
+     << ",\n  \"intrinsics\": {\"fu\": " << ovton::core::json_number(rep.fu)
+     << ", \"fv\": " << ovton::core::json_number(rep.fv) << ", \"cu\": " << ovton::core::json_number(rep.cu)
+     << ", \"cv\": " << ovton::core::json_number(rep.cv)
      << ", \"fitted\": " << (rep.intrinsics_fitted ? "true" : "false") << "},\n  \"image_height\": " << rep.image_height
-     << ",\n  \"min_sigma\": " << ov_core::json_number(o.min_sigma)
-     << ",\n  \"min_explained\": " << ov_core::json_number(o.min_explained)
-     << ",\n  \"top\": " << (first ? ov_core::json_string(first->key) : "null") << ",\n  \"candidates\": [";
+     << ",\n  \"min_sigma\": " << ovton::core::json_number(o.min_sigma)
+     << ",\n  \"min_explained\": " << ovton::core::json_number(o.min_explained)
+     << ",\n  \"top\": " << (first ? ovton::core::json_string(first->key) : "null") << ",\n  \"candidates\": [";
   for (size_t c = 0; c < rep.candidates.size(); ++c) {
     const auto &cr = rep.candidates[c];
-    js << (c ? "," : "") << "\n    {\"rank\": " << cr.rank << ", \"key\": " << ov_core::json_string(cr.key)
-       << ", \"model\": " << ov_core::json_string(cr.description)
+    js << (c ? "," : "") << "\n    {\"rank\": " << cr.rank << ", \"key\": " << ovton::core::json_string(cr.key)
+       << ", \"model\": " << ovton::core::json_string(cr.description)
        << ", \"explained\": " << (cr.explained ? "true" : "false")
-       << ", \"explained_alone\": " << ov_core::json_number(cr.explained_alone)
-       << ", \"explained_added\": " << ov_core::json_number(cr.explained_added)
-       << ", \"sigma\": " << ov_core::json_number(cr.sigma) << ", \"note\": " << ov_core::json_string(cr.note)
+       << ", \"explained_alone\": " << ovton::core::json_number(cr.explained_alone)
+       << ", \"explained_added\": " << ovton::core::json_number(cr.explained_added)
+       << ", \"sigma\": " << ovton::core::json_number(cr.sigma) << ", \"note\": " << ovton::core::json_string(cr.note)
        << ", \"estimates\": [";
     for (size_t e = 0; e < cr.estimates.size(); ++e)
-      js << (e ? ", " : "") << "{\"name\": " << ov_core::json_string(cr.estimates[e].name)
-         << ", \"unit\": " << ov_core::json_string(cr.estimates[e].unit)
-         << ", \"value\": " << ov_core::json_number(cr.estimates[e].value)
-         << ", \"stderr\": " << ov_core::json_number(cr.estimates[e].stderr_) << "}";
+      js << (e ? ", " : "") << "{\"name\": " << ovton::core::json_string(cr.estimates[e].name)
+         << ", \"unit\": " << ovton::core::json_string(cr.estimates[e].unit)
+         << ", \"value\": " << ovton::core::json_number(cr.estimates[e].value)
+         << ", \"stderr\": " << ovton::core::json_number(cr.estimates[e].stderr_) << "}";
     js << "]}";
   }
   js << "\n  ],\n  \"td_bins\": [";
   for (size_t b = 0; b < rep.td_bins.size(); ++b) {
     const auto &tb = rep.td_bins[b];
-    js << (b ? "," : "") << "\n    {\"t_s\": " << ov_core::json_number(tb.t_s)
-       << ", \"td_error_ms\": " << ov_core::json_number(tb.td_ms)
-       << ", \"td_error_se_ms\": " << ov_core::json_number(tb.td_se_ms)
-       << ", \"td_filter_ms\": " << ov_core::json_number(tb.td_filter_ms) << ", \"observations\": " << tb.observations
-       << "}";
+    js << (b ? "," : "") << "\n    {\"t_s\": " << ovton::core::json_number(tb.t_s)
+       << ", \"td_error_ms\": " << ovton::core::json_number(tb.td_ms)
+       << ", \"td_error_se_ms\": " << ovton::core::json_number(tb.td_se_ms)
+       << ", \"td_filter_ms\": " << ovton::core::json_number(tb.td_filter_ms)
+       << ", \"observations\": " << tb.observations << "}";
   }
   js << "\n  ],\n  \"unexplained\": [";
   for (size_t u = 0; u < rep.unexplained.size(); ++u) {
     const auto &ue = rep.unexplained[u];
-    js << (u ? "," : "") << "\n    {\"where\": " << ov_core::json_string(ue.where)
+    js << (u ? "," : "") << "\n    {\"where\": " << ovton::core::json_string(ue.where)
        << ", \"flagged\": " << (ue.flagged ? "true" : "false")
-       << ", \"explained\": " << ov_core::json_number(ue.explained) << ", \"sigma\": " << ov_core::json_number(ue.sigma)
-       << ", \"largest\": " << ov_core::json_string(ue.largest) << "}";
+       << ", \"explained\": " << ovton::core::json_number(ue.explained)
+       << ", \"sigma\": " << ovton::core::json_number(ue.sigma)
+       << ", \"largest\": " << ovton::core::json_string(ue.largest) << "}";
   }
   js << "\n  ]\n}\n";
   return js.str();
@@ -250,16 +252,16 @@ std::string format_ranking(const DiagnoseReport &rep) {
   for (const auto &c : rep.candidates) {
     os << std::left << std::setw(6) << c.rank << std::setw(23) << c.key << std::setw(15)
        << (c.explained ? "EXPLAINED" : "not explained") << std::right << std::setw(8)
-       << ov_core::format_fixed(100 * c.explained_alone, 2) << std::setw(10)
-       << ov_core::format_fixed(100 * c.explained_added, 2) << std::setw(8) << ov_core::format_fixed(c.sigma, 1) << "  "
-       << estimates_text(c) << (c.note.empty() ? "" : "  [" + c.note + "]") << "\n";
+       << ovton::core::format_fixed(100 * c.explained_alone, 2) << std::setw(10)
+       << ovton::core::format_fixed(100 * c.explained_added, 2) << std::setw(8) << ovton::core::format_fixed(c.sigma, 1)
+       << "  " << estimates_text(c) << (c.note.empty() ? "" : "  [" + c.note + "]") << "\n";
   }
   // Structure no candidate explains: the verdict UNEXPLAINED, with its size and where it shows.
   for (const auto &u : rep.unexplained)
     os << "      " << std::left << std::setw(23) << ("by " + u.where) << std::setw(15)
        << (u.flagged ? "UNEXPLAINED" : "noise") << std::right << std::setw(8)
-       << ov_core::format_fixed(100 * u.explained, 2) << std::setw(10) << "" << std::setw(8)
-       << ov_core::format_fixed(u.sigma, 1) << "  leftover's bin means; largest " << u.largest << "\n";
+       << ovton::core::format_fixed(100 * u.explained, 2) << std::setw(10) << "" << std::setw(8)
+       << ovton::core::format_fixed(u.sigma, 1) << "  leftover's bin means; largest " << u.largest << "\n";
   return os.str();
 }
 
@@ -267,17 +269,17 @@ std::vector<std::string> write_diagnose_report(const DiagnoseReport &rep, const 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (!std::filesystem::is_directory(out_dir))
-    throw ov_core::DataError(out_dir, "cannot create the output folder");
+    throw ovton::core::DataError(out_dir, "cannot create the output folder");
   // Plots first, so the report can link them.
   const PlotList plots = write_plots(rep, out_dir);
-  const std::string md_file = ov_core::join_path(out_dir, "diagnose.md");
-  const std::string js_file = ov_core::join_path(out_dir, "diagnose.json");
+  const std::string md_file = ovton::core::join_path(out_dir, "diagnose.md");
+  const std::string js_file = ovton::core::join_path(out_dir, "diagnose.json");
   write_file_atomically(md_file, markdown_text(rep, plots));
   write_file_atomically(js_file, json_text(rep));
   std::vector<std::string> files = {md_file, js_file};
   for (const auto &pl : plots)
-    files.push_back(ov_core::join_path(out_dir, pl.second));
+    files.push_back(ovton::core::join_path(out_dir, pl.second));
   return files;
 }
 
-} // namespace ov_eval
+} // namespace ovton::eval

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <memory>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
@@ -46,9 +46,9 @@ Eigen::Vector2d lagrange_derivative(double t0, double t1, double t2, const Eigen
 } // namespace
 
 Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, DiagnoseReport &rep) {
-  std::unique_ptr<ov_core::CameraModel> cam;
+  std::unique_ptr<ovton::core::CameraModel> cam;
   if (opt.have_camera)
-    cam = std::make_unique<ov_core::CameraModel>(opt.camera);
+    cam = std::make_unique<ovton::core::CameraModel>(opt.camera);
   const long n_obs = data.observations;
   const int64_t t_first = data.t_first;
   Design d;
@@ -102,7 +102,7 @@ Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, D
       for (size_t j = 1; j < m; ++j) {
         const Eigen::Vector3d w0(tr[j - 1]->w_x, tr[j - 1]->w_y, tr[j - 1]->w_z),
             w1(tr[j]->w_x, tr[j]->w_y, tr[j]->w_z);
-        R_B0B = R_B0B * ov_core::so3_exp(0.5 * (w0 + w1) * 1e-9 * double(tr[j]->t_cam_ns - tr[j - 1]->t_cam_ns));
+        R_B0B = R_B0B * ovton::core::so3_exp(0.5 * (w0 + w1) * 1e-9 * double(tr[j]->t_cam_ns - tr[j - 1]->t_cam_ns));
         R_C0C[j] = R_BC.transpose() * R_B0B * R_BC;
       }
     }
@@ -197,4 +197,4 @@ Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, D
   return d;
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

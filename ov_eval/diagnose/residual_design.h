@@ -5,10 +5,10 @@
 #include "ov_eval/diagnose/regression.h"
 #include "ov_eval/diagnose/tracks.h"
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 /// Clustered by track. Fills rep.residual_rms_px and rep.robust_sigma_px (rep's intrinsics and image height must be
 /// set).
 Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, DiagnoseReport &rep);
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

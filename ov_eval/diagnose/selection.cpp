@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 namespace {
 
@@ -171,4 +171,4 @@ std::vector<TimeBin> offset_per_time_bin(const Design &dt, bool from_rates, cons
   return out;
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 /// Candidates tested on the residual design d and, when `rates` is given, those that can be on the rate design (the
 /// others stay on d; rate_why says why there are no rates), and when `bias` is given the accelerometer's on the
@@ -29,4 +29,4 @@ std::vector<CandidateResult> rank_candidates(std::vector<CandidateResult> res, c
 std::vector<TimeBin> offset_per_time_bin(const Design &dt, bool from_rates, const UsedData &data,
                                          const DiagnoseOptions &opt, const DiagnoseReport &rep);
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

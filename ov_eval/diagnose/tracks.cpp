@@ -8,7 +8,7 @@
 #include <cmath>
 #include <limits>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 UsedData select_data(const ResidualLog &log, const DiagnoseOptions &opt, DiagnoseReport &rep) {
   UsedData data;
@@ -16,7 +16,7 @@ UsedData select_data(const ResidualLog &log, const DiagnoseOptions &opt, Diagnos
   // Rows with a residual (accepted or gated: a gated feature may be gated precisely because of the missing effect).
   long with_vel = 0;
   for (const auto &r : log.rows) {
-    if (r.status == ov_core::ResidualStatus::TriangulationFailed) {
+    if (r.status == ovton::core::ResidualStatus::TriangulationFailed) {
       ++rep.rows_triangulation_failed;
       continue;
     }
@@ -46,9 +46,9 @@ UsedData select_data(const ResidualLog &log, const DiagnoseOptions &opt, Diagnos
   for (auto &kv : tracks)
     data.observations += static_cast<long>(kv.second.size());
   if (data.observations < 50)
-    throw ov_core::DataError(log.file,
-                             "only " + std::to_string(data.observations) +
-                                 " usable observations (accepted or gated, in tracks of 3+): too few to diagnose");
+    throw ovton::core::DataError(log.file,
+                                 "only " + std::to_string(data.observations) +
+                                     " usable observations (accepted or gated, in tracks of 3+): too few to diagnose");
   rep.rows_used = data.observations;
   rep.tracks_used = static_cast<long>(tracks.size());
   data.t_first = std::numeric_limits<int64_t>::max(), data.t_last = std::numeric_limits<int64_t>::min();
@@ -90,7 +90,7 @@ void set_intrinsics(const UsedData &data, const DiagnoseOptions &opt, const std:
       break;
     }
     if (!(rep.fu > 0) || !(rep.fv > 0))
-      throw ov_core::DataError(log_file, "cannot fit the focal length from (u_px, x_norm): pass --dataset");
+      throw ovton::core::DataError(log_file, "cannot fit the focal length from (u_px, x_norm): pass --dataset");
   }
   double vmax = 0;
   for (auto *r : data.rows)
@@ -100,4 +100,4 @@ void set_intrinsics(const UsedData &data, const DiagnoseOptions &opt, const std:
                                                                 : static_cast<int>(std::ceil(vmax + 0.5));
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

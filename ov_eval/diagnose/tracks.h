@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 /// One feature in one update, its rows in time order.
 using Track = std::vector<const ResidualLogRow *>;
@@ -30,4 +30,4 @@ UsedData select_data(const ResidualLog &log, const DiagnoseOptions &opt, Diagnos
 /// rep. Throws DataError when they cannot be fitted.
 void set_intrinsics(const UsedData &data, const DiagnoseOptions &opt, const std::string &log_file, DiagnoseReport &rep);
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <functional>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 namespace {
 
@@ -106,4 +106,4 @@ std::vector<UnexplainedStructure> find_unexplained(const Design &d, const std::v
   return out;
 }
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

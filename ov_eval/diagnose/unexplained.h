@@ -8,11 +8,11 @@
 
 #include <vector>
 
-namespace ov_eval::diag {
+namespace ovton::eval::diag {
 
 /// `selected_cols`: the columns of the candidates selected on d. Rows without a region (−1) are left out of the
 /// region test.
 std::vector<UnexplainedStructure> find_unexplained(const Design &d, const std::vector<int> &selected_cols,
                                                    const DiagnoseOptions &opt, const DiagnoseReport &rep);
 
-} // namespace ov_eval::diag
+} // namespace ovton::eval::diag

@@ -6,14 +6,14 @@
 #include <cmath>
 #include <cstdio>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 namespace {
 
 /// " (at IMU time 12.345 s, t_d 10.000 ms)": where the run stopped, for the message.
 std::string where(const State &s) {
   char buf[80];
-  std::snprintf(buf, sizeof buf, " (at IMU time %.3f s, t_d %.3f ms)", ov_core::ns_to_s(s.t_imu_ns), s.td * 1e3);
+  std::snprintf(buf, sizeof buf, " (at IMU time %.3f s, t_d %.3f ms)", ovton::core::ns_to_s(s.t_imu_ns), s.td * 1e3);
   return buf;
 }
 
@@ -82,7 +82,7 @@ void FilterHealth::check(const State &s) const {
   // A non-finite state is never worth a row, checks enabled or not.
   const std::string bad = nonfinite_part(s);
   if (!bad.empty())
-    throw ov_core::EstimatorFailure(s.t_imu_ns, "the filter's " + bad + " is no longer finite" + where(s));
+    throw ovton::core::EstimatorFailure(s.t_imu_ns, "the filter's " + bad + " is no longer finite" + where(s));
   if (!opt_.enabled)
     return;
   check_rates(s);
@@ -99,7 +99,7 @@ void FilterHealth::check_rates(const State &s) const {
                   "the estimate has diverged: over the last %.1f s only %ld of %ld features entered the update (%ld "
                   "failed triangulation, %ld failed the chi-square gate); a healthy run keeps ~90 %%",
                   opt_.window_s, w.used, w.examined(), w.failed_triangulation, w.gated);
-    throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));
+    throw ovton::core::EstimatorFailure(s.t_imu_ns, msg + where(s));
   }
   if (w.gate_rate() > opt_.max_gate_rate) {
     // What the user can do about it: name the usual causes. On whole rendered flights with a drifting offset `sr`
@@ -111,7 +111,7 @@ void FilterHealth::check_rates(const State &s) const {
                   "move), a rolling shutter, a calibration error or understated noise (`ovton diagnose` on a "
                   "--residual-log of this run ranks what could explain it)",
                   opt_.window_s, w.gated, w.used + w.gated);
-    throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));
+    throw ovton::core::EstimatorFailure(s.t_imu_ns, msg + where(s));
   }
 }
 
@@ -149,7 +149,7 @@ void FilterHealth::check_td(const State &s) const {
                 "--residual-log of this run tells which; modes drift and sr+random_walk let t_d move)",
                 now.moved * 1e3, opt_.td_window_s, std::sqrt(now.allowed_var) * 1e3,
                 std::abs(now.moved) / std::max(std::sqrt(now.allowed_var), 1e-12));
-  throw ov_core::EstimatorFailure(s.t_imu_ns, msg + where(s));
+  throw ovton::core::EstimatorFailure(s.t_imu_ns, msg + where(s));
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -21,7 +21,7 @@
 #include <deque>
 #include <string>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 struct FilterHealthOptions {
   bool enabled = true;          ///< false: only count (VioOptions::health)
@@ -55,7 +55,7 @@ public:
   void on_update(int64_t t_ns, const UpdateStats &st);
   /// After each EKF update (MSCKF, SLAM): t_d's mean and variance before and after it.
   void on_td_update(int64_t t_ns, double td_prior, double var_prior, double td_post, double var_post);
-  /// Before a state is handed out. Throws ov_core::EstimatorFailure saying what went wrong when the state or its
+  /// Before a state is handed out. Throws ovton::core::EstimatorFailure saying what went wrong when the state or its
   /// covariance is not finite, the last window's acceptance collapsed or its gate rate is far beyond chance, or the
   /// updates moved t_d far more than they allowed.
   void check(const State &s) const;
@@ -91,4 +91,4 @@ private:
   UpdateTally total_;
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -2,12 +2,12 @@
 
 #include <cmath>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
-StaticInitResult static_initialize(const std::deque<ov_core::ImuData> &imu, int64_t t_end_ns, double window_s,
+StaticInitResult static_initialize(const std::deque<ovton::core::ImuData> &imu, int64_t t_end_ns, double window_s,
                                    double max_accel_std, double max_gyro_std) {
   StaticInitResult r;
-  const int64_t t_begin = t_end_ns - ov_core::s_to_ns(window_s);
+  const int64_t t_begin = t_end_ns - ovton::core::s_to_ns(window_s);
   if (imu.empty() || imu.front().t_imu_ns > t_begin) {
     r.why = "not enough IMU data yet";
     return r;
@@ -55,4 +55,4 @@ StaticInitResult static_initialize(const std::deque<ov_core::ImuData> &imu, int6
   return r;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -6,7 +6,7 @@
 #include <deque>
 #include <string>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 struct StaticInitResult {
   bool ok = false;
@@ -20,7 +20,7 @@ struct StaticInitResult {
 /// Uses the readings in [t_end − window, t_end]. At rest a_m = R_WBᵀ(−g) + b_a, so the mean specific force is
 /// the world z axis seen from the body; yaw is unobservable and set to zero (the body x axis projected on the
 /// horizontal plane is world x). b_a cannot be told apart from tilt here and starts at zero.
-StaticInitResult static_initialize(const std::deque<ov_core::ImuData> &imu, int64_t t_end_ns, double window_s,
+StaticInitResult static_initialize(const std::deque<ovton::core::ImuData> &imu, int64_t t_end_ns, double window_s,
                                    double max_accel_std, double max_gyro_std);
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -1,7 +1,7 @@
 #include "ov_msckf_ton/core/td_mode.h"
 #include "ov_core/types/errors.h"
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 namespace {
 const char *const kModeNames[] = {"off", "sr", "sir", "fvon", "tpn", "ton", "oracle", "drift"};
@@ -29,8 +29,8 @@ TdMode parse_td_mode(const std::string &s) {
   for (TdMode m : all_td_modes())
     if (to_string(m) == s)
       return m;
-  throw ov_core::UsageError("unknown time-offset mode '" + s +
-                            "' (expected off, sr, sir, fvon, tpn, ton, oracle or drift)");
+  throw ovton::core::UsageError("unknown time-offset mode '" + s +
+                                "' (expected off, sr, sir, fvon, tpn, ton, oracle or drift)");
 }
 
 std::string to_string(TdProcess p) {
@@ -41,8 +41,8 @@ TdProcess parse_td_process(const std::string &s) {
   for (int i = 0; i < 5; ++i)
     if (s == kProcessNames[i])
       return static_cast<TdProcess>(i);
-  throw ov_core::UsageError("unknown time-offset process '" + s +
-                            "' (expected auto, constant, random_walk, drift or tpn)");
+  throw ovton::core::UsageError("unknown time-offset process '" + s +
+                                "' (expected auto, constant, random_walk, drift or tpn)");
 }
 
 TdProcess resolve_td_process(TdMode m, TdProcess configured) {
@@ -65,11 +65,11 @@ ModeSpec parse_mode_spec(const std::string &s) {
   if (plus != std::string::npos) {
     spec.process = parse_td_process(s.substr(plus + 1));
     if (!estimates_td(spec.mode))
-      throw ov_core::UsageError("mode '" + s + "': " + to_string(spec.mode) +
-                                " does not estimate t_d, so it has no "
-                                "process to choose");
+      throw ovton::core::UsageError("mode '" + s + "': " + to_string(spec.mode) +
+                                    " does not estimate t_d, so it has no "
+                                    "process to choose");
   }
   return spec;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

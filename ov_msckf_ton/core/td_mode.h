@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 /// `drift` is beyond the paper: sr's observation with t_d and its rate ṫ_d in the state (the paper's eq. 4 as a
 /// Kalman process model), the principled rival of TPN.
@@ -15,7 +15,7 @@ enum class TdMode { Off, Sr, Sir, Fvon, Tpn, Ton, Oracle, Drift };
 /// How t_d moves between images: a constant, a random walk, a drift state [t_d, ṫ_d], or TPN's prediction.
 enum class TdProcess { Auto, Constant, RandomWalk, Drift, Tpn };
 
-TdMode parse_td_mode(const std::string &s); ///< throws ov_core::UsageError naming the valid modes
+TdMode parse_td_mode(const std::string &s); ///< throws ovton::core::UsageError naming the valid modes
 std::string to_string(TdMode m);
 const std::vector<TdMode> &all_td_modes();
 /// The mode strings, in the order of all_td_modes() (for option parsing and listings).
@@ -51,6 +51,6 @@ struct ModeSpec {
   TdMode mode = TdMode::Sr;
   TdProcess process = TdProcess::Auto;
 };
-ModeSpec parse_mode_spec(const std::string &s); ///< throws ov_core::UsageError
+ModeSpec parse_mode_spec(const std::string &s); ///< throws ovton::core::UsageError
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -11,7 +11,7 @@
 #include <chrono>
 #include <optional>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 namespace {
 
@@ -20,7 +20,7 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-ImuNoise noise_from(const ov_core::ImuCalib &imu, const VioOptions &opt) {
+ImuNoise noise_from(const ovton::core::ImuCalib &imu, const VioOptions &opt) {
   ImuNoise n;
   const double k = opt.imu.noise_multiplier;
   const auto pick = [k](double configured, double folder) { return k * (configured > 0 ? configured : folder); };
@@ -108,7 +108,7 @@ InertialInitOptions inertial_init_options(const VioOptions &o) {
 
 } // namespace
 
-VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, const ov_core::ImuCalib &imu)
+VioManager::VioManager(const VioOptions &opt, const ovton::core::CameraCalib &cam, const ovton::core::ImuCalib &imu)
     : opt_(opt), camera_(cam), tracker_(camera_, opt.track), propagator_(noise_from(imu, opt), opt.imu.gravity_mag),
       updater_(cam, updater_options(opt)), slam_(cam, slam_options(opt), updater_),
       state_(std::make_unique<State>(estimates_td(opt.td.mode))), health_(opt) {
@@ -127,7 +127,7 @@ VioManager::VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, c
     fvon_ = std::make_unique<FvonVelocityProvider>(cam, fvon_options(opt.ton, opt.td.velocity_debias != 0.0));
   td_model_ = make_td_model(opt_, [this](int64_t t_cam_ns) {
     if (!td_oracle_)
-      throw ov_core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
+      throw ovton::core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
     return td_oracle_(t_cam_ns);
   });
 }
@@ -136,15 +136,15 @@ const TpnDriver *VioManager::tpn() const {
   return tpn_driver_of(*td_model_);
 }
 
-void VioManager::set_velocity_log(ov_core::VelocityLogWriter *log) {
+void VioManager::set_velocity_log(ovton::core::VelocityLogWriter *log) {
   velocity_log_ = log;
   if (fvon_)
     fvon_->set_evaluate_both(log != nullptr);
 }
 
-void VioManager::log_velocities(const std::vector<const ov_core::Feature *> &feats, const VelocityProvider &used) {
+void VioManager::log_velocities(const std::vector<const ovton::core::Feature *> &feats, const VelocityProvider &used) {
   const double focal = 0.5 * (camera_.calib().intrinsics(0) + camera_.calib().intrinsics(1));
-  std::vector<ov_core::VelocityLogRow> rows;
+  std::vector<ovton::core::VelocityLogRow> rows;
   for (const auto *f : feats) {
     const FvonCandidates *cand = nullptr;
     if (fvon_) {
@@ -152,8 +152,8 @@ void VioManager::log_velocities(const std::vector<const ov_core::Feature *> &fea
       cand = it == fvon_->candidates().end() ? nullptr : &it->second;
     }
     for (size_t i = 0; i < f->obs.size(); ++i) {
-      const ov_core::FeatureObservation &o = f->obs[i];
-      ov_core::VelocityLogRow r;
+      const ovton::core::FeatureObservation &o = f->obs[i];
+      ovton::core::VelocityLogRow r;
       r.t_cam_ns = o.t_cam_ns;
       r.feature_id = f->id;
       r.obs_index = static_cast<int>(i);
@@ -194,24 +194,24 @@ double VioManager::td_for_image_s(int64_t t_cam_ns) const {
   return td_model_->td_at_image(*state_, t_cam_ns, initialized_ ? last_image_ns_ : -1);
 }
 
-void VioManager::on_imu(const ov_core::ImuData &m) {
+void VioManager::on_imu(const ovton::core::ImuData &m) {
   propagator_.feed_imu(m);
   if (!initialized_) {
     init_imu_.push_back(m);
     while (init_imu_.size() > 2 && init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns >
-                                       ov_core::s_to_ns(std::max(opt_.init.window_s, opt_.init.dyn_window_s) + 1.0))
+                                       ovton::core::s_to_ns(std::max(opt_.init.window_s, opt_.init.dyn_window_s) + 1.0))
       init_imu_.pop_front();
   }
 }
 
-void VioManager::on_image(const ov_core::ImageEntry &e) {
+void VioManager::on_image(const ovton::core::ImageEntry &e) {
   if (e.features) {
     process_features(e.t_cam_ns, *e.features);
     return;
   }
   const auto t0 = Clock::now();
   if (frame_source_) {
-    const ov_core::TrackedFrame f = frame_source_(e); // may wait for the tracking thread; rethrows its error
+    const ovton::core::TrackedFrame f = frame_source_(e); // may wait for the tracking thread; rethrows its error
     if (f.on_caller_thread) {
       times_.image_load += f.wait_image_ms;
       times_.tracking += f.track_ms;
@@ -223,9 +223,9 @@ void VioManager::on_image(const ov_core::ImageEntry &e) {
     process_frame(e.t_cam_ns, t0);
     return;
   }
-  cv::Mat gray = image_source_ ? image_source_(e) : ov_core::load_image(e);
+  cv::Mat gray = image_source_ ? image_source_(e) : ovton::core::load_image(e);
   if (gray.empty())
-    throw ov_core::DataError(e.path, "unreadable image (listed for stamp " + std::to_string(e.t_cam_ns) + ")");
+    throw ovton::core::DataError(e.path, "unreadable image (listed for stamp " + std::to_string(e.t_cam_ns) + ")");
   times_.image_load += ms_since(t0);
   process_image(e.t_cam_ns, gray);
 }
@@ -234,7 +234,7 @@ InitFrame VioManager::init_frame(int64_t t_cam_ns, int64_t t_imu_ns) const {
   InitFrame f;
   f.t_cam_ns = t_cam_ns;
   f.t_imu_ns = t_imu_ns;
-  std::vector<const ov_core::Feature *> seen;
+  std::vector<const ovton::core::Feature *> seen;
   db_.features_observed_at(t_cam_ns, seen);
   for (const auto *feat : seen)
     if (const auto *o = feat->at(t_cam_ns))
@@ -243,13 +243,13 @@ InitFrame VioManager::init_frame(int64_t t_cam_ns, int64_t t_imu_ns) const {
 }
 
 bool VioManager::try_initialize(int64_t t_cam_ns) {
-  const int64_t t_imu = t_cam_ns + ov_core::s_to_ns(td_for_image_s(t_cam_ns));
+  const int64_t t_imu = t_cam_ns + ovton::core::s_to_ns(td_for_image_s(t_cam_ns));
   State &s = *state_;
   const InitOptions &io = opt_.init;
   std::optional<Eigen::Matrix<double, ImuState::kSize, ImuState::kSize>> P_imu; // a dynamic initialisation's own
   if (io.mode == InitMode::GroundTruth) {
-    ov_core::StateSample g;
-    if (!ov_core::interpolate_state(gt_, t_imu, g)) {
+    ovton::core::StateSample g;
+    if (!ovton::core::interpolate_state(gt_, t_imu, g)) {
       init_msg_ = "no ground truth at the first image";
       return false;
     }
@@ -329,7 +329,7 @@ void VioManager::process_image(int64_t t_cam_ns, const cv::Mat &gray) {
   process_frame(t_cam_ns, t0);
 }
 
-void VioManager::process_features(int64_t t_cam_ns, const std::vector<ov_core::PointObservation> &obs) {
+void VioManager::process_features(int64_t t_cam_ns, const std::vector<ovton::core::PointObservation> &obs) {
   const auto t0 = Clock::now();
   for (const auto &o : obs)
     db_.add_observation(o.id, t_cam_ns, o.uv, camera_.undistort(o.uv));
@@ -369,7 +369,7 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
   }
   // The clone's t_d Jacobian needs the body rate AT the image time (interpolated reading), not the mean over the
   // last IMU interval, and not a stale value: the first clone after initialisation has no interval behind it.
-  ov_core::ImuData at_image;
+  ovton::core::ImuData at_image;
   const bool have_reading = propagator_.reading_at(s.t_imu_ns, at_image);
   // The clone's error from a t_d error follows the TRUE body rate; a vibrating gyro's reading at one instant is not
   // it, and on a flight whose rate barely changes the filter takes the vibration for information about t_d
@@ -403,10 +403,10 @@ void VioManager::propagate_to_image(int64_t t_cam_ns) {
   State &s = *state_;
   const double td_end = td_model_->td_at_image(s, t_cam_ns, last_image_ns_);
   // The clone is placed at t_cam + td_end so that its td_ref agrees with where the mean will be.
-  const int64_t t_imu = std::max(s.t_imu_ns, t_cam_ns + ov_core::s_to_ns(td_end));
-  const double dt_imu = ov_core::ns_to_s(t_imu - s.t_imu_ns);
+  const int64_t t_imu = std::max(s.t_imu_ns, t_cam_ns + ovton::core::s_to_ns(td_end));
+  const double dt_imu = ovton::core::ns_to_s(t_imu - s.t_imu_ns);
   if (!propagator_.propagate(s, t_imu))
-    throw ov_core::UsageError("IMU data does not reach image " + std::to_string(t_cam_ns));
+    throw ovton::core::UsageError("IMU data does not reach image " + std::to_string(t_cam_ns));
   td_model_->propagate(s, td_end, dt_imu);
 }
 
@@ -426,7 +426,7 @@ void VioManager::finish_image(int64_t t_cam_ns) {
 }
 
 bool VioManager::is_still(int64_t t_cam_ns) const {
-  std::vector<const ov_core::Feature *> seen;
+  std::vector<const ovton::core::Feature *> seen;
   db_.features_observed_at(t_cam_ns, seen);
   std::vector<double> disparity;
   disparity.reserve(seen.size());
@@ -443,7 +443,7 @@ bool VioManager::is_still(int64_t t_cam_ns) const {
   return disparity[disparity.size() / 2] < opt_.zupt.max_disparity_px;
 }
 
-const VelocityProvider &VioManager::prepare_velocities(const std::vector<const ov_core::Feature *> &feats,
+const VelocityProvider &VioManager::prepare_velocities(const std::vector<const ovton::core::Feature *> &feats,
                                                        std::optional<NextForFirstVelocityProvider> &with_first) {
   const VelocityProvider *velocities = opt_.td.sir_velocity == SirVelocity::Central
                                            ? static_cast<const VelocityProvider *>(&central_velocities_)
@@ -467,12 +467,12 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
   // Features the tracker lost in this frame have complete tracks; when the window is full, features seen by the
   // oldest clone must be used now or their information about it is lost — unless they are still tracked and there
   // is room for SLAM features: then they become landmarks in the state instead (delayed initialisation below).
-  std::vector<const ov_core::Feature *> feats, slam_init;
+  std::vector<const ovton::core::Feature *> feats, slam_init;
   db_.lost_features(t_cam_ns, feats);
   const bool window_full = static_cast<int>(s.clones.size()) > opt_.update.max_clones;
   int64_t oldest = s.clones.begin()->first;
   if (window_full) {
-    std::vector<const ov_core::Feature *> old;
+    std::vector<const ovton::core::Feature *> old;
     db_.features_observed_at(oldest, old);
     int room = std::min(opt_.slam.max_features - static_cast<int>(s.landmarks.size()), opt_.slam.max_init_per_frame);
     for (const auto *f : old) {
@@ -504,7 +504,8 @@ void VioManager::update_and_marginalize(int64_t t_cam_ns) {
   }
 }
 
-void VioManager::msckf_update(const std::vector<const ov_core::Feature *> &feats, const VelocityProvider &velocities) {
+void VioManager::msckf_update(const std::vector<const ovton::core::Feature *> &feats,
+                              const VelocityProvider &velocities) {
   State &s = *state_;
   std::vector<ResidualRecord> records;
   if (velocity_log_)
@@ -533,7 +534,7 @@ void VioManager::msckf_update(const std::vector<const ov_core::Feature *> &feats
     db_.remove(id);
 }
 
-void VioManager::slam_update(int64_t t_cam_ns, const std::vector<const ov_core::Feature *> &init,
+void VioManager::slam_update(int64_t t_cam_ns, const std::vector<const ovton::core::Feature *> &init,
                              const VelocityProvider &velocities) {
   State &s = *state_;
   const TdObservation td_obs = td_observation(opt_.td.mode);
@@ -552,7 +553,7 @@ void VioManager::slam_update(int64_t t_cam_ns, const std::vector<const ov_core::
     td_tracked_update([&] { slam_.initialize(s, init, t_cam_ns, td_obs, velocities, st); });
   // Landmarks the tracker lost in this image (or that left the camera's depth range) leave the state.
   for (const auto &[id, l] : s.landmarks) {
-    const ov_core::Feature *f = db_.get(id);
+    const ovton::core::Feature *f = db_.get(id);
     if (!f || f->newest().t_cam_ns != t_cam_ns)
       lost.push_back(id);
   }
@@ -568,10 +569,10 @@ void VioManager::slam_update(int64_t t_cam_ns, const std::vector<const ov_core::
   counters_.slam_gated += st.gated;
 }
 
-ov_core::StateSample VioManager::snapshot() const {
+ovton::core::StateSample VioManager::snapshot() const {
   const State &s = *state_;
   health_.check(s); // no row leaves the filter without it: a diverged estimate is an error, not an answer
-  ov_core::StateSample o;
+  ovton::core::StateSample o;
   o.t_ns = s.t_imu_ns;
   o.p = s.imu.p;
   o.q_WB = Eigen::Quaterniond(s.imu.R).normalized();
@@ -592,4 +593,4 @@ ov_core::StateSample VioManager::snapshot() const {
   return o;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

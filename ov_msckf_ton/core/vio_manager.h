@@ -28,11 +28,11 @@
 #include <optional>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 struct TrackedFrame; // ov_core/track/track_pipeline.h
 }
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 /// Per-frame cost of each stage [ms], accumulated; the benchmark prints means. `networks` is FVON and TPN
 /// (training, prediction and FVON's triangulation); it is not part of `update`. With a frame source that tracks on
@@ -57,44 +57,44 @@ struct VioCounters {
   long slam_initialised = 0, slam_updates = 0, slam_gated = 0; ///< SLAM landmarks initialised, observations used
 };
 
-class VioManager : public ov_core::ReplayConsumer {
+class VioManager : public ovton::core::ReplayConsumer {
 public:
-  using StateCallback = std::function<void(const ov_core::StateSample &)>;
+  using StateCallback = std::function<void(const ovton::core::StateSample &)>;
 
-  VioManager(const VioOptions &opt, const ov_core::CameraCalib &cam, const ov_core::ImuCalib &imu);
+  VioManager(const VioOptions &opt, const ovton::core::CameraCalib &cam, const ovton::core::ImuCalib &imu);
 
   /// Oracle mode: the true offset at a camera stamp (needed before the first image).
   void set_td_oracle(std::function<double(int64_t t_cam_ns)> f) { td_oracle_ = std::move(f); }
   /// Ground-truth initialisation: the true state at an IMU-clock time.
-  void set_groundtruth(std::vector<ov_core::StateSample> gt) { gt_ = std::move(gt); }
+  void set_groundtruth(std::vector<ovton::core::StateSample> gt) { gt_ = std::move(gt); }
   void set_state_callback(StateCallback cb) { on_state_ = std::move(cb); }
   void set_residual_log(ResidualLogWriter *log) { log_ = log; }
   /// Per observation of every feature an update uses, each rule's and network's image velocity (for
   /// `ovton velocities`). In modes fvon/ton it makes FVON predict with both networks (on a copy; same trajectory).
-  void set_velocity_log(ov_core::VelocityLogWriter *log);
-  /// Where on_image gets its decoded image (e.g. an ov_core::ImagePrefetcher); default ov_core::load_image (the file,
-  /// or the bag message). An empty image is reported as unreadable, naming the file.
-  using ImageSource = std::function<cv::Mat(const ov_core::ImageEntry &)>;
+  void set_velocity_log(ovton::core::VelocityLogWriter *log);
+  /// Where on_image gets its decoded image (e.g. an ovton::core::ImagePrefetcher); default ovton::core::load_image (the
+  /// file, or the bag message). An empty image is reported as unreadable, naming the file.
+  using ImageSource = std::function<cv::Mat(const ovton::core::ImageEntry &)>;
   void set_image_source(ImageSource src) { image_source_ = std::move(src); }
   /// The raw gyro for the tracker's LK starting points (tracker.gyro_prior), when this manager tracks the images.
-  void set_rotation_prior(std::shared_ptr<const ov_core::GyroRotationPrior> prior) {
+  void set_rotation_prior(std::shared_ptr<const ovton::core::GyroRotationPrior> prior) {
     tracker_.set_rotation_prior(std::move(prior));
   }
-  /// Where on_image gets an image's tracked features when they are tracked elsewhere (an ov_core::TrackPipeline with
-  /// this manager's tracker options and camera): set, it replaces the image source and the manager's own tracker.
-  using FrameSource = std::function<ov_core::TrackedFrame(const ov_core::ImageEntry &)>;
+  /// Where on_image gets an image's tracked features when they are tracked elsewhere (an ovton::core::TrackPipeline
+  /// with this manager's tracker options and camera): set, it replaces the image source and the manager's own tracker.
+  using FrameSource = std::function<ovton::core::TrackedFrame(const ovton::core::ImageEntry &)>;
   void set_frame_source(FrameSource src) { frame_source_ = std::move(src); }
 
-  void on_imu(const ov_core::ImuData &m) override;
+  void on_imu(const ovton::core::ImuData &m) override;
   /// Loads the image named in the entry (grayscale, from the image source), then processes it.
-  void on_image(const ov_core::ImageEntry &e) override;
+  void on_image(const ovton::core::ImageEntry &e) override;
   double td_for_image_s(int64_t t_cam_ns) const override;
-  int64_t imu_lookahead_ns() const override { return ov_core::s_to_ns(0.5 * opt_.td.jacobian_rate_window_s); }
+  int64_t imu_lookahead_ns() const override { return ovton::core::s_to_ns(0.5 * opt_.td.jacobian_rate_window_s); }
 
   /// Processes an already decoded image (benchmarks, tests, prefetching callers).
   void process_image(int64_t t_cam_ns, const cv::Mat &gray);
   /// Processes one frame of a feature-level dataset (no tracker: the observations are given).
-  void process_features(int64_t t_cam_ns, const std::vector<ov_core::PointObservation> &obs);
+  void process_features(int64_t t_cam_ns, const std::vector<ovton::core::PointObservation> &obs);
 
   bool initialized() const { return initialized_; }
   const State &state() const { return *state_; }
@@ -121,11 +121,11 @@ private:
   void update_and_marginalize(int64_t t_cam_ns);
   /// The velocities every update of this image uses: the configured rule for tracked observations, FVON's
   /// predictions (fvon/ton) and the next observation's for first ones (first_velocity next).
-  const VelocityProvider &prepare_velocities(const std::vector<const ov_core::Feature *> &feats,
+  const VelocityProvider &prepare_velocities(const std::vector<const ovton::core::Feature *> &feats,
                                              std::optional<NextForFirstVelocityProvider> &with_first);
-  void msckf_update(const std::vector<const ov_core::Feature *> &feats, const VelocityProvider &velocities);
+  void msckf_update(const std::vector<const ovton::core::Feature *> &feats, const VelocityProvider &velocities);
   /// SLAM landmarks: update with this image, initialise `init` from the window, marginalise the lost ones.
-  void slam_update(int64_t t_cam_ns, const std::vector<const ov_core::Feature *> &init,
+  void slam_update(int64_t t_cam_ns, const std::vector<const ovton::core::Feature *> &init,
                    const VelocityProvider &velocities);
   /// Median feature motion since the previous frame is below the ZUPT threshold.
   bool is_still(int64_t t_cam_ns) const;
@@ -135,26 +135,26 @@ private:
   template <typename UpdateFn> void td_tracked_update(UpdateFn &&fn);
   /// After an image: the t_d model learns (TPN), the networks' time is counted.
   void finish_image(int64_t t_cam_ns);
-  ov_core::StateSample snapshot() const;
+  ovton::core::StateSample snapshot() const;
 
   VioOptions opt_;
-  ov_core::CameraModel camera_;
-  ov_core::TrackKLT tracker_;
-  ov_core::FeatureDatabase db_;
+  ovton::core::CameraModel camera_;
+  ovton::core::TrackKLT tracker_;
+  ovton::core::FeatureDatabase db_;
   Propagator propagator_;
   UpdaterMSCKF updater_;
   UpdaterSLAM slam_;
   std::unique_ptr<State> state_;
-  std::deque<ov_core::ImuData> init_imu_;
+  std::deque<ovton::core::ImuData> init_imu_;
   std::unique_ptr<InertialInitializer> inertial_init_; ///< every initialisation but ground truth
 
   std::function<double(int64_t)> td_oracle_;
-  std::vector<ov_core::StateSample> gt_;
+  std::vector<ovton::core::StateSample> gt_;
   StateCallback on_state_;
   ResidualLogWriter *log_ = nullptr;
-  ov_core::VelocityLogWriter *velocity_log_ = nullptr;
+  ovton::core::VelocityLogWriter *velocity_log_ = nullptr;
   /// Rows of the velocity log for the update's features, with the velocities `used` gives them.
-  void log_velocities(const std::vector<const ov_core::Feature *> &feats, const VelocityProvider &used);
+  void log_velocities(const std::vector<const ovton::core::Feature *> &feats, const VelocityProvider &used);
   ImageSource image_source_;
   FrameSource frame_source_;
 
@@ -170,4 +170,4 @@ private:
   FilterHealth health_;
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -10,7 +10,7 @@
 #include <set>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 namespace {
 
@@ -31,15 +31,15 @@ template <typename T> Field field(const char *section, const char *key, T &ref) 
   return {section, key,
           [&ref, key](const YAML::Node &n, const std::string &file) {
             if (!n.IsScalar())
-              throw ov_core::DataError(file, line_of(n), std::string("'") + key + "' must be a single value");
+              throw ovton::core::DataError(file, line_of(n), std::string("'") + key + "' must be a single value");
             try {
               ref = n.as<T>();
             } catch (const YAML::Exception &e) {
-              throw ov_core::DataError(file, line_of(n), std::string("bad value for '") + key + "': " + e.msg);
+              throw ovton::core::DataError(file, line_of(n), std::string("bad value for '") + key + "': " + e.msg);
             }
             if constexpr (std::is_floating_point_v<T>)
               if (!std::isfinite(ref))
-                throw ov_core::DataError(file, line_of(n), std::string("non-finite value for '") + key + "'");
+                throw ovton::core::DataError(file, line_of(n), std::string("non-finite value for '") + key + "'");
           },
           [&ref](std::ostream &os) {
             if constexpr (std::is_same_v<T, bool>)
@@ -49,18 +49,18 @@ template <typename T> Field field(const char *section, const char *key, T &ref) 
           }};
 }
 
-/// An enum read from its name; `parse` throws ov_core::UsageError for unknown names.
+/// An enum read from its name; `parse` throws ovton::core::UsageError for unknown names.
 template <typename E>
 Field enum_field(const char *section, const char *key, E &ref, std::function<E(const std::string &)> parse,
                  std::function<std::string(E)> name) {
   return {section, key,
           [&ref, key, parse](const YAML::Node &n, const std::string &file) {
             if (!n.IsScalar())
-              throw ov_core::DataError(file, line_of(n), std::string("'") + key + "' must be a single value");
+              throw ovton::core::DataError(file, line_of(n), std::string("'") + key + "' must be a single value");
             try {
               ref = parse(n.as<std::string>());
-            } catch (const ov_core::UsageError &e) {
-              throw ov_core::DataError(file, line_of(n), std::string("'") + key + "': " + e.what());
+            } catch (const ovton::core::UsageError &e) {
+              throw ovton::core::DataError(file, line_of(n), std::string("'") + key + "': " + e.what());
             }
           },
           [&ref, name](std::ostream &os) { os << name(ref); }};
@@ -74,7 +74,7 @@ template <typename E> std::function<E(const std::string &)> parser(std::vector<s
         return e;
       valid += (valid.empty() ? "" : ", ") + std::string(n);
     }
-    throw ov_core::UsageError("unknown value '" + s + "' (expected " + valid + ")");
+    throw ovton::core::UsageError("unknown value '" + s + "' (expected " + valid + ")");
   };
 }
 
@@ -91,10 +91,10 @@ const std::vector<std::pair<const char *, SirVelocity>> kSirVelocity = {{"backwa
                                                                         {"central", SirVelocity::Central}};
 const std::vector<std::pair<const char *, FirstVelocity>> kFirstVelocity = {{"none", FirstVelocity::None},
                                                                             {"next", FirstVelocity::Next}};
-const std::vector<std::pair<const char *, ov_core::ImageEqualization>> kEqualization = {
-    {"none", ov_core::ImageEqualization::None},
-    {"histogram", ov_core::ImageEqualization::Histogram},
-    {"clahe", ov_core::ImageEqualization::Clahe}};
+const std::vector<std::pair<const char *, ovton::core::ImageEqualization>> kEqualization = {
+    {"none", ovton::core::ImageEqualization::None},
+    {"histogram", ovton::core::ImageEqualization::Histogram},
+    {"clahe", ovton::core::ImageEqualization::Clahe}};
 
 std::vector<Field> fields(VioOptions &o) {
   auto &td = o.td;
@@ -185,8 +185,8 @@ std::vector<Field> fields(VioOptions &o) {
       field(K, "ransac_px", tr.ransac_px),
       field(K, "forward_backward", tr.forward_backward),
       field(K, "gyro_prior", tr.gyro_prior),
-      enum_field<ov_core::ImageEqualization>(K, "equalization", tr.equalization, parser(kEqualization),
-                                             namer(kEqualization)),
+      enum_field<ovton::core::ImageEqualization>(K, "equalization", tr.equalization, parser(kEqualization),
+                                                 namer(kEqualization)),
       field(I, "noise_multiplier", o.imu.noise_multiplier),
       field(I, "gravity_mag", o.imu.gravity_mag),
       field(I, "gyroscope_noise_density", o.imu.gyroscope_noise_density),
@@ -220,7 +220,7 @@ std::vector<Field> fields(VioOptions &o) {
 
 void require(bool ok, const std::string &what) {
   if (!ok)
-    throw ov_core::UsageError("estimator option out of range: " + what);
+    throw ovton::core::UsageError("estimator option out of range: " + what);
 }
 
 } // namespace
@@ -240,7 +240,7 @@ InitMode parse_init_mode(const std::string &s) {
   for (const auto &[name, m] : kInitModes)
     if (s == name)
       return m;
-  throw ov_core::UsageError("unknown initialisation '" + s + "' (expected static, groundtruth, auto or dynamic)");
+  throw ovton::core::UsageError("unknown initialisation '" + s + "' (expected static, groundtruth, auto or dynamic)");
 }
 
 void apply_mode_spec(const ModeSpec &spec, VioOptions &o) {
@@ -336,48 +336,48 @@ VioOptions load_vio_options(const std::string &file, std::ostream *print) {
   try {
     root = YAML::LoadFile(file);
   } catch (const YAML::BadFile &) {
-    throw ov_core::DataError(file, "cannot open estimator config");
+    throw ovton::core::DataError(file, "cannot open estimator config");
   } catch (const YAML::Exception &e) {
-    throw ov_core::DataError(file, e.mark.line + 1, "unreadable YAML: " + e.msg);
+    throw ovton::core::DataError(file, e.mark.line + 1, "unreadable YAML: " + e.msg);
   }
   if (root.IsNull())
-    throw ov_core::DataError(file, "empty estimator config");
+    throw ovton::core::DataError(file, "empty estimator config");
   if (!root.IsMap())
-    throw ov_core::DataError(file, "expected a YAML mapping of sections (time_offset, ton, update, ...)");
+    throw ovton::core::DataError(file, "expected a YAML mapping of sections (time_offset, ton, update, ...)");
   const std::vector<Field> table = fields(o);
   std::set<std::string> sections_seen;
   for (const auto &sec : root) {
-    const std::string section = ov_core::yaml_as<std::string>(sec.first, file, "section name");
+    const std::string section = ovton::core::yaml_as<std::string>(sec.first, file, "section name");
     if (!sections_seen.insert(section).second)
-      throw ov_core::DataError(file, line_of(sec.first), "duplicate section '" + section + "'");
+      throw ovton::core::DataError(file, line_of(sec.first), "duplicate section '" + section + "'");
     bool known = false;
     for (const Field &f : table)
       known = known || section == f.section;
     if (!known)
-      throw ov_core::DataError(
+      throw ovton::core::DataError(
           file, line_of(sec.first),
           "unknown section '" + section +
               "' (expected time_offset, ton, update, slam, calibration, zupt, tracker, imu, init or health)");
     if (!sec.second.IsMap())
-      throw ov_core::DataError(file, line_of(sec.first), "section '" + section + "' must be a mapping of keys");
+      throw ovton::core::DataError(file, line_of(sec.first), "section '" + section + "' must be a mapping of keys");
     std::set<std::string> keys_seen;
     for (const auto &kv : sec.second) {
-      const std::string key = ov_core::yaml_as<std::string>(kv.first, file, "key");
+      const std::string key = ovton::core::yaml_as<std::string>(kv.first, file, "key");
       if (!keys_seen.insert(key).second)
-        throw ov_core::DataError(file, line_of(kv.first), "duplicate key '" + section + "." + key + "'");
+        throw ovton::core::DataError(file, line_of(kv.first), "duplicate key '" + section + "." + key + "'");
       const Field *match = nullptr;
       for (const Field &f : table)
         if (section == f.section && key == f.key)
           match = &f;
       if (!match)
-        throw ov_core::DataError(file, line_of(kv.first), "unknown key '" + section + "." + key + "'");
+        throw ovton::core::DataError(file, line_of(kv.first), "unknown key '" + section + "." + key + "'");
       match->read(kv.second, file);
     }
   }
   try {
     validate_vio_options(o);
-  } catch (const ov_core::UsageError &e) {
-    throw ov_core::DataError(file, e.what());
+  } catch (const ovton::core::UsageError &e) {
+    throw ovton::core::DataError(file, e.what());
   }
   if (print)
     print_vio_options(o, *print);
@@ -399,4 +399,4 @@ void print_vio_options(const VioOptions &o_in, std::ostream &os) {
   }
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -8,7 +8,7 @@
 #include <iosfwd>
 #include <string>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 /// Static: from a still start. GroundTruth: from the dataset's truth (simulations). Dynamic: from a moving start
 /// (init/dynamic_init.h). Auto: static when the images are still, dynamic when they move (init/inertial_init.h).
@@ -203,8 +203,8 @@ struct InitOptions {
   double dyn_sigma_inflation = 2.0; ///< the covariance handed to the filter, in sigmas above the fit's
 };
 
-/// Stop the run (ov_core::EstimatorFailure) when the estimate has evidently diverged (core/filter_health.h). Off only
-/// to watch a divergence to its end; a non-finite state stops the run either way.
+/// Stop the run (ovton::core::EstimatorFailure) when the estimate has evidently diverged (core/filter_health.h). Off
+/// only to watch a divergence to its end; a non-finite state stops the run either way.
 struct HealthOptions {
   bool enabled = true;
 };
@@ -216,7 +216,7 @@ struct VioOptions {
   SlamOptions slam;
   CalibrationOptions calibration;
   ZuptOptions zupt;
-  ov_core::TrackKLTOptions track; ///< YAML section `tracker`
+  ovton::core::TrackKLTOptions track; ///< YAML section `tracker`
   ImuOptions imu;
   InitOptions init;
   HealthOptions health;
@@ -231,10 +231,10 @@ void apply_mode_spec(const ModeSpec &spec, VioOptions &o);
 /// loaded value there.
 VioOptions load_vio_options(const std::string &file, std::ostream *print = nullptr);
 void print_vio_options(const VioOptions &o, std::ostream &os);
-/// Range checks shared by the loader and programmatic callers; throws ov_core::UsageError naming the key.
+/// Range checks shared by the loader and programmatic callers; throws ovton::core::UsageError naming the key.
 void validate_vio_options(const VioOptions &o);
 
 std::string to_string(InitMode m);
 InitMode parse_init_mode(const std::string &s); ///< static | groundtruth | auto | dynamic; throws UsageError
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

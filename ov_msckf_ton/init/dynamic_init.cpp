@@ -10,9 +10,9 @@
 #include <map>
 #include <tuple>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
-using ov_core::ImuData;
+using ovton::core::ImuData;
 using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
@@ -215,7 +215,7 @@ bool build_normal(const Problem &pb, const Params &x, const std::vector<Preinteg
     Jb.col(i) = (rp - rm) / (2 * h);
   }
   const Eigen::Matrix<double, 3, 2> B = tangent_basis(x.u);
-  const Eigen::Matrix<double, 3, 2> dg_dd = -pb.G * ov_core::skew(x.u) * B;
+  const Eigen::Matrix<double, 3, 2> dg_dd = -pb.G * ovton::core::skew(x.u) * B;
   ne = Normal();
   ne.Hff.assign(pb.n_feat, Mat3::Zero());
   ne.Hgf.assign(pb.n_feat, MatG3::Zero());
@@ -272,7 +272,7 @@ MatG reduced(const Normal &ne, double lambda, VecG *rhs, std::vector<Mat3> *Hff_
 Params apply_step(const Params &x, const VecG &dg, const std::vector<Vec3> &df) {
   Params y = x;
   y.v0 += dg.head<3>();
-  y.u = (ov_core::so3_exp(tangent_basis(x.u) * dg.segment<2>(3)) * x.u).normalized();
+  y.u = (ovton::core::so3_exp(tangent_basis(x.u) * dg.segment<2>(3)) * x.u).normalized();
   y.bg += dg.segment<3>(5);
   y.ba += dg.segment<3>(8);
   for (size_t f = 0; f < y.pf.size(); ++f)
@@ -311,7 +311,7 @@ bool state_jacobian(const Problem &pb, const Params &x, Eigen::Matrix<double, 15
         return false;
       s[sgn] = state_at_newest(pb, y, pre);
     }
-    J.block<3, 1>(0, i) = ov_core::so3_log(s[0].R * s[1].R.transpose()) / (2 * h);
+    J.block<3, 1>(0, i) = ovton::core::so3_log(s[0].R * s[1].R.transpose()) / (2 * h);
     J.block<3, 1>(3, i) = (s[0].p - s[1].p) / (2 * h);
     J.block<3, 1>(6, i) = (s[0].v - s[1].v) / (2 * h);
     J.block<3, 1>(9, i) = (s[0].bg - s[1].bg) / (2 * h);
@@ -348,10 +348,10 @@ bool preintegrate(const std::deque<ImuData> &imu, int64_t t0_ns, const std::vect
     const ImuData b = to_reading ? *it : lerp(*(it - 1), *it, target);
     const double dt = 1e-9 * static_cast<double>(b.t_imu_ns - a.t_imu_ns);
     const Vec3 w = 0.5 * (a.wm + b.wm) - bg, acc = 0.5 * (a.am + b.am) - ba;
-    const Mat3 R_mid = cur.R * ov_core::so3_exp(0.5 * dt * w);
+    const Mat3 R_mid = cur.R * ovton::core::so3_exp(0.5 * dt * w);
     cur.p += cur.v * dt + 0.5 * R_mid * acc * dt * dt;
     cur.v += R_mid * acc * dt;
-    cur.R = cur.R * ov_core::so3_exp(dt * w);
+    cur.R = cur.R * ovton::core::so3_exp(dt * w);
     a = b;
     if (to_reading)
       ++it;
@@ -529,4 +529,4 @@ DynamicInitResult dynamic_initialize(const std::vector<InitFrame> &frames, const
   return res;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

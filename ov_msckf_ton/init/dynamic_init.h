@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 /// Features seen in one image: (feature id, undistorted normalised coordinates), and the image's IMU-clock time.
 struct InitFrame {
@@ -62,7 +62,7 @@ struct DynamicInitResult {
 
 /// `frames` oldest first (the newest is the state's time); `imu` must cover them. T_BC camera -> body; focal_px
 /// converts normalised residuals to pixels. sigma_yaw and sigma_pos are added to the unobservable directions.
-DynamicInitResult dynamic_initialize(const std::vector<InitFrame> &frames, const std::deque<ov_core::ImuData> &imu,
+DynamicInitResult dynamic_initialize(const std::vector<InitFrame> &frames, const std::deque<ovton::core::ImuData> &imu,
                                      const Eigen::Matrix4d &T_BC, double focal_px, double gravity_mag, double sigma_yaw,
                                      double sigma_pos, const DynamicInitOptions &opt);
 
@@ -73,7 +73,7 @@ struct Preintegrated {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Eigen::Vector3d v = Eigen::Vector3d::Zero(), p = Eigen::Vector3d::Zero();
 };
-bool preintegrate(const std::deque<ov_core::ImuData> &imu, int64_t t0_ns, const std::vector<int64_t> &t_ns,
+bool preintegrate(const std::deque<ovton::core::ImuData> &imu, int64_t t0_ns, const std::vector<int64_t> &t_ns,
                   const Eigen::Vector3d &bg, const Eigen::Vector3d &ba, std::vector<Preintegrated> &out);
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <unordered_map>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 InertialInitializer::InertialInitializer(const InertialInitOptions &opt, const Eigen::Matrix4d &T_BC, double focal_px,
                                          double gravity_mag)
@@ -16,7 +16,7 @@ double InertialInitializer::imu_window_s() const {
 
 std::optional<double> InertialInitializer::disparity_px(double span_s) const {
   const InitFrame &newest = frames_.back();
-  const int64_t span_ns = ov_core::s_to_ns(span_s);
+  const int64_t span_ns = ovton::core::s_to_ns(span_s);
   if (newest.t_cam_ns - frames_.front().t_cam_ns < span_ns)
     return std::nullopt;
   // The oldest image still within the span.
@@ -36,10 +36,10 @@ std::optional<double> InertialInitializer::disparity_px(double span_s) const {
 }
 
 std::optional<InitSolution> InertialInitializer::try_initialize(InitFrame frame,
-                                                                const std::deque<ov_core::ImuData> &imu) {
+                                                                const std::deque<ovton::core::ImuData> &imu) {
   frames_.push_back(std::move(frame));
   const double keep_s = std::max(opt_.dynamic.window_s, opt_.still_window_s);
-  while (frames_.size() > 2 && frames_.back().t_cam_ns - frames_[1].t_cam_ns >= ov_core::s_to_ns(keep_s))
+  while (frames_.size() > 2 && frames_.back().t_cam_ns - frames_[1].t_cam_ns >= ovton::core::s_to_ns(keep_s))
     frames_.pop_front();
   const int64_t t_imu = frames_.back().t_imu_ns;
 
@@ -72,9 +72,9 @@ std::optional<InitSolution> InertialInitializer::try_initialize(InitFrame frame,
   // Moving: the dynamic initialiser over the frames of its window.
   std::vector<InitFrame> window;
   for (const auto &f : frames_)
-    if (frames_.back().t_cam_ns - f.t_cam_ns <= ov_core::s_to_ns(opt_.dynamic.window_s))
+    if (frames_.back().t_cam_ns - f.t_cam_ns <= ovton::core::s_to_ns(opt_.dynamic.window_s))
       window.push_back(f);
-  if (window.back().t_cam_ns - window.front().t_cam_ns < ov_core::s_to_ns(0.9 * opt_.dynamic.window_s)) {
+  if (window.back().t_cam_ns - window.front().t_cam_ns < ovton::core::s_to_ns(0.9 * opt_.dynamic.window_s)) {
     why_ = "moving: collecting " + std::to_string(opt_.dynamic.window_s) + " s of images for a dynamic initialisation";
     return std::nullopt;
   }
@@ -95,4 +95,4 @@ std::optional<InitSolution> InertialInitializer::try_initialize(InitFrame frame,
   return s;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

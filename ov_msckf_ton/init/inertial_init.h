@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 struct InertialInitOptions {
   bool allow_static = true;                                              ///< false: dynamic only (init mode dynamic)
@@ -37,7 +37,7 @@ public:
 
   /// Called with every image before initialisation (its IMU-clock time and the features seen in it); returns the
   /// solution once one is accepted. `why()` says what is missing until then.
-  std::optional<InitSolution> try_initialize(InitFrame frame, const std::deque<ov_core::ImuData> &imu);
+  std::optional<InitSolution> try_initialize(InitFrame frame, const std::deque<ovton::core::ImuData> &imu);
   const std::string &why() const { return why_; }
   /// IMU history the initialiser needs before the newest image [s].
   double imu_window_s() const;
@@ -54,4 +54,4 @@ private:
   std::string why_ = "no image yet";
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -13,7 +13,7 @@
 #include <limits>
 #include <unordered_map>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 namespace {
 
@@ -21,10 +21,10 @@ namespace {
 /// over any interval costs two lookups (every candidate t_d needs every pair's mean).
 class GyroIntegral {
 public:
-  GyroIntegral(const std::vector<ov_core::ImuData> &imu, int64_t t0_ns) {
+  GyroIntegral(const std::vector<ovton::core::ImuData> &imu, int64_t t0_ns) {
     t_.reserve(imu.size());
     for (const auto &m : imu) {
-      t_.push_back(ov_core::ns_to_s(m.t_imu_ns - t0_ns));
+      t_.push_back(ovton::core::ns_to_s(m.t_imu_ns - t0_ns));
       w_.push_back(m.wm);
     }
     c_.assign(t_.size(), Eigen::Vector3d::Zero());
@@ -155,14 +155,14 @@ double correlated_sigma(const std::vector<PairRate> &pairs, const std::vector<st
 }
 
 /// The gyro averaged over a window of one image interval (the median of the pairs'), centred on each reading.
-std::vector<ov_core::ImuData> box_filtered(const std::vector<ov_core::ImuData> &imu,
-                                           const std::vector<PairRate> &pairs) {
+std::vector<ovton::core::ImuData> box_filtered(const std::vector<ovton::core::ImuData> &imu,
+                                               const std::vector<PairRate> &pairs) {
   std::vector<double> spans;
   for (const auto &p : pairs)
     spans.push_back(p.t1 - p.t0);
   std::nth_element(spans.begin(), spans.begin() + spans.size() / 2, spans.end());
-  const int64_t half_ns = ov_core::s_to_ns(0.5 * spans[spans.size() / 2]);
-  std::vector<ov_core::ImuData> out = imu;
+  const int64_t half_ns = ovton::core::s_to_ns(0.5 * spans[spans.size() / 2]);
+  std::vector<ovton::core::ImuData> out = imu;
   size_t a = 0, b = 0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (size_t i = 0; i < imu.size(); ++i) {
@@ -223,20 +223,20 @@ Window choose_window(const std::vector<double> &t_img, const GyroIntegral &gyro,
 
 /// The images' rotation rate between consecutive frames of the window, in the body frame: KLT tracks (or a
 /// feature-level dataset's observations), a rotation-only fit per pair with 10 or more common features.
-std::vector<PairRate> image_pair_rates(const std::vector<ov_core::ImageEntry> &images, const Window &win,
-                                       const std::vector<double> &t_img, const ov_core::CameraCalib &cam,
+std::vector<PairRate> image_pair_rates(const std::vector<ovton::core::ImageEntry> &images, const Window &win,
+                                       const std::vector<double> &t_img, const ovton::core::CameraCalib &cam,
                                        const TdSearchOptions &opt, const TdSearchImageLoader &load,
-                                       ov_core::TrackedStart *tracked) {
-  const ov_core::CameraModel camera(cam);
+                                       ovton::core::TrackedStart *tracked) {
+  const ovton::core::CameraModel camera(cam);
   // A window from the first image is tracked as the filter will track it, so that the filter can take these tracks
   // instead of tracking the images again; a later window is tracked with fewer features, for this search alone.
   const bool as_filter = win.b == 0;
-  ov_core::TrackKLTOptions track = opt.track;
+  ovton::core::TrackKLTOptions track = opt.track;
   if (!as_filter)
     track.num_features = std::min(track.num_features, opt.max_features);
-  auto tracker = std::make_unique<ov_core::TrackKLT>(camera, track);
+  auto tracker = std::make_unique<ovton::core::TrackKLT>(camera, track);
   tracker->set_rotation_prior(opt.rotation_prior);
-  ov_core::TrackedStart start;
+  ovton::core::TrackedStart start;
   const Eigen::Matrix3d R_BC = cam.T_BC.block<3, 3>(0, 0);
   const double huber_rad = 2.0 / std::max(camera.fu(), camera.fv());
   std::unordered_map<size_t, Eigen::Vector3d> prev, curr;
@@ -249,7 +249,7 @@ std::vector<PairRate> image_pair_rates(const std::vector<ov_core::ImageEntry> &i
       for (const auto &o : *e.features)
         curr[o.id] = camera.undistort(o.uv).homogeneous().normalized();
     } else {
-      const cv::Mat img = load ? load(e) : ov_core::load_gray_image(e, cam.width, cam.height);
+      const cv::Mat img = load ? load(e) : ovton::core::load_gray_image(e, cam.width, cam.height);
       const auto &feats = tracker->track(e.t_cam_ns, img);
       for (const auto &f : feats)
         curr[f.id] = f.xy.homogeneous().normalized();
@@ -269,7 +269,7 @@ std::vector<PairRate> image_pair_rates(const std::vector<ov_core::ImageEntry> &i
         // bear0 ≈ R_{C_{k-1} C_k}·bear1; the body rotation over the interval is R_BC·R·R_CB, so its rate is
         // R_BC·log(R)/dt.
         const Eigen::Matrix3d R = fit_rotation(bear0, bear1, huber_rad);
-        pairs.push_back({t_img[i - 1], t_img[i], R_BC * ov_core::so3_log(R) / dt});
+        pairs.push_back({t_img[i - 1], t_img[i], R_BC * ovton::core::so3_log(R) / dt});
       }
     }
     std::swap(prev, curr);
@@ -297,9 +297,10 @@ std::string TdSearchResult::summary() const {
   return buf;
 }
 
-TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const std::vector<ov_core::ImuData> &imu,
-                         const ov_core::CameraCalib &cam, double prior_td_s, const TdSearchOptions &opt,
-                         const TdSearchImageLoader &load, ov_core::TrackedStart *tracked) {
+TdSearchResult search_td(const std::vector<ovton::core::ImageEntry> &images,
+                         const std::vector<ovton::core::ImuData> &imu, const ovton::core::CameraCalib &cam,
+                         double prior_td_s, const TdSearchOptions &opt, const TdSearchImageLoader &load,
+                         ovton::core::TrackedStart *tracked) {
   const auto wall0 = std::chrono::steady_clock::now();
   TdSearchResult res;
   res.prior_s = res.td_s = prior_td_s;
@@ -316,7 +317,7 @@ TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const s
   const GyroIntegral gyro(imu, t0);
   std::vector<double> t_img(images.size());
   for (size_t i = 0; i < images.size(); ++i)
-    t_img[i] = ov_core::ns_to_s(images[i].t_cam_ns - t0);
+    t_img[i] = ovton::core::ns_to_s(images[i].t_cam_ns - t0);
 
   const Window win = choose_window(t_img, gyro, prior_td_s, opt);
   res.rms_alpha = std::max(0.0, win.rms_alpha);
@@ -449,4 +450,4 @@ TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const s
   return res;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
-namespace ov_core {
+namespace ovton::core {
 struct TrackedStart; // ov_core/track/track_pipeline.h
 }
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 struct TdSearchOptions {
   double range_s = 0.2;    ///< candidates t_d ∈ prior ± range_s
@@ -32,9 +32,9 @@ struct TdSearchOptions {
   /// varying translational flow a rotation fit takes up).
   double highpass_s = 0.5;
   int min_pairs = 40; ///< consecutive image pairs with a rotation fit
-  ov_core::TrackKLTOptions track;
+  ovton::core::TrackKLTOptions track;
   /// The raw gyro for the tracker's LK starting points (track.gyro_prior); none: LK starts where a point was.
-  std::shared_ptr<const ov_core::GyroRotationPrior> rotation_prior;
+  std::shared_ptr<const ovton::core::GyroRotationPrior> rotation_prior;
   /// A window that does not start at the first image is tracked with at most this many features (track.num_features
   /// if fewer): a rotation fit of bearings needs few, and that tracking is for the search alone. Measured at 100
   /// against 200: the same t_d within 0.3 ms and σ within 0.05 ms on the real cut and renders of V1_03 and MH_03, the
@@ -64,15 +64,16 @@ struct TdSearchResult {
   std::string summary() const;
 };
 
-/// Decodes an image for the search (default: ov_core::load_gray_image with the camera's size).
-using TdSearchImageLoader = std::function<cv::Mat(const ov_core::ImageEntry &)>;
+/// Decodes an image for the search (default: ovton::core::load_gray_image with the camera's size).
+using TdSearchImageLoader = std::function<cv::Mat(const ovton::core::ImageEntry &)>;
 
 /// Searches t_d over prior_td_s ± opt.range_s. Feature-level entries (ImageEntry::features) are used as given; others
 /// are decoded and tracked. Never throws for weak data: `found` is false and `why` says what was missing. Throws
 /// DataError (from the loader) for an unreadable image. When the window starts at the first image and all of it was
 /// tracked, `tracked` (if given) receives those tracks and the tracker, for a filter with opt.track to go on from.
-TdSearchResult search_td(const std::vector<ov_core::ImageEntry> &images, const std::vector<ov_core::ImuData> &imu,
-                         const ov_core::CameraCalib &cam, double prior_td_s, const TdSearchOptions &opt = {},
-                         const TdSearchImageLoader &load = {}, ov_core::TrackedStart *tracked = nullptr);
+TdSearchResult search_td(const std::vector<ovton::core::ImageEntry> &images,
+                         const std::vector<ovton::core::ImuData> &imu, const ovton::core::CameraCalib &cam,
+                         double prior_td_s, const TdSearchOptions &opt = {}, const TdSearchImageLoader &load = {},
+                         ovton::core::TrackedStart *tracked = nullptr);
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

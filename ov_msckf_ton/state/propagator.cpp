@@ -5,11 +5,11 @@
 
 #include <algorithm>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
-using ov_core::skew;
-using ov_core::so3_exp;
-using ov_core::so3_jr;
+using ovton::core::skew;
+using ovton::core::so3_exp;
+using ovton::core::so3_jr;
 
 namespace {
 
@@ -104,20 +104,20 @@ void imu_step_calibrated(const ImuState &x, const ImuIntrinsics &D, const Eigen:
 
 Propagator::Propagator(const ImuNoise &noise, double gravity_mag) : noise_(noise), gravity_(0, 0, -gravity_mag) {}
 
-void Propagator::feed_imu(const ov_core::ImuData &m) {
+void Propagator::feed_imu(const ovton::core::ImuData &m) {
   if (!buf_.empty() && m.t_imu_ns <= buf_.back().t_imu_ns)
-    throw ov_core::UsageError("IMU readings must arrive in increasing time order");
+    throw ovton::core::UsageError("IMU readings must arrive in increasing time order");
   buf_.push_back(m);
   // Keep a bounded history: 5 s is far more than any window of clones needs for interpolation.
   while (buf_.size() > 2 && buf_.back().t_imu_ns - buf_[1].t_imu_ns > 5000000000LL)
     buf_.pop_front();
 }
 
-bool Propagator::reading_at(int64_t t_ns, ov_core::ImuData &out) const {
+bool Propagator::reading_at(int64_t t_ns, ovton::core::ImuData &out) const {
   if (buf_.empty() || t_ns < buf_.front().t_imu_ns || t_ns > buf_.back().t_imu_ns)
     return false;
   auto it = std::lower_bound(buf_.begin(), buf_.end(), t_ns,
-                             [](const ov_core::ImuData &m, int64_t t) { return m.t_imu_ns < t; });
+                             [](const ovton::core::ImuData &m, int64_t t) { return m.t_imu_ns < t; });
   if (it->t_imu_ns == t_ns) {
     out = *it;
     return true;
@@ -135,7 +135,7 @@ bool Propagator::mean_gyro(int64_t t_from_ns, int64_t t_to_ns, Eigen::Vector3d &
   int n = 0;
   // Per image on the filter's path: start at the window (binary search) instead of walking the 5 s history.
   auto it = std::lower_bound(buf_.begin(), buf_.end(), t_from_ns,
-                             [](const ov_core::ImuData &m, int64_t t) { return m.t_imu_ns < t; });
+                             [](const ovton::core::ImuData &m, int64_t t) { return m.t_imu_ns < t; });
   for (; it != buf_.end() && it->t_imu_ns <= t_to_ns; ++it)
     sum += it->wm, ++n;
   if (n == 0)
@@ -147,19 +147,19 @@ bool Propagator::mean_gyro(int64_t t_from_ns, int64_t t_to_ns, Eigen::Vector3d &
 template <typename StepFn> bool Propagator::integrate(int64_t t_from, int64_t t_to, StepFn &&step) const {
   if (t_to <= t_from)
     return t_to == t_from;
-  ov_core::ImuData prev;
+  ovton::core::ImuData prev;
   if (!reading_at(t_from, prev) || buf_.back().t_imu_ns < t_to)
     return false;
   auto it = std::upper_bound(buf_.begin(), buf_.end(), t_from,
-                             [](int64_t t, const ov_core::ImuData &m) { return t < m.t_imu_ns; });
+                             [](int64_t t, const ovton::core::ImuData &m) { return t < m.t_imu_ns; });
   while (true) {
-    ov_core::ImuData next;
+    ovton::core::ImuData next;
     if (it != buf_.end() && it->t_imu_ns < t_to) {
       next = *it++;
     } else {
       reading_at(t_to, next);
     }
-    const double dt = ov_core::ns_to_s(next.t_imu_ns - prev.t_imu_ns);
+    const double dt = ovton::core::ns_to_s(next.t_imu_ns - prev.t_imu_ns);
     if (dt > 0)
       step(0.5 * (prev.wm + next.wm), 0.5 * (prev.am + next.am), dt);
     prev = next;
@@ -231,4 +231,4 @@ bool Propagator::predict_mean(const State &s, int64_t t_to_ns, ImuState &out) co
   return ok;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -5,7 +5,7 @@
 
 #include <deque>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 /// Continuous-time IMU noise (EuRoC imu0/sensor.yaml units). The time offset's process noise belongs to its model
 /// (td/td_model.h).
@@ -46,7 +46,7 @@ public:
   /// First-estimate Jacobians in propagation (on by default; off only to measure what they change).
   void set_use_fej(bool on) { use_fej_ = on; }
 
-  void feed_imu(const ov_core::ImuData &m);
+  void feed_imu(const ovton::core::ImuData &m);
 
   /// Propagates the IMU state (mean and covariance, with its cross terms) from s.t_imu_ns to t_to_ns (IMU clock).
   /// Readings are interpolated at both ends. t_d is left to its model (td/td_model.h).
@@ -61,19 +61,19 @@ public:
   const Eigen::Vector3d &gravity() const { return gravity_; }
   const ImuNoise &noise() const { return noise_; }
   /// Interpolated reading at t (IMU clock); false when t is outside the buffer.
-  bool reading_at(int64_t t_ns, ov_core::ImuData &out) const;
+  bool reading_at(int64_t t_ns, ovton::core::ImuData &out) const;
   /// Mean gyro reading over [t_from_ns, t_to_ns] (the readings the buffer holds there); false when it holds none.
   bool mean_gyro(int64_t t_from_ns, int64_t t_to_ns, Eigen::Vector3d &w) const;
-  const std::deque<ov_core::ImuData> &buffer() const { return buf_; }
+  const std::deque<ovton::core::ImuData> &buffer() const { return buf_; }
 
 private:
   template <typename StepFn> bool integrate(int64_t t_from, int64_t t_to, StepFn &&step) const;
 
   ImuNoise noise_;
   Eigen::Vector3d gravity_;
-  std::deque<ov_core::ImuData> buf_;
+  std::deque<ovton::core::ImuData> buf_;
   Eigen::Vector3d last_w_B_ = Eigen::Vector3d::Zero();
   bool use_fej_ = true;
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

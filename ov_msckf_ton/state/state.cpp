@@ -1,7 +1,7 @@
 #include "ov_msckf_ton/state/state.h"
 #include "ov_core/math/so3.h"
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 State::State(bool estimate_td) {
   const int n = ImuState::kSize + (estimate_td ? 1 : 0);
@@ -51,7 +51,7 @@ void State::remove_block(int idx, int size) {
 }
 
 void State::boxplus(const Eigen::VectorXd &dx) {
-  imu.R = ov_core::so3_exp(dx.segment<3>(ImuState::kTheta)) * imu.R;
+  imu.R = ovton::core::so3_exp(dx.segment<3>(ImuState::kTheta)) * imu.R;
   imu.p += dx.segment<3>(ImuState::kPos);
   imu.v += dx.segment<3>(ImuState::kVel);
   imu.bg += dx.segment<3>(ImuState::kBg);
@@ -61,13 +61,13 @@ void State::boxplus(const Eigen::VectorXd &dx) {
   if (td_rate_index >= 0)
     td_rate += dx(td_rate_index);
   for (auto &[key, c] : clones) {
-    c.R = ov_core::so3_exp(dx.segment<3>(c.index)) * c.R;
+    c.R = ovton::core::so3_exp(dx.segment<3>(c.index)) * c.R;
     c.p += dx.segment<3>(c.index + 3);
   }
   for (auto &[key, l] : landmarks)
     l.p_W += dx.segment<3>(l.index);
   if (calib.extrinsics_index >= 0) {
-    calib.R_BC = ov_core::so3_exp(dx.segment<3>(calib.extrinsics_index)) * calib.R_BC;
+    calib.R_BC = ovton::core::so3_exp(dx.segment<3>(calib.extrinsics_index)) * calib.R_BC;
     calib.p_BC += dx.segment<3>(calib.extrinsics_index + 3);
   }
   if (calib.intrinsics_index >= 0)
@@ -81,4 +81,4 @@ void State::boxplus(const Eigen::VectorXd &dx) {
     }
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

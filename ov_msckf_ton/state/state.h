@@ -27,7 +27,7 @@
 #include <map>
 #include <type_traits>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 /// IMU state; the error block [δθ δp δv δb_g δb_a] sits at covariance index `index` (always 0).
 struct ImuState {
@@ -184,4 +184,4 @@ public:
   void boxplus(const Eigen::VectorXd &dx);
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

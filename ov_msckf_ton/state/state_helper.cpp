@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace state_helper {
 
 void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, const Eigen::Matrix<double, 15, 15> &Q) {
@@ -45,7 +45,7 @@ void propagate_covariance(State &s, const Eigen::Matrix<double, 15, 15> &Phi, co
 
 void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w_B, const Eigen::Vector3d &v_W) {
   if (s.clones.count(t_cam_ns))
-    throw ov_core::UsageError("clone for image " + std::to_string(t_cam_ns) + " already exists");
+    throw ovton::core::UsageError("clone for image " + std::to_string(t_cam_ns) + " already exists");
   const int n = s.dim();
   // J maps the current error state to the clone's error [δθ_c δp_c].
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(6, n);
@@ -87,7 +87,7 @@ void clone(State &s, int64_t t_cam_ns, bool td_coupled, const Eigen::Vector3d &w
 void marginalize_clone(State &s, int64_t t_cam_ns) {
   auto it = s.clones.find(t_cam_ns);
   if (it == s.clones.end())
-    throw ov_core::UsageError("no clone for image " + std::to_string(t_cam_ns));
+    throw ovton::core::UsageError("no clone for image " + std::to_string(t_cam_ns));
   const int idx = it->second.index;
   s.clones.erase(it);
   s.remove_block(idx, CloneState::kSize);
@@ -96,7 +96,7 @@ void marginalize_clone(State &s, int64_t t_cam_ns) {
 void marginalize_landmark(State &s, size_t id) {
   auto it = s.landmarks.find(id);
   if (it == s.landmarks.end())
-    throw ov_core::UsageError("no landmark " + std::to_string(id));
+    throw ovton::core::UsageError("no landmark " + std::to_string(id));
   const int idx = it->second.index;
   s.landmarks.erase(it);
   s.remove_block(idx, LandmarkState::kSize);
@@ -180,7 +180,7 @@ double apply_update(State &s, const std::vector<int> &cols, const Eigen::MatrixX
                     const Eigen::MatrixXd &S, const Eigen::VectorXd &r, double sigma2, const ReportNoise &noise) {
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success)
-    throw ov_core::UsageError("innovation covariance is not positive definite");
+    throw ovton::core::UsageError("innovation covariance is not positive definite");
   const Eigen::VectorXd Sinv_r = llt.solve(r);
   const Eigen::VectorXd dx = PHt * Sinv_r;
   Eigen::MatrixXd Wt = PHt.transpose(); // m × n, becomes L⁻¹ PHᵀᵀ = Wᵀ
@@ -211,15 +211,15 @@ double ekf_update(State &s, const std::vector<int> &cols, const Eigen::MatrixXd 
   const int n = s.dim(), nc = static_cast<int>(cols.size());
   if ((noise.cols && (noise.cols->rows() != nc || noise.cols->cols() != nc)) ||
       (noise.rows && (noise.rows->rows() != r.size() || noise.rows->cols() != r.size())))
-    throw ov_core::UsageError("ekf_update: the covariance's extra noise differs in size from the rows or columns");
+    throw ovton::core::UsageError("ekf_update: the covariance's extra noise differs in size from the rows or columns");
   if (noise.any() && !s.separate_report())
-    throw ov_core::UsageError("ekf_update: extra noise for the covariance needs a separately reported covariance");
+    throw ovton::core::UsageError("ekf_update: extra noise for the covariance needs a separately reported covariance");
   if (Hc.cols() != nc || Hc.rows() != r.size())
-    throw ov_core::UsageError("ekf_update: Jacobian, columns and residual differ in size");
+    throw ovton::core::UsageError("ekf_update: Jacobian, columns and residual differ in size");
   Eigen::MatrixXd Pc(n, nc);
   for (int j = 0; j < nc; ++j) {
     if (cols[j] < 0 || cols[j] >= n)
-      throw ov_core::UsageError("ekf_update: column " + std::to_string(cols[j]) + " outside the state");
+      throw ovton::core::UsageError("ekf_update: column " + std::to_string(cols[j]) + " outside the state");
     Pc.col(j) = s.P.col(cols[j]);
   }
   // After the MSCKF's QR compression Hc is square and upper triangular: its products then cost half.
@@ -266,4 +266,4 @@ double min_eigenvalue(const State &s) {
 }
 
 } // namespace state_helper
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

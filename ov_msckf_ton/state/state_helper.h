@@ -4,7 +4,7 @@
 
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace state_helper {
 
 /// P_II <- Φ P_II Φᵀ + Q, cross terms P_IX <- Φ P_IX (the IMU block; t_d's model propagates its own block).
@@ -56,4 +56,4 @@ Eigen::MatrixXd sub_covariance(const State &s, const std::vector<int> &cols);
 double min_eigenvalue(const State &s);
 
 } // namespace state_helper
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -8,7 +8,7 @@
 
 #include <optional>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 namespace {
 
@@ -32,7 +32,7 @@ public:
   double td_at_image(const State &s, int64_t t_cam_ns, int64_t) const override {
     if (s.td_rate_index < 0 || s.td_rate == 0.0)
       return s.td;
-    const double dt = ov_core::ns_to_s(t_cam_ns - s.t_imu_ns);
+    const double dt = ovton::core::ns_to_s(t_cam_ns - s.t_imu_ns);
     return (s.td + s.td_rate * dt) / (1.0 - s.td_rate);
   }
 
@@ -70,4 +70,4 @@ std::unique_ptr<TdModel> make_drift_model(const TimeOffsetOptions &o) {
   return std::make_unique<DriftTdModel>(o);
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -2,13 +2,13 @@
 #include "ov_core/types/errors.h"
 #include "ov_msckf_ton/td/td_models.h"
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 std::unique_ptr<TdModel> make_td_model(const VioOptions &opt, std::function<double(int64_t)> truth) {
   const TimeOffsetOptions &o = opt.td;
   if (o.mode == TdMode::Oracle) {
     if (!truth)
-      throw ov_core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
+      throw ovton::core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
     return make_oracle_model(std::move(truth));
   }
   switch (resolve_td_process(o.mode, o.process)) {
@@ -43,4 +43,4 @@ void propagate_td_covariance(State &s, double q_td, double q_rate, double dt_s) 
   });
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

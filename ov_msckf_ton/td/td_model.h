@@ -14,7 +14,7 @@
 #include <memory>
 #include <string>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 /// What a model did so far (run summaries, tests).
 struct TdModelStats {
@@ -62,4 +62,4 @@ std::unique_ptr<TdModel> make_td_model(const VioOptions &opt, std::function<doub
 /// acceleration model Q = q_r² [[dt³/3, dt²/2], [dt²/2, dt]] on top.
 void propagate_td_covariance(State &s, double q_td, double q_rate, double dt_s);
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

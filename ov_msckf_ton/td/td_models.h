@@ -3,7 +3,7 @@
 #include "ov_msckf_ton/td/td_model.h"
 #include "ov_msckf_ton/ton/tpn_driver.h"
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 /// t_d constant (q = 0: OpenVINS' model) or a random walk of q [s/sqrt(s)]; t_d at an image is the current mean.
 /// adaptive: covariance matching (td_noise_adapter.h) over blocks of block_s seconds.
@@ -22,4 +22,4 @@ const TpnDriver *tpn_driver_of(const TdModel &m);
 /// Mode oracle: t_d is the truth at every image (not estimated).
 std::unique_ptr<TdModel> make_oracle_model(std::function<double(int64_t)> truth);
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

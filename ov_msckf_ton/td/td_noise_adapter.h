@@ -15,7 +15,7 @@
 #include <cmath>
 #include <deque>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 class TdNoiseAdapter {
 public:
@@ -79,4 +79,4 @@ private:
   std::deque<ImageSum> block_; ///< the last block_s seconds of images
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

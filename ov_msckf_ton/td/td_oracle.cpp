@@ -1,7 +1,7 @@
 // Mode oracle: t_d is read from the dataset's truth at every image; nothing is estimated.
 #include "ov_msckf_ton/td/td_models.h"
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 namespace {
 
@@ -22,4 +22,4 @@ std::unique_ptr<TdModel> make_oracle_model(std::function<double(int64_t)> truth)
   return std::make_unique<OracleTdModel>(std::move(truth));
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -4,7 +4,7 @@
 
 #include <optional>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 namespace {
 
@@ -49,4 +49,4 @@ std::unique_ptr<TdModel> make_random_walk_model(double q, bool adaptive, double 
   return std::make_unique<RandomWalkTdModel>(q, adaptive, block_s);
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -9,7 +9,7 @@
 
 #include <optional>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 namespace {
 
@@ -42,7 +42,7 @@ public:
     last_clamped_ = false;
     if (last_image_ns < 0 || t_cam_ns <= last_image_ns)
       return s.td;
-    const double dt = ov_core::ns_to_s(t_cam_ns - last_image_ns);
+    const double dt = ovton::core::ns_to_s(t_cam_ns - last_image_ns);
     if (label_images_ == 1)
       return s.td + driver_.rate(s.td, dt, &last_clamped_) * dt;
     // Block labels: the rate from the last label to the predicted next one, over their spacing.
@@ -103,7 +103,7 @@ public:
     if (first_image_ns_ < 0)
       first_image_ns_ = t_cam_ns;
     block_td_ += s.td;
-    block_t_ += ov_core::ns_to_s(t_cam_ns - first_image_ns_);
+    block_t_ += ovton::core::ns_to_s(t_cam_ns - first_image_ns_);
     if (++block_n_ < label_images_)
       return;
     const double label = block_td_ / block_n_, t_label = block_t_ / block_n_;
@@ -148,4 +148,4 @@ const TpnDriver *tpn_driver_of(const TdModel &m) {
   return t ? &t->driver() : nullptr;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 #include <cmath>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 template <int N> class Adam {
@@ -51,4 +51,4 @@ private:
 };
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -2,7 +2,7 @@
 
 #include <random>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 F2fFvon::F2fFvon(const F2fFvonOptions &options)
@@ -65,4 +65,4 @@ Eigen::Vector2d F2fFvon::predict(const Eigen::Vector3d &p_in_cam) const {
 }
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -10,7 +10,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 struct F2fFvonOptions {
@@ -68,4 +68,4 @@ private:
 };
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -6,19 +6,19 @@
 #include <algorithm>
 #include <map>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 namespace {
 
 /// Later observations (after the first) that carry a tracked velocity, counted up to the first gap.
-int later_velocities(const ov_core::Feature &f) {
+int later_velocities(const ovton::core::Feature &f) {
   int n = 0;
   for (size_t i = 1; i < f.obs.size() && f.obs[i].vel_valid; ++i)
     ++n;
   return n;
 }
 
-bool well_tracked(const ov_core::Feature &f) {
+bool well_tracked(const ovton::core::Feature &f) {
   if (f.obs.size() < 2)
     return false;
   for (const auto &o : f.obs)
@@ -29,18 +29,18 @@ bool well_tracked(const ov_core::Feature &f) {
 
 } // namespace
 
-FvonVelocityProvider::FvonVelocityProvider(const ov_core::CameraCalib &calib, const FvonProviderOptions &options)
+FvonVelocityProvider::FvonVelocityProvider(const ovton::core::CameraCalib &calib, const FvonProviderOptions &options)
     : opt_(options), R_BC_(calib.T_BC.topLeftCorner<3, 3>()), p_BC_(calib.T_BC.topRightCorner<3, 1>()),
       focal_(0.5 * (calib.intrinsics(0) + calib.intrinsics(1))), its_(options.its), f2f_(options.f2f) {
   if (!(focal_ > 0))
-    throw ov_core::UsageError("FvonVelocityProvider: focal lengths must be positive");
+    throw ovton::core::UsageError("FvonVelocityProvider: focal lengths must be positive");
   if (opt_.max_labels < 1 || opt_.min_f2f_labels < 1 || opt_.its_min_later < 1)
-    throw ov_core::UsageError("FvonVelocityProvider: max_labels, min_f2f_labels and its_min_later must be >= 1");
+    throw ovton::core::UsageError("FvonVelocityProvider: max_labels, min_f2f_labels and its_min_later must be >= 1");
   if (!(opt_.gate_px_s >= 0))
-    throw ov_core::UsageError("FvonVelocityProvider: gate_px_s must be >= 0");
+    throw ovton::core::UsageError("FvonVelocityProvider: gate_px_s must be >= 0");
 }
 
-bool FvonVelocityProvider::keep_prediction(const ov_core::Feature &f, const Prediction &p) {
+bool FvonVelocityProvider::keep_prediction(const ovton::core::Feature &f, const Prediction &p) {
   FvonCandidates &c = candidates_[f.id];
   c.chosen = p.source;
   if (opt_.gate_px_s > 0 && f.obs.size() >= 2 && f.obs[1].vel_valid &&
@@ -53,7 +53,7 @@ bool FvonVelocityProvider::keep_prediction(const ov_core::Feature &f, const Pred
   return true;
 }
 
-Eigen::Vector2d FvonVelocityProvider::predict_its(const ov_core::Feature &f, VelocityStencil *stencil) {
+Eigen::Vector2d FvonVelocityProvider::predict_its(const ovton::core::Feature &f, VelocityStencil *stencil) {
   const int n = later_velocities(f);
   its_seq_.clear();
   for (int i = 1; i <= n; ++i)
@@ -67,7 +67,7 @@ Eigen::Vector2d FvonVelocityProvider::predict_its(const ov_core::Feature &f, Vel
   return v;
 }
 
-void FvonVelocityProvider::its_stencil(const ov_core::Feature &f, int n, VelocityStencil &stencil) {
+void FvonVelocityProvider::its_stencil(const ovton::core::Feature &f, int n, VelocityStencil &stencil) {
   // ∂prediction/∂V_i by central differences (ITS works in px/s: the focal cancels), each V_i through eq. 2's
   // stencil. The step is small against the normaliser's spread, so that it stays a derivative of the LSTM's tanh
   // units even when a flat window shrinks the spread to its 1 px/s floor.
@@ -89,13 +89,13 @@ void FvonVelocityProvider::its_stencil(const ov_core::Feature &f, int n, Velocit
   }
 }
 
-void FvonVelocityProvider::prepare(const State &state, const std::vector<const ov_core::Feature *> &features,
+void FvonVelocityProvider::prepare(const State &state, const std::vector<const ovton::core::Feature *> &features,
                                    const UpdaterMSCKF &updater) {
   predictions_.clear();
   candidates_.clear();
   p_W_.clear();
   updater_ = &updater;
-  std::vector<const ov_core::Feature *> need_its, need_f2f;
+  std::vector<const ovton::core::Feature *> need_its, need_f2f;
   for (const auto *f : features) {
     if (f->obs.empty() || f->obs.front().vel_valid)
       continue;
@@ -103,13 +103,13 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
   }
   if (need_its.empty() && need_f2f.empty())
     return;
-  const std::vector<const ov_core::Feature *> f2f_by_rule = need_f2f;
+  const std::vector<const ovton::core::Feature *> f2f_by_rule = need_f2f;
 
-  std::vector<const ov_core::Feature *> its_done;
+  std::vector<const ovton::core::Feature *> its_done;
   if (!need_its.empty()) {
     // Stage 2, ITS branch: train on the velocity sequences of the well-tracked features of this update, longest
     // first (most (V^{k+1} -> V^k) pairs per track) until the label budget is used.
-    std::vector<const ov_core::Feature *> tracks;
+    std::vector<const ovton::core::Feature *> tracks;
     for (const auto *f : features)
       if (well_tracked(*f))
         tracks.push_back(f);
@@ -152,7 +152,7 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
   if (!need_f2f.empty())
     f2f_pass(
         state, features, need_f2f, f2f_,
-        [&](const ov_core::Feature &f, const Eigen::Vector2d &v, int64_t t) {
+        [&](const ovton::core::Feature &f, const Eigen::Vector2d &v, int64_t t) {
           FvonCandidates &c = candidates_[f.id];
           c.has_f2f = true;
           c.f2f = v;
@@ -163,26 +163,26 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
           ++stats_.f2f_predictions;
           keep_prediction(f, p);
         },
-        [&](const ov_core::Feature &) { ++stats_.no_prediction; });
+        [&](const ovton::core::Feature &) { ++stats_.no_prediction; });
   if (opt_.evaluate_both && !its_done.empty()) {
     // On a copy: training F2F on more frames would move the weights the filter's own predictions warm-start from.
     ton::F2fFvon shadow = f2f_;
     f2f_pass(
         state, features, its_done, shadow,
-        [&](const ov_core::Feature &f, const Eigen::Vector2d &v, int64_t) {
+        [&](const ovton::core::Feature &f, const Eigen::Vector2d &v, int64_t) {
           FvonCandidates &c = candidates_[f.id];
           c.has_f2f = true;
           c.f2f = v;
         },
-        [](const ov_core::Feature &) {});
+        [](const ovton::core::Feature &) {});
   }
 }
 
 void FvonVelocityProvider::f2f_pass(
-    const State &state, const std::vector<const ov_core::Feature *> &features,
-    const std::vector<const ov_core::Feature *> &need, ton::F2fFvon &net,
-    const std::function<void(const ov_core::Feature &, const Eigen::Vector2d &, int64_t)> &out,
-    const std::function<void(const ov_core::Feature &)> &none) {
+    const State &state, const std::vector<const ovton::core::Feature *> &features,
+    const std::vector<const ovton::core::Feature *> &need, ton::F2fFvon &net,
+    const std::function<void(const ovton::core::Feature &, const Eigen::Vector2d &, int64_t)> &out,
+    const std::function<void(const ovton::core::Feature &)> &none) {
   // Stage 2, F2F branch: one training per frame that holds a new feature, on the 3D positions (in that camera) and
   // tracked velocities of the other features the frame sees. Points come from the same triangulation the update
   // does, from the current clone estimates; observations are shifted by tracked velocities only.
@@ -192,7 +192,7 @@ void FvonVelocityProvider::f2f_pass(
       if (tr.ok())
         p_W_[f->id] = tr.p_W;
     }
-  std::map<int64_t, std::vector<const ov_core::Feature *>> by_frame;
+  std::map<int64_t, std::vector<const ovton::core::Feature *>> by_frame;
   for (const auto *f : need)
     by_frame[f->obs.front().t_cam_ns].push_back(f);
 
@@ -213,7 +213,7 @@ void FvonVelocityProvider::f2f_pass(
     labels.clear();
     Eigen::Vector3d p_C;
     for (const auto *g : features) {
-      const ov_core::FeatureObservation *o = g->at(t);
+      const ovton::core::FeatureObservation *o = g->at(t);
       if (o && o->vel_valid && in_camera(g->id, p_C))
         labels.emplace_back(p_C, o->vel_xy * focal_);
     }
@@ -243,13 +243,13 @@ void FvonVelocityProvider::f2f_pass(
   }
 }
 
-const FvonVelocityProvider::Prediction *FvonVelocityProvider::prediction_for(const ov_core::Feature &feature,
+const FvonVelocityProvider::Prediction *FvonVelocityProvider::prediction_for(const ovton::core::Feature &feature,
                                                                              size_t obs_index) const {
   const auto it = predictions_.find(feature.id);
   return it != predictions_.end() && it->second.t_cam_ns == feature.obs[obs_index].t_cam_ns ? &it->second : nullptr;
 }
 
-bool FvonVelocityProvider::velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
+bool FvonVelocityProvider::velocity(const ovton::core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
                                     int &source) const {
   if (feature.obs[obs_index].vel_valid)
     return tracked_for_update_->velocity(feature, obs_index, vel_xy, source);
@@ -263,7 +263,7 @@ bool FvonVelocityProvider::velocity(const ov_core::Feature &feature, size_t obs_
   return true;
 }
 
-void FvonVelocityProvider::stencil(const ov_core::Feature &feature, size_t obs_index, VelocityStencil &out) const {
+void FvonVelocityProvider::stencil(const ovton::core::Feature &feature, size_t obs_index, VelocityStencil &out) const {
   if (feature.obs[obs_index].vel_valid) {
     tracked_for_update_->stencil(feature, obs_index, out);
     return;
@@ -275,4 +275,4 @@ void FvonVelocityProvider::stencil(const ov_core::Feature &feature, size_t obs_i
     out.clear();
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

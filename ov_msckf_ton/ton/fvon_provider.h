@@ -16,7 +16,7 @@
 #include <unordered_map>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 class UpdaterMSCKF;
 
@@ -65,19 +65,21 @@ struct FvonStats {
 /// the provider to UpdaterMSCKF::update().
 class FvonVelocityProvider : public VelocityProvider {
 public:
-  FvonVelocityProvider(const ov_core::CameraCalib &calib, const FvonProviderOptions &options = {});
+  FvonVelocityProvider(const ovton::core::CameraCalib &calib, const FvonProviderOptions &options = {});
 
   /// Trains the networks on the update's well-tracked features (warm start) and predicts the velocity of every
   /// first observation of `features` that has none. Points are triangulated with `updater` from the clone
   /// estimates in `state`. Predictions of the previous call are forgotten.
-  void prepare(const State &state, const std::vector<const ov_core::Feature *> &features, const UpdaterMSCKF &updater);
+  void prepare(const State &state, const std::vector<const ovton::core::Feature *> &features,
+               const UpdaterMSCKF &updater);
 
   /// Tracked observations get the velocity of `tracked` (eq. 2's backward difference by default, or the central
   /// difference of time_offset.sir_velocity); first observations FVON's prediction, when it made one.
-  bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy, int &source) const override;
+  bool velocity(const ovton::core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
+                int &source) const override;
   /// Tracked observations: `tracked`'s; ITS predictions through the later velocities they came from (with
   /// `stencils`); F2F's dependence on the points (through its triangulated input) is left out.
-  void stencil(const ov_core::Feature &feature, size_t obs_index, VelocityStencil &out) const override;
+  void stencil(const ovton::core::Feature &feature, size_t obs_index, VelocityStencil &out) const override;
   /// The provider for tracked observations (must outlive this one); default: eq. 2.
   void set_tracked(const VelocityProvider *tracked) { tracked_for_update_ = tracked ? tracked : &tracked_; }
 
@@ -97,21 +99,21 @@ private:
   };
 
   /// Stores the prediction unless the sanity check rejects it; returns whether it was kept.
-  bool keep_prediction(const ov_core::Feature &f, const Prediction &p);
+  bool keep_prediction(const ovton::core::Feature &f, const Prediction &p);
   /// ITS-FVON's prediction for a first observation from the track's later velocities (ITS must be trained).
   /// With `stencil`, also how the prediction depends on the track's points (through its input velocities).
-  Eigen::Vector2d predict_its(const ov_core::Feature &f, VelocityStencil *stencil = nullptr);
+  Eigen::Vector2d predict_its(const ovton::core::Feature &f, VelocityStencil *stencil = nullptr);
   /// The stencil of the prediction predict_its just made from the track's n later velocities (in its_seq_).
-  void its_stencil(const ov_core::Feature &f, int n, VelocityStencil &stencil);
+  void its_stencil(const ovton::core::Feature &f, int n, VelocityStencil &stencil);
   /// The prediction kept for this (first) observation by the last prepare(), or nullptr.
-  const Prediction *prediction_for(const ov_core::Feature &feature, size_t obs_index) const;
+  const Prediction *prediction_for(const ovton::core::Feature &feature, size_t obs_index) const;
   /// F2F-FVON over the frames of `need` (first observations): one training of `net` per frame on the other features'
   /// 3D points and tracked velocities, then `out(feature, velocity)` for each point it can predict. Features of a
   /// frame without enough labels, or untriangulable, are passed to `none`.
-  void f2f_pass(const State &state, const std::vector<const ov_core::Feature *> &features,
-                const std::vector<const ov_core::Feature *> &need, ton::F2fFvon &net,
-                const std::function<void(const ov_core::Feature &, const Eigen::Vector2d &, int64_t)> &out,
-                const std::function<void(const ov_core::Feature &)> &none);
+  void f2f_pass(const State &state, const std::vector<const ovton::core::Feature *> &features,
+                const std::vector<const ovton::core::Feature *> &need, ton::F2fFvon &net,
+                const std::function<void(const ovton::core::Feature &, const Eigen::Vector2d &, int64_t)> &out,
+                const std::function<void(const ovton::core::Feature &)> &none);
 
   FvonProviderOptions opt_;
   Eigen::Matrix3d R_BC_;
@@ -132,4 +134,4 @@ private:
   FvonStats stats_;
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -1,6 +1,6 @@
 #include "ov_msckf_ton/ton/its_fvon.h"
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 ItsFvon::ItsFvon(const ItsFvonOptions &options)
@@ -73,4 +73,4 @@ Eigen::Vector2d ItsFvon::predict(const Eigen::Vector2d *future, int count) const
 }
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 struct ItsFvonOptions {
@@ -74,4 +74,4 @@ private:
 };
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -18,7 +18,7 @@
 #include <type_traits>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 template <int In, int Hidden, int Out> class Lstm {
@@ -205,4 +205,4 @@ using ItsLstm = Lstm<2, 2, 2>;
 using TpnLstm = Lstm<1, 2, 1>;
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 #include <limits>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 template <int Dim> class MinMaxNormalizer {
@@ -68,4 +68,4 @@ private:
 };
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

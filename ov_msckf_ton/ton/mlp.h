@@ -19,7 +19,7 @@
 #include <random>
 #include <type_traits>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 template <int In, int H1, int H2, int Out> class Mlp {
@@ -124,4 +124,4 @@ private:
 using F2fMlp = Mlp<3, 5, 5, 2>;
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

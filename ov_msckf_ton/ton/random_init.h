@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <random>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 /// Uniform draw in (-bound, bound) built from the raw mt19937 output rather than std::uniform_real_distribution,
@@ -21,4 +21,4 @@ template <typename Derived> void fill_uniform(Eigen::MatrixBase<Derived> &&m, st
 }
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

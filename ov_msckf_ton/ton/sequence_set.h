@@ -6,7 +6,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 /// Independent (input, target) pairs for the MLP.
@@ -70,4 +70,4 @@ private:
 };
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -3,7 +3,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 /// Misuse of a network or its wrapper (predict before train, non-finite label, malformed sequence). Carries the
@@ -21,11 +21,11 @@ private:
 };
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf
 
 /// Throws TonError with the caller's location when `cond` is false. Unlike assert() it stays in Release builds.
 #define OVTON_TON_CHECK(cond, msg)                                                                                     \
   do {                                                                                                                 \
     if (!(cond))                                                                                                       \
-      throw ::ov_msckf_ton::ton::TonError(__FILE__, __LINE__, (msg));                                                  \
+      throw ::ovton::msckf::ton::TonError(__FILE__, __LINE__, (msg));                                                  \
   } while (0)

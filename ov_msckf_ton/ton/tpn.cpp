@@ -3,7 +3,7 @@
 #include <cmath>
 #include <random>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 Tpn::Tpn(const TpnOptions &options)
@@ -69,4 +69,4 @@ double Tpn::predict() const {
 }
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

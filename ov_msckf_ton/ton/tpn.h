@@ -9,7 +9,7 @@
 
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 struct TpnOptions {
@@ -68,4 +68,4 @@ private:
 };
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

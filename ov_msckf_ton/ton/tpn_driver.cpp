@@ -4,13 +4,13 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 TpnDriver::TpnDriver(const TpnDriverOptions &options) : opt_(options), tpn_(options.tpn) {
   if (opt_.min_labels < 2)
-    throw ov_core::UsageError("TpnDriver: min_labels must be at least 2 (one input-target pair)");
+    throw ovton::core::UsageError("TpnDriver: min_labels must be at least 2 (one input-target pair)");
   if (!(opt_.td_rate_max >= 0))
-    throw ov_core::UsageError("TpnDriver: td_rate_max must be >= 0");
+    throw ovton::core::UsageError("TpnDriver: td_rate_max must be >= 0");
 }
 
 bool TpnDriver::step(double td_estimate_s) {
@@ -37,4 +37,4 @@ double TpnDriver::rate(double td_now_s, double dt_s, bool *clamped) const {
   return std::clamp(j, -opt_.td_rate_max, opt_.td_rate_max);
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -4,7 +4,7 @@
 // next image then drives the t_d mean at J_td = (t_d^TPN(K) − t̂_d(K−1)) / dt.
 #include "ov_msckf_ton/ton/tpn.h"
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 struct TpnDriverOptions {
   ton::TpnOptions tpn;
@@ -47,4 +47,4 @@ private:
   bool has_prediction_ = false;
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -7,7 +7,7 @@
 #include <chrono>
 #include <cmath>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 namespace ton {
 
 struct TrainOptions {
@@ -87,4 +87,4 @@ TrainReport train_network(Net &net, Adam<Net::kNumParams> &adam, const typename 
 }
 
 } // namespace ton
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 /// Jacobians of z = π(p_C) w.r.t. the clone's [δθ δp], the world feature position p_f and the camera–IMU
 /// extrinsics [δθ_BC δp_BC] (R_BC = Exp(δθ_BC)·R̂_BC).
@@ -53,10 +53,10 @@ inline bool project_in_clone(const Eigen::Matrix3d &R_WB, const Eigen::Vector3d 
     dz_dpc << iz, 0.0, -p_C.x() * iz * iz, 0.0, iz, -p_C.y() * iz * iz;
     const Eigen::Matrix3d R_CW = R_BC.transpose() * R_WB.transpose();
     J->H_f = dz_dpc * R_CW;
-    J->H_theta = J->H_f * ov_core::skew(p_f - p_WB);
+    J->H_theta = J->H_f * ovton::core::skew(p_f - p_WB);
     J->H_p = -J->H_f;
     const Eigen::Matrix<double, 2, 3> dz_dpB = dz_dpc * R_BC.transpose();
-    J->H_ext_theta = dz_dpB * ov_core::skew(p_B - p_BC);
+    J->H_ext_theta = dz_dpB * ovton::core::skew(p_B - p_BC);
     J->H_ext_p = -dz_dpB;
   }
   return true;
@@ -91,16 +91,16 @@ inline bool predicted_image_velocity(const Eigen::Matrix3d &R_WB, const Eigen::V
         0.0, -d.z() * iz2, -d.y() * iz2 + 2.0 * y * d.z() * iz3;
     dV_dd << iz, 0.0, -x * iz2, 0.0, iz, -y * iz2;
     const Eigen::Matrix3d R_CB = R_BC.transpose(), R_BW = R_WB.transpose();
-    const Eigen::Matrix3d W = ov_core::skew(m.w_B);
+    const Eigen::Matrix3d W = ovton::core::skew(m.w_B);
     const Eigen::Matrix<double, 2, 3> A = dV_dpc * R_CB, B = dV_dd * R_CB; // per ∂p_B and per ∂q
     J->H_f = A * R_BW - B * W * R_BW;
     J->H_p = -J->H_f;
-    J->H_theta =
-        A * R_BW * ov_core::skew(p_W - p_WB) - B * (W * R_BW * ov_core::skew(p_W - p_WB) + R_BW * ov_core::skew(m.v_W));
-    J->H_ext_theta = dV_dpc * R_CB * ov_core::skew(p_B - p_BC) + dV_dd * R_CB * ov_core::skew(q);
+    J->H_theta = A * R_BW * ovton::core::skew(p_W - p_WB) -
+                 B * (W * R_BW * ovton::core::skew(p_W - p_WB) + R_BW * ovton::core::skew(m.v_W));
+    J->H_ext_theta = dV_dpc * R_CB * ovton::core::skew(p_B - p_BC) + dV_dd * R_CB * ovton::core::skew(q);
     J->H_ext_p = -dV_dpc * R_CB;
   }
   return true;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -8,7 +8,7 @@
 #include <Eigen/QR>
 #include <cmath>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 void UpdaterMSCKF::nullspace_project(const Eigen::Matrix<double, Eigen::Dynamic, 3> &H_f, Eigen::MatrixXd &H_x,
                                      Eigen::VectorXd &r) {
@@ -18,7 +18,7 @@ void UpdaterMSCKF::nullspace_project(const Eigen::Matrix<double, Eigen::Dynamic,
 void UpdaterMSCKF::nullspace_project(const FeatureQR &qr, Eigen::MatrixXd &H_x, Eigen::VectorXd &r) {
   const Eigen::Index rows = qr.rows();
   if (rows <= 3 || H_x.rows() != rows || r.size() != rows)
-    throw ov_core::UsageError("nullspace_project: need matching blocks with more than 3 rows");
+    throw ovton::core::UsageError("nullspace_project: need matching blocks with more than 3 rows");
   // Qᵀ applied by its Householder reflectors, never forming the 2m × 2m Q.
   H_x.applyOnTheLeft(qr.householderQ().adjoint());
   r.applyOnTheLeft(qr.householderQ().adjoint());
@@ -38,7 +38,7 @@ void UpdaterMSCKF::compress(Eigen::MatrixXd &H, Eigen::VectorXd &r) {
 
 Eigen::MatrixXd UpdaterMSCKF::track_noise_factor(Eigen::Index rows, double rho) {
   if (rows % 2 != 0 || !(rho >= 0 && rho < 1))
-    throw ov_core::UsageError("track_noise_factor: need an even row count and 0 <= rho < 1");
+    throw ovton::core::UsageError("track_noise_factor: need an even row count and 0 <= rho < 1");
   // e_k = ρ e_{k−1} + √(1 − ρ²) w_k, e_0 = w_0 (unit stationary variance): L_kj = ρ^(k−j), times √(1 − ρ²) for j > 0.
   const Eigen::Index m = rows / 2;
   const double s = std::sqrt(1.0 - rho * rho);
@@ -56,7 +56,7 @@ Eigen::MatrixXd UpdaterMSCKF::track_noise_factor(Eigen::Index rows, double rho) 
 Eigen::MatrixXd UpdaterMSCKF::projected_track_noise_factor(const FeatureQR &qr, double rho) {
   const Eigen::Index rows = qr.rows();
   if (rows <= 3)
-    throw ov_core::UsageError("projected_track_noise_factor: need more than 3 rows");
+    throw ovton::core::UsageError("projected_track_noise_factor: need more than 3 rows");
   Eigen::MatrixXd L = track_noise_factor(rows, rho);
   L.applyOnTheLeft(qr.householderQ().adjoint());
   return L.bottomRows(rows - 3);
@@ -66,7 +66,7 @@ void UpdaterMSCKF::whiten_track_rows(Eigen::Ref<Eigen::MatrixXd> M, double rho) 
   if (rho == 0.0)
     return;
   if (M.rows() % 2 != 0 || !(rho > -1 && rho < 1))
-    throw ov_core::UsageError("whiten_track_rows: need an even row count and |rho| < 1");
+    throw ovton::core::UsageError("whiten_track_rows: need an even row count and |rho| < 1");
   const double s = 1.0 / std::sqrt(1.0 - rho * rho);
   // From the last observation back, so that each row is combined with its predecessor's original values.
   for (Eigen::Index k = M.rows() / 2 - 1; k >= 1; --k)
@@ -87,7 +87,7 @@ Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &l
   const int m = static_cast<int>(lin.obs.size()), rows = 2 * m, nc = static_cast<int>(lin.H_x.cols());
   const int nd = nc - 6 * m; // t_d and calibration columns, dense
   if (m < 2 || nd < 0 || lin.H_x.rows() != rows || P_sub.rows() != nc || qr.rows() != rows)
-    throw ov_core::UsageError("projected_innovation: linearisation and covariance differ in size");
+    throw ovton::core::UsageError("projected_innovation: linearisation and covariance differ in size");
   // T = H_x P, block row by block row.
   Eigen::MatrixXd T = Eigen::MatrixXd::Zero(rows, nc);
   for (int k = 0; k < m; ++k)
@@ -113,4 +113,4 @@ Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &l
   return S2;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

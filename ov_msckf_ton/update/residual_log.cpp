@@ -5,10 +5,10 @@
 
 #include <algorithm>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
-ov_core::CalibrationLogRow calibration_row(const State &state, const std::vector<ResidualRecord> &records) {
-  ov_core::CalibrationLogRow c;
+ovton::core::CalibrationLogRow calibration_row(const State &state, const std::vector<ResidualRecord> &records) {
+  ovton::core::CalibrationLogRow c;
   for (const ResidualRecord &r : records) {
     c.update_id = r.update_id;
     c.t_cam_ns = std::max(c.t_cam_ns, r.t_cam_ns);
@@ -42,28 +42,28 @@ ov_core::CalibrationLogRow calibration_row(const State &state, const std::vector
 }
 
 ResidualLogWriter::ResidualLogWriter(const std::string &path)
-    : path_(path), calib_path_(ov_core::calibration_log_path(path)), out_(path, std::ios::trunc),
+    : path_(path), calib_path_(ovton::core::calibration_log_path(path)), out_(path, std::ios::trunc),
       calib_out_(calib_path_, std::ios::trunc) {
   if (!out_)
-    throw ov_core::DataError(path, "cannot open the residual log for writing");
+    throw ovton::core::DataError(path, "cannot open the residual log for writing");
   if (!calib_out_)
-    throw ov_core::DataError(calib_path_, "cannot open the calibration log for writing");
+    throw ovton::core::DataError(calib_path_, "cannot open the calibration log for writing");
   out_ << header() << '\n';
-  calib_out_ << ov_core::calibration_log_header(true) << '\n';
+  calib_out_ << ovton::core::calibration_log_header(true) << '\n';
   out_.flush();
   calib_out_.flush();
   if (!out_ || !calib_out_)
-    throw ov_core::DataError(path, "cannot write the residual or calibration log header");
+    throw ovton::core::DataError(path, "cannot write the residual or calibration log header");
 }
 
 void ResidualLogWriter::write(const std::vector<ResidualRecord> &records, const State &state) {
   write(records);
   if (records.empty())
     return;
-  calib_out_ << ov_core::format_calibration_row(calibration_row(state, records)) << '\n';
+  calib_out_ << ovton::core::format_calibration_row(calibration_row(state, records)) << '\n';
   calib_out_.flush();
   if (!calib_out_)
-    throw ov_core::DataError(calib_path_, "write failed (disk full?)");
+    throw ovton::core::DataError(calib_path_, "write failed (disk full?)");
 }
 
 void ResidualLogWriter::write(const std::vector<ResidualRecord> &records) {
@@ -71,8 +71,8 @@ void ResidualLogWriter::write(const std::vector<ResidualRecord> &records) {
     out_ << format(r) << '\n';
   out_.flush();
   if (!out_)
-    throw ov_core::DataError(path_, "write failed after " + std::to_string(rows_) + " rows (disk full?)");
+    throw ovton::core::DataError(path_, "write failed after " + std::to_string(rows_) + " rows (disk full?)");
   rows_ += records.size();
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -10,22 +10,22 @@
 #include <string>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
-using ResidualStatus = ov_core::ResidualStatus;
-/// One observation of one feature in one update (ov_core::ResidualLogRow; `line` stays 0 when written).
-using ResidualRecord = ov_core::ResidualLogRow;
+using ResidualStatus = ovton::core::ResidualStatus;
+/// One observation of one feature in one update (ovton::core::ResidualLogRow; `line` stays 0 when written).
+using ResidualRecord = ovton::core::ResidualLogRow;
 
-/// The filter's calibration and IMU biases as a calibration-log row (ov_core::CalibrationLogRow), for the update
+/// The filter's calibration and IMU biases as a calibration-log row (ovton::core::CalibrationLogRow), for the update
 /// whose residual rows are `records` (update id and newest camera time from them).
-ov_core::CalibrationLogRow calibration_row(const State &state, const std::vector<ResidualRecord> &records);
+ovton::core::CalibrationLogRow calibration_row(const State &state, const std::vector<ResidualRecord> &records);
 
 /// Writes ResidualRecords as CSV: one header line, then one line per record; and beside it the calibration log
-/// (ov_core::calibration_log_path), one row per update with records. Each batch is flushed so that an interrupted
+/// (ovton::core::calibration_log_path), one row per update with records. Each batch is flushed so that an interrupted
 /// run leaves every finished update on disk.
 class ResidualLogWriter {
 public:
-  /// Opens (truncates) both files and writes their headers; throws ov_core::DataError when they cannot be written.
+  /// Opens (truncates) both files and writes their headers; throws ovton::core::DataError when they cannot be written.
   explicit ResidualLogWriter(const std::string &path);
   /// The records of one update and the state after it (its calibration goes to the calibration log).
   void write(const std::vector<ResidualRecord> &records, const State &state);
@@ -34,10 +34,10 @@ public:
   const std::string &path() const { return path_; }
   size_t rows_written() const { return rows_; }
 
-  /// The header line (without newline): ov_core::residual_log_header().
-  static std::string header() { return ov_core::residual_log_header(); }
-  /// One record as a CSV line (without newline): ov_core::format_residual_row().
-  static std::string format(const ResidualRecord &r) { return ov_core::format_residual_row(r); }
+  /// The header line (without newline): ovton::core::residual_log_header().
+  static std::string header() { return ovton::core::residual_log_header(); }
+  /// One record as a CSV line (without newline): ovton::core::format_residual_row().
+  static std::string format(const ResidualRecord &r) { return ovton::core::format_residual_row(r); }
 
 private:
   std::string path_, calib_path_;
@@ -45,4 +45,4 @@ private:
   size_t rows_ = 0;
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 /// The role t_d plays in the MSCKF measurement of one update.
 enum class TdObservation {
@@ -69,8 +69,9 @@ public:
   virtual ~VelocityProvider() = default;
   /// Returns false when the observation has no usable velocity: its measurement row then carries no t_d entry
   /// and does not constrain t_d. `source` is one of VelocitySource.
-  virtual bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy, int &source) const {
-    const ov_core::FeatureObservation &o = feature.obs[obs_index];
+  virtual bool velocity(const ovton::core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
+                        int &source) const {
+    const ovton::core::FeatureObservation &o = feature.obs[obs_index];
     if (!o.vel_valid) {
       source = kVelocityNone;
       return false;
@@ -81,7 +82,7 @@ public:
   }
   /// What velocity() returns for this observation as a combination of the track's points (eq. 2 here). Must follow
   /// velocity(): an override of one overrides the other.
-  virtual void stencil(const ov_core::Feature &feature, size_t obs_index, VelocityStencil &out) const {
+  virtual void stencil(const ovton::core::Feature &feature, size_t obs_index, VelocityStencil &out) const {
     out.clear();
     const auto &obs = feature.obs;
     if (!obs[obs_index].vel_valid)
@@ -106,12 +107,12 @@ public:
 class NextForFirstVelocityProvider : public VelocityProvider {
 public:
   explicit NextForFirstVelocityProvider(const VelocityProvider &base) : base_(base) {}
-  bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
+  bool velocity(const ovton::core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
                 int &source) const override {
     size_t used = 0;
     return taken_from(feature, obs_index, vel_xy, source, used);
   }
-  void stencil(const ov_core::Feature &feature, size_t obs_index, VelocityStencil &out) const override {
+  void stencil(const ovton::core::Feature &feature, size_t obs_index, VelocityStencil &out) const override {
     Eigen::Vector2d v;
     int src = kVelocityNone;
     size_t used = 0;
@@ -123,7 +124,7 @@ public:
 
 private:
   /// The base's velocity of this observation, else of the next one; `used` says whose.
-  bool taken_from(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy, int &source,
+  bool taken_from(const ovton::core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy, int &source,
                   size_t &used) const {
     for (used = obs_index; used <= obs_index + 1 && used < feature.obs.size(); ++used)
       if (base_.velocity(feature, used, vel_xy, source))
@@ -142,7 +143,7 @@ private:
 /// Not the paper's SIR: an option (`sir_velocity: central`) to measure what eq. 2 costs.
 class CentralVelocityProvider : public VelocityProvider {
 public:
-  bool velocity(const ov_core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
+  bool velocity(const ovton::core::Feature &feature, size_t obs_index, Eigen::Vector2d &vel_xy,
                 int &source) const override {
     const auto &obs = feature.obs;
     if (!obs[obs_index].vel_valid) {
@@ -157,7 +158,7 @@ public:
     source = kVelocityTracked;
     return true;
   }
-  void stencil(const ov_core::Feature &feature, size_t obs_index, VelocityStencil &out) const override {
+  void stencil(const ovton::core::Feature &feature, size_t obs_index, VelocityStencil &out) const override {
     double dt0 = 0.0, dt1 = 0.0;
     if (!central(feature, obs_index, dt0, dt1)) {
       VelocityProvider::stencil(feature, obs_index, out);
@@ -173,7 +174,7 @@ public:
 
 private:
   /// Whether the observation has a valid neighbour on each side, and the two intervals.
-  static bool central(const ov_core::Feature &feature, size_t obs_index, double &dt0, double &dt1) {
+  static bool central(const ovton::core::Feature &feature, size_t obs_index, double &dt0, double &dt1) {
     const auto &obs = feature.obs;
     if (!(obs[obs_index].vel_valid && obs_index + 1 < obs.size() && obs[obs_index + 1].vel_valid))
       return false;
@@ -185,4 +186,4 @@ private:
   }
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 std::string to_string(TriangulationQuality q) {
   switch (q) {
@@ -66,14 +66,14 @@ bool inverse_depth_residual(const RelPose &rp, const Eigen::Vector3d &abr, const
 TriangulationResult triangulate(const std::vector<CameraPose> &poses, const std::vector<Eigen::Vector2d> &xy,
                                 size_t anchor, const TriangulationOptions &opt) {
   if (poses.size() != xy.size())
-    throw ov_core::UsageError("triangulate: " + std::to_string(poses.size()) + " poses but " +
-                              std::to_string(xy.size()) + " observations");
+    throw ovton::core::UsageError("triangulate: " + std::to_string(poses.size()) + " poses but " +
+                                  std::to_string(xy.size()) + " observations");
   TriangulationResult out;
   const size_t n = poses.size();
   if (n < 2)
     return out;
   if (anchor >= n)
-    throw ov_core::UsageError("triangulate: anchor index out of range");
+    throw ovton::core::UsageError("triangulate: anchor index out of range");
 
   // Poses relative to the anchor; the bearings expressed in the anchor frame are rotation-compensated, so the
   // angle between them is the parallax proper.
@@ -187,4 +187,4 @@ TriangulationResult triangulate(const std::vector<CameraPose> &poses, const std:
   return out;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

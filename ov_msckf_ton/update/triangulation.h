@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 /// A camera pose in the world: p_W = R_WC p_C + p_WC.
 struct CameraPose {
@@ -52,4 +52,4 @@ struct TriangulationResult {
 TriangulationResult triangulate(const std::vector<CameraPose> &poses, const std::vector<Eigen::Vector2d> &xy,
                                 size_t anchor, const TriangulationOptions &opt);
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -10,7 +10,7 @@
 #include <cmath>
 #include <optional>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 namespace {
 
@@ -24,35 +24,35 @@ double chi2_quantile(double confidence, int dof) {
 
 } // namespace
 
-UpdaterMSCKF::UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKFOptions &options)
+UpdaterMSCKF::UpdaterMSCKF(const ovton::core::CameraCalib &calib, const UpdaterMSCKFOptions &options)
     : calib_(calib), opt_(options), camera_(calib) {
   const double fu = calib.intrinsics(0), fv = calib.intrinsics(1);
   if (!(fu > 0) || !(fv > 0))
-    throw ov_core::UsageError("UpdaterMSCKF: focal lengths must be positive");
+    throw ovton::core::UsageError("UpdaterMSCKF: focal lengths must be positive");
   if (!(opt_.sigma_px > 0))
-    throw ov_core::UsageError("UpdaterMSCKF: sigma_px must be positive");
+    throw ovton::core::UsageError("UpdaterMSCKF: sigma_px must be positive");
   if (!(opt_.chi2_confidence > 0 && opt_.chi2_confidence < 1))
-    throw ov_core::UsageError("UpdaterMSCKF: chi2_confidence must be in (0, 1)");
+    throw ovton::core::UsageError("UpdaterMSCKF: chi2_confidence must be in (0, 1)");
   if (!(opt_.chi2_multiplier > 0))
-    throw ov_core::UsageError("UpdaterMSCKF: chi2_multiplier must be positive");
+    throw ovton::core::UsageError("UpdaterMSCKF: chi2_multiplier must be positive");
   if (!(opt_.track_correlation >= 0 && opt_.track_correlation < 1))
-    throw ov_core::UsageError("UpdaterMSCKF: track_correlation must be in [0, 1)");
+    throw ovton::core::UsageError("UpdaterMSCKF: track_correlation must be in [0, 1)");
   if (!(opt_.td_velocity_debias >= 0 && opt_.td_velocity_debias <= 10))
-    throw ov_core::UsageError("UpdaterMSCKF: td_velocity_debias must be in [0, 10]");
+    throw ovton::core::UsageError("UpdaterMSCKF: td_velocity_debias must be in [0, 10]");
   if (opt_.td_velocity_debias != 0 && opt_.track_correlation != 0)
-    throw ov_core::UsageError(
+    throw ovton::core::UsageError(
         "UpdaterMSCKF: td_velocity_debias assumes independent pixel errors (track_correlation 0)");
   if (!(opt_.covariance_track_correlation >= 0 && opt_.covariance_track_correlation < 1))
-    throw ov_core::UsageError("UpdaterMSCKF: covariance_track_correlation must be in [0, 1)");
+    throw ovton::core::UsageError("UpdaterMSCKF: covariance_track_correlation must be in [0, 1)");
   if (opt_.covariance_track_correlation != 0 && opt_.track_correlation != 0)
-    throw ov_core::UsageError("UpdaterMSCKF: covariance_track_correlation is for the independent weight: it needs "
-                              "track_correlation 0");
+    throw ovton::core::UsageError("UpdaterMSCKF: covariance_track_correlation is for the independent weight: it needs "
+                                  "track_correlation 0");
   if (opt_.min_observations < 2)
-    throw ov_core::UsageError("UpdaterMSCKF: min_observations must be at least 2 (two views leave one row)");
+    throw ovton::core::UsageError("UpdaterMSCKF: min_observations must be at least 2 (two views leave one row)");
   if (!(opt_.min_depth > 0) || !(opt_.max_depth > opt_.min_depth))
-    throw ov_core::UsageError("UpdaterMSCKF: need 0 < min_depth < max_depth");
+    throw ovton::core::UsageError("UpdaterMSCKF: need 0 < min_depth < max_depth");
   if (opt_.max_features < 0)
-    throw ov_core::UsageError("UpdaterMSCKF: max_features must be >= 0 (0 = no limit)");
+    throw ovton::core::UsageError("UpdaterMSCKF: max_features must be >= 0 (0 = no limit)");
   R_BC_ = calib.T_BC.topLeftCorner<3, 3>();
   p_BC_ = calib.T_BC.topRightCorner<3, 1>();
   chi2_table_.resize(kChi2TableSize + 1, 0.0);
@@ -60,7 +60,7 @@ UpdaterMSCKF::UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKF
     chi2_table_[d] = opt_.chi2_multiplier * chi2_quantile(opt_.chi2_confidence, d);
 }
 
-double UpdaterMSCKF::row_factor(const CameraView &v, const ov_core::FeatureObservation &o) {
+double UpdaterMSCKF::row_factor(const CameraView &v, const ovton::core::FeatureObservation &o) {
   return o.uv.y() / static_cast<double>(v.height) - 0.5;
 }
 
@@ -72,13 +72,13 @@ Eigen::Matrix2d UpdaterMSCKF::distortion_jacobian(const Eigen::Vector2d &xy) con
 
 double UpdaterMSCKF::chi2_threshold(int dof) const {
   if (dof <= 0)
-    throw ov_core::UsageError("chi2_threshold: dof must be positive");
+    throw ovton::core::UsageError("chi2_threshold: dof must be positive");
   if (dof <= kChi2TableSize)
     return chi2_table_[dof];
   return opt_.chi2_multiplier * chi2_quantile(opt_.chi2_confidence, dof);
 }
 
-void UpdaterMSCKF::usable_observations(const State &state, const ov_core::Feature &feature,
+void UpdaterMSCKF::usable_observations(const State &state, const ovton::core::Feature &feature,
                                        std::vector<std::pair<size_t, const CloneState *>> &out) const {
   out.clear();
   for (size_t i = 0; i < feature.obs.size(); ++i) {
@@ -99,7 +99,7 @@ UpdaterMSCKF::CameraView UpdaterMSCKF::camera_view(const State &state) const {
   v.readout_s = c.readout_s;
   v.height = calib_.height;
   if (v.est_intr) {
-    ov_core::CameraCalib k = calib_;
+    ovton::core::CameraCalib k = calib_;
     k.intrinsics = c.intrinsics.head<4>();
     k.dist_coeffs = c.intrinsics.tail<4>();
     v.est.emplace(k);
@@ -108,12 +108,12 @@ UpdaterMSCKF::CameraView UpdaterMSCKF::camera_view(const State &state) const {
   return v;
 }
 
-Eigen::Vector2d UpdaterMSCKF::observation_xy(const CameraView &v, const ov_core::FeatureObservation &o) const {
+Eigen::Vector2d UpdaterMSCKF::observation_xy(const CameraView &v, const ovton::core::FeatureObservation &o) const {
   // With the intrinsics in the state the tracker's undistortion (configured intrinsics) is stale: redo it.
   return v.est ? v.cam->undistort(o.uv) : o.xy;
 }
 
-TriangulationResult UpdaterMSCKF::triangulate_feature(const State &state, const ov_core::Feature &feature,
+TriangulationResult UpdaterMSCKF::triangulate_feature(const State &state, const ovton::core::Feature &feature,
                                                       TdObservation td_obs, const VelocityProvider &velocities) const {
   const CameraView view = camera_view(state);
   usable_observations(state, feature, usable_);
@@ -124,7 +124,7 @@ TriangulationResult UpdaterMSCKF::triangulate_feature(const State &state, const 
     cp.R_WC = c->R * view.R_BC;
     cp.p_WC = c->p + c->R * view.p_BC;
     poses_.push_back(cp);
-    const ov_core::FeatureObservation &o = feature.obs[i];
+    const ovton::core::FeatureObservation &o = feature.obs[i];
     Eigen::Vector2d z = observation_xy(view, o);
     Eigen::Vector2d v;
     int src = 0;
@@ -145,7 +145,7 @@ TriangulationResult UpdaterMSCKF::triangulate_feature(const State &state, const 
   return triangulate(poses_, xy_, poses_.empty() ? 0 : poses_.size() - 1, to);
 }
 
-bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature, const Eigen::Vector3d &p_f,
+bool UpdaterMSCKF::linearize(const State &state, const ovton::core::Feature &feature, const Eigen::Vector3d &p_f,
                              TdObservation td_obs, const VelocityProvider &velocities,
                              FeatureLinearization &out) const {
   const CameraView view = camera_view(state);
@@ -222,7 +222,7 @@ bool UpdaterMSCKF::linearize(const State &state, const ov_core::Feature &feature
         !project_in_clone(c.R_lin(), c.p_lin(), view.R_BC, view.p_BC, p_f_lin, z_lin, nullptr, &J))
       return false;
     o.depth = p_C.z();
-    const ov_core::FeatureObservation &obs = feature.obs[o.obs_index];
+    const ovton::core::FeatureObservation &obs = feature.obs[o.obs_index];
     // The image-plane shifts: the image was taken when the point was V·(t_d − td_ref) away, and row v of it
     // V·ρ·t_r later (rolling shutter).
     Eigen::Vector2d shift = Eigen::Vector2d::Zero();
@@ -291,7 +291,7 @@ bool UpdaterMSCKF::readout_velocity(const CameraView &view, const CloneState &c,
   return !J || predicted_image_velocity(c.R_lin(), c.p_lin(), view.R_BC, view.p_BC, p_lin_f, c.motion, at_lin, J);
 }
 
-double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ov_core::Feature &feature,
+double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ovton::core::Feature &feature,
                                       const VelocityProvider &velocities, const FeatureQR &qr) {
   const int m = static_cast<int>(lin.obs.size());
   if (m == 0 || !lin.obs.front().td_column)
@@ -325,7 +325,7 @@ double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ov_
   return D.trace() - (Q1.transpose() * D * Q1).trace();
 }
 
-double UpdaterMSCKF::td_bias_to_remove(const FeatureLinearization &lin, const ov_core::Feature &feature,
+double UpdaterMSCKF::td_bias_to_remove(const FeatureLinearization &lin, const ovton::core::Feature &feature,
                                        const VelocityProvider &velocities, const FeatureQR &qr) const {
   return opt_.td_velocity_debias != 0.0 ? opt_.td_velocity_debias * td_velocity_bias(lin, feature, velocities, qr)
                                         : 0.0;
@@ -339,7 +339,8 @@ double UpdaterMSCKF::remove_td_bias(State &state, double bias) {
   return dx(state.td_index);
 }
 
-void UpdaterMSCKF::append_records(const State &state, const ov_core::Feature &feature, const FeatureLinearization *lin,
+void UpdaterMSCKF::append_records(const State &state, const ovton::core::Feature &feature,
+                                  const FeatureLinearization *lin,
                                   const std::vector<std::pair<size_t, const CloneState *>> &usable,
                                   TdObservation td_obs, const VelocityProvider &velocities, const Eigen::Vector3d &p_f,
                                   double chi2, double threshold, ResidualStatus status,
@@ -347,7 +348,7 @@ void UpdaterMSCKF::append_records(const State &state, const ov_core::Feature &fe
   for (size_t k = 0; k < usable.size(); ++k) {
     const size_t i = usable[k].first;
     const CloneState &c = *usable[k].second;
-    const ov_core::FeatureObservation &o = feature.obs[i];
+    const ovton::core::FeatureObservation &o = feature.obs[i];
     ResidualRecord rec;
     rec.update_id = update_count_;
     rec.t_cam_ns = o.t_cam_ns;
@@ -406,7 +407,7 @@ void UpdaterMSCKF::append_records(const State &state, const ov_core::Feature &fe
   }
 }
 
-UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::Feature *> &features,
+UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::core::Feature *> &features,
                                  TdObservation td_obs, const VelocityProvider &velocities,
                                  std::vector<ResidualRecord> *log) {
   ++update_count_;
@@ -416,11 +417,11 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
   const int dim = state.dim();
 
   // Longest usable tracks first: they carry the most information when max_features cuts the list.
-  std::vector<std::pair<int, const ov_core::Feature *>> order;
+  std::vector<std::pair<int, const ovton::core::Feature *>> order;
   order.reserve(features.size());
-  for (const ov_core::Feature *f : features) {
+  for (const ovton::core::Feature *f : features) {
     if (!f)
-      throw ov_core::UsageError("UpdaterMSCKF::update: null feature");
+      throw ovton::core::UsageError("UpdaterMSCKF::update: null feature");
     usable_observations(state, *f, usable_);
     if (static_cast<int>(usable_.size()) < opt_.min_observations) {
       ++st.too_few_observations;
@@ -441,7 +442,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
   double td_bias = 0.0; // Σ_f tr(Q₂ᵀDQ₂) (td_velocity_debias)
   std::vector<std::pair<size_t, const CloneState *>> usable;
   for (const auto &[count, fp] : order) {
-    const ov_core::Feature &f = *fp;
+    const ovton::core::Feature &f = *fp;
     const TriangulationResult tri = triangulate_feature(state, f, td_obs, velocities);
     if (!tri.ok() || !linearize(state, f, tri.p_W, td_obs, velocities, lin_)) {
       ++st.rejected_triangulation;
@@ -552,4 +553,4 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ov_core::
   return st;
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

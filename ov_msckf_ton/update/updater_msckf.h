@@ -17,7 +17,7 @@
 #include <optional>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 struct UpdaterMSCKFOptions {
   double sigma_px = 1.0;         ///< measurement noise [px], converted by the mean focal length
@@ -107,17 +107,17 @@ struct FeatureLinearization {
 /// Not thread-safe: const methods share scratch buffers. Use one updater per filter.
 class UpdaterMSCKF {
 public:
-  explicit UpdaterMSCKF(const ov_core::CameraCalib &calib, const UpdaterMSCKFOptions &options = {});
+  explicit UpdaterMSCKF(const ovton::core::CameraCalib &calib, const UpdaterMSCKFOptions &options = {});
 
   /// One MSCKF update with the given features (typically lost ones and those observed in the clone that leaves the
   /// window). Observations without a clone are ignored. Appends one ResidualRecord per observation of each feature
-  /// that reached triangulation to `log` when given. Throws ov_core::UsageError on inconsistent input.
-  UpdateStats update(State &state, const std::vector<const ov_core::Feature *> &features, TdObservation td_obs,
+  /// that reached triangulation to `log` when given. Throws ovton::core::UsageError on inconsistent input.
+  UpdateStats update(State &state, const std::vector<const ovton::core::Feature *> &features, TdObservation td_obs,
                      const VelocityProvider &velocities, std::vector<ResidualRecord> *log = nullptr);
 
   /// Triangulates a feature from the current clone estimates, shifting image-plane observations by V·(t̂_d − td_ref)
   /// in ImagePlane mode so that the point agrees with the model it will be linearised in.
-  TriangulationResult triangulate_feature(const State &state, const ov_core::Feature &feature, TdObservation td_obs,
+  TriangulationResult triangulate_feature(const State &state, const ovton::core::Feature &feature, TdObservation td_obs,
                                           const VelocityProvider &velocities) const;
 
   /// Residuals and Jacobians of every observation of `feature` that has a clone, at the feature position p_f:
@@ -125,8 +125,8 @@ public:
   ///   H_x: [∂h/∂δθ_i  ∂h/∂δp_i] per clone (feature_jacobians.h), and +V_i in the t_d column (paper eq. 1: the
   ///        shifted measurement z − V·(t_d − td_ref) has Jacobian −V, so the model z = h + V·(t_d − td_ref) has +V).
   /// Returns false when the point is behind a camera.
-  bool linearize(const State &state, const ov_core::Feature &feature, const Eigen::Vector3d &p_f, TdObservation td_obs,
-                 const VelocityProvider &velocities, FeatureLinearization &out) const;
+  bool linearize(const State &state, const ovton::core::Feature &feature, const Eigen::Vector3d &p_f,
+                 TdObservation td_obs, const VelocityProvider &velocities, FeatureLinearization &out) const;
 
   /// Multiplies H_x and r on the left by Q₂ᵀ, where [Q₁ Q₂] is the Householder QR of H_f (2m × 3, full column rank),
   /// so that Q₂ᵀH_f = 0: the result no longer depends on the feature error. Rows become 2m − 3. Noise stays σ²I
@@ -160,11 +160,11 @@ public:
 
   /// tr(Q₂ᵀDQ₂) of one linearised feature (td_velocity_debias): the expected spurious part of hᵀr/σ² over its
   /// projected rows, h its t_d column. 0 when its rows carry no t_d column.
-  static double td_velocity_bias(const FeatureLinearization &lin, const ov_core::Feature &feature,
+  static double td_velocity_bias(const FeatureLinearization &lin, const ovton::core::Feature &feature,
                                  const VelocityProvider &velocities, const FeatureQR &qr);
   /// td_velocity_debias × td_velocity_bias: what an update with this feature is to remove (0 when off or when the
   /// feature's rows carry no t_d column, i.e. outside the image-plane modes).
-  double td_bias_to_remove(const FeatureLinearization &lin, const ov_core::Feature &feature,
+  double td_bias_to_remove(const FeatureLinearization &lin, const ovton::core::Feature &feature,
                            const VelocityProvider &velocities, const FeatureQR &qr) const;
   /// After an EKF update whose t_d information vector was off by `bias` (Σ td_velocity_bias): the state moves by
   /// −P⁺·e_td·bias (the gain's information form, P⁺Hᵀr/σ²). Returns the change of t̂_d.
@@ -181,17 +181,17 @@ public:
   struct CameraView {
     Eigen::Matrix3d R_BC;
     Eigen::Vector3d p_BC;
-    const ov_core::CameraModel *cam = nullptr;
-    std::optional<ov_core::CameraModel> est; ///< the state's intrinsics, when estimated
+    const ovton::core::CameraModel *cam = nullptr;
+    std::optional<ovton::core::CameraModel> est; ///< the state's intrinsics, when estimated
     double readout_s = 0.0;
     int height = 0;
     bool est_ext = false, est_intr = false, est_readout = false;
   };
   CameraView camera_view(const State &state) const;
   /// The observation's undistorted normalised coordinates under the view's intrinsics.
-  Eigen::Vector2d observation_xy(const CameraView &v, const ov_core::FeatureObservation &o) const;
+  Eigen::Vector2d observation_xy(const CameraView &v, const ovton::core::FeatureObservation &o) const;
   /// ρ = v/H − ½: the observation's row time relative to the image's middle row, in readouts.
-  static double row_factor(const CameraView &v, const ov_core::FeatureObservation &o);
+  static double row_factor(const CameraView &v, const ovton::core::FeatureObservation &o);
   /// The image velocity of the rolling-shutter shift at clone c for a point at p_W (readout_state_velocity), or the
   /// track's measured one (`tracked`, `has_tracked`). J (state velocity only): its Jacobians, at (R_lin, p_lin,
   /// p_lin_f). False when there is none (no motion, behind the camera, no measured velocity).
@@ -201,18 +201,18 @@ public:
 
 private:
   /// Observations of `feature` that have a clone, as (obs index, clone).
-  void usable_observations(const State &state, const ov_core::Feature &feature,
+  void usable_observations(const State &state, const ovton::core::Feature &feature,
                            std::vector<std::pair<size_t, const CloneState *>> &out) const;
-  void append_records(const State &state, const ov_core::Feature &feature, const FeatureLinearization *lin,
+  void append_records(const State &state, const ovton::core::Feature &feature, const FeatureLinearization *lin,
                       const std::vector<std::pair<size_t, const CloneState *>> &usable, TdObservation td_obs,
                       const VelocityProvider &velocities, const Eigen::Vector3d &p_f, double chi2, double threshold,
                       ResidualStatus status, std::vector<ResidualRecord> &log) const;
 
-  ov_core::CameraCalib calib_;
+  ovton::core::CameraCalib calib_;
   UpdaterMSCKFOptions opt_;
   Eigen::Matrix3d R_BC_;
   Eigen::Vector3d p_BC_;
-  ov_core::CameraModel camera_;
+  ovton::core::CameraModel camera_;
   std::vector<double> chi2_table_; ///< index = dof
   uint64_t update_count_ = 0;
 
@@ -233,4 +233,4 @@ private:
   std::vector<int> cols_, where_; ///< the stacked system's state columns, and each state column's place in it
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

@@ -8,25 +8,27 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
-UpdaterSLAM::UpdaterSLAM(const ov_core::CameraCalib &calib, const UpdaterSlamOptions &opt, const UpdaterMSCKF &msckf)
+UpdaterSLAM::UpdaterSLAM(const ovton::core::CameraCalib &calib, const UpdaterSlamOptions &opt,
+                         const UpdaterMSCKF &msckf)
     : opt_(opt), msckf_(msckf) {
   (void)calib; // the calibration comes from the updater's view of the state (fixed or estimated)
   if (!(opt_.sigma_px > 0) || !(opt_.chi2_multiplier > 0))
-    throw ov_core::UsageError("UpdaterSLAM: sigma_px and chi2_multiplier must be positive");
+    throw ovton::core::UsageError("UpdaterSLAM: sigma_px and chi2_multiplier must be positive");
   if (!(opt_.track_correlation >= 0 && opt_.track_correlation < 1))
-    throw ov_core::UsageError("UpdaterSLAM: track_correlation must be in [0, 1)");
+    throw ovton::core::UsageError("UpdaterSLAM: track_correlation must be in [0, 1)");
   if (msckf_.options().td_velocity_debias != 0 && opt_.track_correlation != 0)
-    throw ov_core::UsageError("UpdaterSLAM: td_velocity_debias assumes independent pixel errors (track_correlation 0)");
+    throw ovton::core::UsageError(
+        "UpdaterSLAM: td_velocity_debias assumes independent pixel errors (track_correlation 0)");
   if (!(opt_.covariance_sigma_px == 0 || opt_.covariance_sigma_px >= opt_.sigma_px))
-    throw ov_core::UsageError("UpdaterSLAM: covariance_sigma_px must be 0 (off) or at least sigma_px");
+    throw ovton::core::UsageError("UpdaterSLAM: covariance_sigma_px must be 0 (off) or at least sigma_px");
 }
 
-void UpdaterSLAM::initialize(State &state, const std::vector<const ov_core::Feature *> &features, int64_t t_cam_ns,
+void UpdaterSLAM::initialize(State &state, const std::vector<const ovton::core::Feature *> &features, int64_t t_cam_ns,
                              TdObservation td_obs, const VelocityProvider &velocities, SlamStats &stats) {
   const double sigma2 = opt_.sigma_px * opt_.sigma_px;
-  for (const ov_core::Feature *f : features) {
+  for (const ovton::core::Feature *f : features) {
     if (state.landmarks.count(f->id))
       continue;
     const TriangulationResult tri = msckf_.triangulate_feature(state, *f, td_obs, velocities);
@@ -138,7 +140,7 @@ UpdaterSLAM::LandmarkBlock UpdaterSLAM::report_initialization(const State &state
 }
 
 bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
-                            const CloneState &c, const ov_core::Feature &feature, size_t obs_index,
+                            const CloneState &c, const ovton::core::Feature &feature, size_t obs_index,
                             TdObservation td_obs, const VelocityProvider &velocities, LandmarkLinearization &out,
                             const BodyMotion *motion) const {
   Eigen::Vector2d zhat, z_lin;
@@ -150,7 +152,7 @@ bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &s
   out.depth = p_C.z();
   if (out.depth < opt_.min_depth || out.depth > opt_.max_depth)
     return false;
-  const ov_core::FeatureObservation &o = feature.obs[obs_index];
+  const ovton::core::FeatureObservation &o = feature.obs[obs_index];
   Eigen::Vector2d vel;
   int src = kVelocityNone;
   const bool predicted = motion && opt_.state_velocity && td_obs == TdObservation::ImagePlane &&
@@ -221,7 +223,7 @@ bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &s
 }
 
 bool UpdaterSLAM::difference_previous(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
-                                      const ov_core::Feature &f, TdObservation td_obs,
+                                      const ovton::core::Feature &f, TdObservation td_obs,
                                       const VelocityProvider &velocities, LandmarkLinearization &lin,
                                       LandmarkLinearization &prev, int &prev_clone_index) const {
   const double rho = opt_.track_correlation;
@@ -243,7 +245,7 @@ bool UpdaterSLAM::difference_previous(const UpdaterMSCKF::CameraView &view, cons
   return true;
 }
 
-void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64_t t_cam_ns, TdObservation td_obs,
+void UpdaterSLAM::update(State &state, const ovton::core::FeatureDatabase &db, int64_t t_cam_ns, TdObservation td_obs,
                          const VelocityProvider &velocities, SlamStats &stats, std::vector<size_t> &drop,
                          const BodyMotion *motion) {
   const auto clone_it = state.clones.find(t_cam_ns);
@@ -262,7 +264,7 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
   std::vector<int> cols;
   const double rho = opt_.track_correlation;
   for (auto &[id, l] : state.landmarks) {
-    const ov_core::Feature *f = db.get(id);
+    const ovton::core::Feature *f = db.get(id);
     if (!f || f->obs.empty() || f->newest().t_cam_ns != t_cam_ns)
       continue; // not seen in this image: the caller marginalises it
     if (!linearize(view, state, l, c, *f, f->obs.size() - 1, td_obs, velocities, lin, motion)) {
@@ -336,4 +338,4 @@ void UpdaterSLAM::update(State &state, const ov_core::FeatureDatabase &db, int64
   stats.updated += static_cast<int>(rows_r.size());
 }
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf

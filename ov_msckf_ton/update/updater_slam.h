@@ -13,7 +13,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-namespace ov_msckf_ton {
+namespace ovton::msckf {
 
 struct UpdaterSlamOptions {
   double sigma_px = 1.0;
@@ -56,7 +56,7 @@ struct LandmarkLinearization {
 class UpdaterSLAM {
 public:
   /// `msckf` supplies the shared triangulation, linearisation, distortion Jacobian and chi-square table.
-  UpdaterSLAM(const ov_core::CameraCalib &calib, const UpdaterSlamOptions &opt, const UpdaterMSCKF &msckf);
+  UpdaterSLAM(const ovton::core::CameraCalib &calib, const UpdaterSlamOptions &opt, const UpdaterMSCKF &msckf);
 
   /// Delayed initialisation (OpenVINS' StateHelper::initialize): each feature is triangulated and linearised over
   /// its window observations as for an MSCKF update, r = H_x δx + H_f δp_f + n; the QR of H_f splits the rows
@@ -64,14 +64,14 @@ public:
   ///                P_ff = R₁⁻¹ (H_x1 P H_x1ᵀ + σ²I) R₁⁻ᵀ,  P_xf = −P H_x1ᵀ R₁⁻ᵀ;
   ///   remaining:   r₂ = H_x2 δx + n₂              -> an EKF update of the state (and, through P_xf, the landmark),
   /// after a chi-square test of r₂. Features that fail either step stay out of the state.
-  void initialize(State &state, const std::vector<const ov_core::Feature *> &features, int64_t t_cam_ns,
+  void initialize(State &state, const std::vector<const ovton::core::Feature *> &features, int64_t t_cam_ns,
                   TdObservation td_obs, const VelocityProvider &velocities, SlamStats &stats);
 
   /// Updates every landmark observed at t_cam_ns (the newest clone) with that observation: one chi-square test per
   /// landmark (2 dof), the passing ones stacked into one EKF update. Landmarks that can no longer be linearised
   /// (behind the camera, outside the depth range) are appended to `drop` for the caller to marginalise. `motion`:
   /// the body's motion at t_cam_ns, for the predicted velocities of image-plane modes (state_velocity).
-  void update(State &state, const ov_core::FeatureDatabase &db, int64_t t_cam_ns, TdObservation td_obs,
+  void update(State &state, const ovton::core::FeatureDatabase &db, int64_t t_cam_ns, TdObservation td_obs,
               const VelocityProvider &velocities, SlamStats &stats, std::vector<size_t> &drop,
               const BodyMotion *motion = nullptr);
 
@@ -98,9 +98,9 @@ public:
 
   /// Residual and Jacobians of landmark `l` seen at observation `obs_index` of `feature` in `clone`; false when
   /// the landmark is behind the camera or outside the depth range.
-  bool linearize(const State &state, const LandmarkState &l, const CloneState &clone, const ov_core::Feature &feature,
-                 size_t obs_index, TdObservation td_obs, const VelocityProvider &velocities,
-                 LandmarkLinearization &out) const {
+  bool linearize(const State &state, const LandmarkState &l, const CloneState &clone,
+                 const ovton::core::Feature &feature, size_t obs_index, TdObservation td_obs,
+                 const VelocityProvider &velocities, LandmarkLinearization &out) const {
     return linearize(msckf_.camera_view(state), state, l, clone, feature, obs_index, td_obs, velocities, out);
   }
   /// The same with the calibration view of the update (UpdaterMSCKF::camera_view), computed once per update. The
@@ -108,7 +108,7 @@ public:
   /// `calib_cols`. `motion` (the body's at the clone): in image-plane modes with state_velocity the observation's
   /// velocity is the one the landmark's state predicts, not the provider's.
   bool linearize(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
-                 const CloneState &clone, const ov_core::Feature &feature, size_t obs_index, TdObservation td_obs,
+                 const CloneState &clone, const ovton::core::Feature &feature, size_t obs_index, TdObservation td_obs,
                  const VelocityProvider &velocities, LandmarkLinearization &out,
                  const BodyMotion *motion = nullptr) const;
 
@@ -118,7 +118,7 @@ private:
   /// (its state index in prev_clone_index).
   /// False (lin untouched) when that observation's clone has left the state or its columns differ from lin's.
   bool difference_previous(const UpdaterMSCKF::CameraView &view, const State &state, const LandmarkState &l,
-                           const ov_core::Feature &f, TdObservation td_obs, const VelocityProvider &velocities,
+                           const ovton::core::Feature &f, TdObservation td_obs, const VelocityProvider &velocities,
                            LandmarkLinearization &lin, LandmarkLinearization &prev, int &prev_clone_index) const;
 
   UpdaterSlamOptions opt_;
@@ -126,4 +126,4 @@ private:
   FeatureLinearization lin_;
 };
 
-} // namespace ov_msckf_ton
+} // namespace ovton::msckf
