@@ -28,7 +28,7 @@ inline ovton::msckf::VioOptions gt_run_options(ovton::msckf::TdMode mode, double
   ovton::msckf::VioOptions opt;
   opt.td.mode = mode;
   opt.init.mode = ovton::msckf::InitMode::GroundTruth;
-  opt.update.sigma_px = sigma_px;
+  opt.update.msckf.sigma_px = sigma_px;
   return opt;
 }
 

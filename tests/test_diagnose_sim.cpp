@@ -182,7 +182,7 @@ DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_in
   opt.td.mode = ovton::msckf::parse_td_mode(mode);
   opt.td.init_s = td_init_s;
   opt.init.mode = ovton::msckf::InitMode::GroundTruth;
-  opt.update.sigma_px = o.features.pixel_noise;
+  opt.update.msckf.sigma_px = o.features.pixel_noise;
   opt.calibration = calibration;
   ovton::msckf::VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);

@@ -73,9 +73,9 @@ std::unique_ptr<ovton::core::Dataset> simulate_constant_10ms(const ovtest::TempD
 /// fit, only on FVON supplying a velocity where the constant-speed model has none.
 VioOptions fast_networks() {
   VioOptions o;
-  o.ton.its_epochs = 200;
-  o.ton.f2f_epochs = 300;
-  o.ton.tpn_epochs = 300;
+  o.ton.fvon.its.train.max_epochs = 200;
+  o.ton.fvon.f2f.train.max_epochs = 300;
+  o.ton.tpn.tpn.train.max_epochs = 300;
   return o;
 }
 
@@ -128,8 +128,8 @@ TEST(TonFilter, FvonGateKeepsOnlyPredictionsThatAgreeWithTheTrack) {
   ovtest::TempDir dir;
   const auto data = simulate_constant_10ms(dir);
   VioOptions open = fast_networks(), shut = fast_networks(), normal = fast_networks();
-  open.ton.fvon_gate_px_s = 0.0;  // no check
-  shut.ton.fvon_gate_px_s = 1e-6; // nothing agrees this well with a noisy track
+  open.ton.fvon.gate_px_s = 0.0;  // no check
+  shut.ton.fvon.gate_px_s = 1e-6; // nothing agrees this well with a noisy track
   const ModeRun a = run_mode(*data, TdMode::Fvon, open);
   const ModeRun b = run_mode(*data, TdMode::Fvon, shut);
   const ModeRun c = run_mode(*data, TdMode::Fvon, normal);

@@ -61,9 +61,9 @@ TEST(VelocityTruth, NoiseFreeTracksScoreNearZeroAndNetworksAreScored) {
   // frame of image acceleration; FVON (mode fvon) predicts with both networks for every new feature.
   ovtest::TempDir tmp;
   const ovton::core::Dataset data = ovtest::feature_flight(tmp / "sim", 6.0, 3, 0.0);
-  VioOptions opt = ovtest::gt_run_options(TdMode::Fvon, VioOptions().update.sigma_px);
-  opt.ton.its_epochs = 100;
-  opt.ton.f2f_epochs = 150;
+  VioOptions opt = ovtest::gt_run_options(TdMode::Fvon, VioOptions().update.msckf.sigma_px);
+  opt.ton.fvon.its.train.max_epochs = 100;
+  opt.ton.fvon.f2f.train.max_epochs = 150;
   VioManager vio(opt, data.cam, data.imu_calib);
   vio.set_groundtruth(data.groundtruth);
   {

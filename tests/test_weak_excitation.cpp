@@ -27,7 +27,7 @@ TEST(WeakExcitation, VibratingGyroDoesNotMakeTdLookObservable) {
   const ovton::core::Dataset data = ovton::core::load_dataset(o.out_dir);
   const auto final_td = [&](double window_s) {
     ovton::msckf::VioOptions opt = ovtest::gt_run_options(ovton::msckf::TdMode::Sr, 0.0);
-    opt.update.sigma_px = 1.0;
+    opt.update.msckf.sigma_px = 1.0;
     opt.td.jacobian_rate_window_s = window_s;
     ovton::msckf::VioManager vio(opt, data.cam, data.imu_calib);
     vio.set_groundtruth(data.groundtruth);

@@ -103,7 +103,7 @@ int cmd_run(const Args &args) {
     req.opt.td.init_s = td_init_ms * 1e-3;
   }
   if (!td_search.empty())
-    req.opt.td.search = parse_on_off(td_search, "--td-search");
+    req.opt.td.search.enabled = parse_on_off(td_search, "--td-search");
   if (!health.empty())
     req.opt.health.enabled = parse_on_off(health, "--health-checks");
   // Every output is checked before the run: a typo should not cost a whole run.

@@ -97,7 +97,7 @@ CompareResult run_compare(const ovton::core::Dataset &data, const CompareRequest
   // One coarse t_d search for every mode that estimates t_d (off keeps its fixed value, oracle reads the truth).
   ovton::msckf::VioOptions searched = req.base, unsearched = req.base;
   searched.td.mode = TdMode::Sr;
-  unsearched.td.search = false;
+  unsearched.td.search.enabled = false;
   // What the search did is shared read-only by every mode's filter instead of being done again: its tracks when its
   // window starts at the first image (tracks do not depend on t_d), else the images it decoded.
   auto decoded = std::make_shared<ovton::core::DecodedImages>();

@@ -31,14 +31,12 @@ std::optional<ovton::msckf::TdSearchResult> run_td_search(const ovton::core::Dat
                                                           ovton::core::DecodedImages *keep, size_t keep_bytes,
                                                           ovton::core::TrackedStart *tracked) {
   using ovton::msckf::TdMode;
-  const bool due = opt.td.search && opt.td.mode != TdMode::Off && opt.td.mode != TdMode::Oracle;
-  opt.td.search = false;
+  const bool due = opt.td.search.enabled && opt.td.mode != TdMode::Off && opt.td.mode != TdMode::Oracle;
+  opt.td.search.enabled = false;
   if (!due)
     return std::nullopt;
-  ovton::msckf::TdSearchOptions so;
-  so.range_s = opt.td.search_range_s;
-  so.track = opt.track;
-  so.rotation_prior = make_rotation_prior(data, opt); // at the prior offset: the search has not found its own yet
+  // The LK starting points at the prior offset: the search has not found its own yet.
+  const auto rotation_prior = make_rotation_prior(data, opt);
   size_t kept_bytes = 0;
   bool first_load = true, keeping = keep != nullptr;
   const auto load = [&](const ovton::core::ImageEntry &e) {
@@ -56,7 +54,8 @@ std::optional<ovton::msckf::TdSearchResult> run_td_search(const ovton::core::Dat
     }
     return img;
   };
-  const auto r = ovton::msckf::search_td(data.images, data.imu, data.cam, opt.td.init_s, so, load, tracked);
+  const auto r = ovton::msckf::search_td(data.images, data.imu, data.cam, opt.td.init_s, opt.td.search, opt.track,
+                                         rotation_prior, load, tracked);
   if (r.found) {
     opt.td.init_s = r.td_s;
     // The filter's prior must cover the search's own error.

@@ -31,30 +31,6 @@ ImuNoise noise_from(const ovton::core::ImuCalib &imu, const VioOptions &opt) {
   return n;
 }
 
-UpdaterMSCKFOptions updater_options(const VioOptions &o) {
-  UpdaterMSCKFOptions u;
-  u.sigma_px = o.update.sigma_px;
-  u.chi2_multiplier = o.update.chi2_multiplier;
-  u.min_observations = o.update.min_track_length;
-  u.min_parallax_deg = o.update.min_parallax_deg;
-  u.max_features = o.update.max_features;
-  u.track_correlation = o.update.track_correlation;
-  u.covariance_track_correlation = o.update.covariance_track_correlation;
-  u.td_velocity_debias = o.td.velocity_debias;
-  u.readout_state_velocity = o.calibration.readout_state_velocity;
-  return u;
-}
-
-UpdaterSlamOptions slam_options(const VioOptions &o) {
-  UpdaterSlamOptions u;
-  u.sigma_px = o.slam.sigma_px > 0 ? o.slam.sigma_px : o.update.sigma_px;
-  u.chi2_multiplier = o.slam.chi2_multiplier;
-  u.track_correlation = o.slam.track_correlation;
-  u.covariance_sigma_px = o.slam.covariance_sigma_px;
-  u.state_velocity = o.slam.state_velocity;
-  return u;
-}
-
 TdObservation td_observation(TdMode m) {
   if (uses_state_relevant(m))
     return TdObservation::StateRelevant;
@@ -63,54 +39,11 @@ TdObservation td_observation(TdMode m) {
   return TdObservation::None;
 }
 
-FvonProviderOptions fvon_options(const TonOptions &o, bool stencils) {
-  FvonProviderOptions f;
-  f.stencils = stencils;
-  f.max_labels = o.fvon_max_labels;
-  f.min_f2f_labels = o.fvon_min_f2f_labels;
-  f.gate_px_s = o.fvon_gate_px_s;
-  f.its.train.max_epochs = o.its_epochs;
-  f.its.train.plateau_epochs = f.f2f.train.plateau_epochs = o.plateau_epochs;
-  f.its.train.plateau_rel = f.f2f.train.plateau_rel = o.plateau_rel;
-  f.its.train.warmup_calls = f.f2f.train.warmup_calls = o.fvon_warmup_trainings;
-  f.its.train.maintenance_epochs = f.f2f.train.maintenance_epochs = o.fvon_maintenance_epochs;
-  f.its.residual = o.its_residual;
-  f.f2f.train.max_epochs = o.f2f_epochs;
-  f.f2f.inverse_depth_input = o.f2f_inverse_depth;
-  return f;
-}
-
-InertialInitOptions inertial_init_options(const VioOptions &o) {
-  const InitOptions &i = o.init;
-  InertialInitOptions r;
-  r.allow_static = i.mode != InitMode::Dynamic;
-  r.allow_dynamic = i.mode == InitMode::Auto || i.mode == InitMode::Dynamic;
-  r.static_window_s = i.window_s;
-  r.max_accel_std = i.max_accel_std;
-  r.max_gyro_std = i.max_gyro_std;
-  r.still_window_s = i.still_window_s;
-  r.still_max_disparity_px = i.still_max_disparity_px;
-  r.sigma_yaw = i.sigma_yaw;
-  r.sigma_pos = i.sigma_pos;
-  DynamicInitOptions &d = r.dynamic;
-  d.window_s = i.dyn_window_s;
-  d.min_features = i.dyn_min_features;
-  d.max_features = i.dyn_max_features;
-  d.min_observations = i.dyn_min_observations;
-  d.min_disparity_px = i.dyn_min_disparity_px;
-  d.sigma_px = o.update.sigma_px;
-  d.max_rms_px = i.dyn_max_rms_px;
-  d.max_sigma_rollpitch_deg = i.dyn_max_sigma_rollpitch_deg;
-  d.max_sigma_vel = i.dyn_max_sigma_vel;
-  d.sigma_inflation = i.dyn_sigma_inflation;
-  return r;
-}
-
 } // namespace
 
 VioManager::VioManager(const VioOptions &opt, const ovton::core::CameraCalib &cam, const ovton::core::ImuCalib &imu)
     : opt_(opt), camera_(cam), tracker_(camera_, opt.track), propagator_(noise_from(imu, opt), opt.imu.gravity_mag),
-      updater_(cam, updater_options(opt)), slam_(cam, slam_options(opt), updater_),
+      updater_(cam, opt.update.msckf), slam_(cam, opt.slam.updater, updater_),
       state_(std::make_unique<State>(estimates_td(opt.td.mode))), health_(opt) {
   validate_vio_options(opt_);
   state_->td = opt.td.init_s;
@@ -121,10 +54,11 @@ VioManager::VioManager(const VioOptions &opt, const ovton::core::CameraCalib &ca
   c.intrinsics << cam.intrinsics, cam.dist_coeffs;
   c.readout_s = opt.calibration.readout_s;
   if (opt.init.mode != InitMode::GroundTruth)
-    inertial_init_ = std::make_unique<InertialInitializer>(
-        inertial_init_options(opt), cam.T_BC, 0.5 * (cam.intrinsics(0) + cam.intrinsics(1)), opt.imu.gravity_mag);
+    inertial_init_ =
+        std::make_unique<InertialInitializer>(opt.init, opt.update.msckf.sigma_px, cam.T_BC,
+                                              0.5 * (cam.intrinsics(0) + cam.intrinsics(1)), opt.imu.gravity_mag);
   if (uses_fvon(opt.td.mode))
-    fvon_ = std::make_unique<FvonVelocityProvider>(cam, fvon_options(opt.ton, opt.td.velocity_debias != 0.0));
+    fvon_ = std::make_unique<FvonVelocityProvider>(cam, opt.ton.fvon, opt.update.msckf.td_velocity_debias != 0.0);
   td_model_ = make_td_model(opt_, [this](int64_t t_cam_ns) {
     if (!td_oracle_)
       throw ovton::core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
@@ -198,8 +132,9 @@ void VioManager::on_imu(const ovton::core::ImuData &m) {
   propagator_.feed_imu(m);
   if (!initialized_) {
     init_imu_.push_back(m);
-    while (init_imu_.size() > 2 && init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns >
-                                       ovton::core::s_to_ns(std::max(opt_.init.window_s, opt_.init.dyn_window_s) + 1.0))
+    while (init_imu_.size() > 2 &&
+           init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns >
+               ovton::core::s_to_ns(std::max(opt_.init.window_s, opt_.init.dynamic.window_s) + 1.0))
       init_imu_.pop_front();
   }
 }
@@ -291,7 +226,7 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
   }
   add_calibration_variables();
   // A track-error model for the reported covariance: from here on P_report follows P's gains (State::P_report).
-  if (opt_.update.covariance_track_correlation > 0 || opt_.slam.covariance_sigma_px > 0)
+  if (opt_.update.msckf.covariance_track_correlation > 0 || opt_.slam.updater.covariance_sigma_px > 0)
     s.start_report();
   initialized_ = true;
   init_imu_.clear();
@@ -370,14 +305,14 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
   // The clone's t_d Jacobian needs the body rate AT the image time (interpolated reading), not the mean over the
   // last IMU interval, and not a stale value: the first clone after initialisation has no interval behind it.
   ovton::core::ImuData at_image;
-  const bool have_reading = propagator_.reading_at(s.t_imu_ns, at_image);
+  const bool have_reading = propagator_.imu().interpolate(s.t_imu_ns, at_image);
   // The clone's error from a t_d error follows the TRUE body rate; a vibrating gyro's reading at one instant is not
   // it, and on a flight whose rate barely changes the filter takes the vibration for information about t_d
   // (docs/robustness.md, "Weak excitation"). A centred mean over the window removes the vibration without lag; the
   // replay hands over its second half before the image (imu_lookahead_ns).
   const int64_t half = imu_lookahead_ns();
   Eigen::Vector3d w_B, w_mean;
-  if (half > 0 && propagator_.mean_gyro(s.t_imu_ns - half, s.t_imu_ns + half, w_mean))
+  if (half > 0 && propagator_.imu().mean_gyro_readings(s.t_imu_ns - half, s.t_imu_ns + half, w_mean))
     w_B = w_mean - s.imu.bg;
   else
     w_B = have_reading ? Eigen::Vector3d(at_image.wm - s.imu.bg) : propagator_.last_w_B();

@@ -3,6 +3,7 @@
 #include "ov_core/io/image_io.h"
 #include "ov_core/math/so3.h"
 #include "ov_core/track/track_pipeline.h"
+#include "ov_core/types/imu_buffer.h"
 
 #include <Eigen/SVD>
 
@@ -17,34 +18,7 @@ namespace ovton::msckf {
 
 namespace {
 
-/// The gyro as a function of time: linear between readings, with its exact running integral so that the mean rate
-/// over any interval costs two lookups (every candidate t_d needs every pair's mean).
-class GyroIntegral {
-public:
-  GyroIntegral(const std::vector<ovton::core::ImuData> &imu, int64_t t0_ns) {
-    t_.reserve(imu.size());
-    for (const auto &m : imu) {
-      t_.push_back(ovton::core::ns_to_s(m.t_imu_ns - t0_ns));
-      w_.push_back(m.wm);
-    }
-    c_.assign(t_.size(), Eigen::Vector3d::Zero());
-    for (size_t i = 1; i < t_.size(); ++i)
-      c_[i] = c_[i - 1] + 0.5 * (t_[i] - t_[i - 1]) * (w_[i] + w_[i - 1]);
-  }
-  double begin() const { return t_.empty() ? 0.0 : t_.front(); }
-  double end() const { return t_.empty() ? 0.0 : t_.back(); }
-  /// Mean rate over [a, b] (a < b, both inside the log).
-  Eigen::Vector3d mean(double a, double b) const { return (integral(b) - integral(a)) / (b - a); }
-
-private:
-  Eigen::Vector3d integral(double t) const {
-    const size_t i = std::min<size_t>(t_.size() - 2, std::upper_bound(t_.begin(), t_.end(), t) - t_.begin() - 1);
-    const double h = t_[i + 1] - t_[i], u = t - t_[i];
-    return c_[i] + u * w_[i] + 0.5 * u * u / h * (w_[i + 1] - w_[i]);
-  }
-  std::vector<double> t_;
-  std::vector<Eigen::Vector3d> w_, c_;
-};
+using ovton::core::GyroIntegral;
 
 /// One pair of consecutive images: the body rate the images saw between them.
 struct PairRate {
@@ -225,17 +199,18 @@ Window choose_window(const std::vector<double> &t_img, const GyroIntegral &gyro,
 /// feature-level dataset's observations), a rotation-only fit per pair with 10 or more common features.
 std::vector<PairRate> image_pair_rates(const std::vector<ovton::core::ImageEntry> &images, const Window &win,
                                        const std::vector<double> &t_img, const ovton::core::CameraCalib &cam,
-                                       const TdSearchOptions &opt, const TdSearchImageLoader &load,
-                                       ovton::core::TrackedStart *tracked) {
+                                       const TdSearchOptions &opt, const ovton::core::TrackKLTOptions &track_opt,
+                                       std::shared_ptr<const ovton::core::GyroRotationPrior> rotation_prior,
+                                       const TdSearchImageLoader &load, ovton::core::TrackedStart *tracked) {
   const ovton::core::CameraModel camera(cam);
   // A window from the first image is tracked as the filter will track it, so that the filter can take these tracks
   // instead of tracking the images again; a later window is tracked with fewer features, for this search alone.
   const bool as_filter = win.b == 0;
-  ovton::core::TrackKLTOptions track = opt.track;
+  ovton::core::TrackKLTOptions track = track_opt;
   if (!as_filter)
     track.num_features = std::min(track.num_features, opt.max_features);
   auto tracker = std::make_unique<ovton::core::TrackKLT>(camera, track);
-  tracker->set_rotation_prior(opt.rotation_prior);
+  tracker->set_rotation_prior(std::move(rotation_prior));
   ovton::core::TrackedStart start;
   const Eigen::Matrix3d R_BC = cam.T_BC.block<3, 3>(0, 0);
   const double huber_rad = 2.0 / std::max(camera.fu(), camera.fv());
@@ -299,8 +274,9 @@ std::string TdSearchResult::summary() const {
 
 TdSearchResult search_td(const std::vector<ovton::core::ImageEntry> &images,
                          const std::vector<ovton::core::ImuData> &imu, const ovton::core::CameraCalib &cam,
-                         double prior_td_s, const TdSearchOptions &opt, const TdSearchImageLoader &load,
-                         ovton::core::TrackedStart *tracked) {
+                         double prior_td_s, const TdSearchOptions &opt, const ovton::core::TrackKLTOptions &track,
+                         std::shared_ptr<const ovton::core::GyroRotationPrior> rotation_prior,
+                         const TdSearchImageLoader &load, ovton::core::TrackedStart *tracked) {
   const auto wall0 = std::chrono::steady_clock::now();
   TdSearchResult res;
   res.prior_s = res.td_s = prior_td_s;
@@ -333,7 +309,8 @@ TdSearchResult search_td(const std::vector<ovton::core::ImageEntry> &images,
     return finish(why);
   }
 
-  std::vector<PairRate> pairs = image_pair_rates(images, win, t_img, cam, opt, load, tracked);
+  std::vector<PairRate> pairs =
+      image_pair_rates(images, win, t_img, cam, opt, track, std::move(rotation_prior), load, tracked);
   // Every candidate must see the same pairs: keep those the gyro covers over the whole search range.
   pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
                              [&](const PairRate &p) {

@@ -7,6 +7,7 @@
 #include "ov_core/cam/camera_calib.h"
 #include "ov_core/track/track_klt.h"
 #include "ov_core/types/sensor_data.h"
+#include "ov_msckf_ton/init/init_options.h"
 
 #include <functional>
 #include <opencv2/core.hpp>
@@ -18,30 +19,6 @@ struct TrackedStart; // ov_core/track/track_pipeline.h
 }
 
 namespace ovton::msckf {
-
-struct TdSearchOptions {
-  double range_s = 0.2;    ///< candidates t_d ∈ prior ± range_s
-  double step_s = 0.001;   ///< grid step of the first pass (refined to 0.1 ms around the best)
-  double window_s = 8.0;   ///< seconds of images used
-  double max_start_s = 60; ///< how far into the recording a window with enough rotation is looked for
-  /// RMS angular acceleration [rad/s^2] a window needs: the cost's curvature in t_d grows with it, and a still start
-  /// (EuRoC's first seconds) or a constant turn leaves t_d undetermined.
-  double min_rms_alpha = 0.5;
-  double max_sigma_s = 0.004; ///< a result with a larger standard error is reported but not used
-  /// Rate differences are compared after taking away their mean over this long a stretch (gyro bias and the slowly
-  /// varying translational flow a rotation fit takes up).
-  double highpass_s = 0.5;
-  int min_pairs = 40; ///< consecutive image pairs with a rotation fit
-  ovton::core::TrackKLTOptions track;
-  /// The raw gyro for the tracker's LK starting points (track.gyro_prior); none: LK starts where a point was.
-  std::shared_ptr<const ovton::core::GyroRotationPrior> rotation_prior;
-  /// A window that does not start at the first image is tracked with at most this many features (track.num_features
-  /// if fewer): a rotation fit of bearings needs few, and that tracking is for the search alone. Measured at 100
-  /// against 200: the same t_d within 0.3 ms and σ within 0.05 ms on the real cut and renders of V1_03 and MH_03, the
-  /// same APE and TPE. A window from the first image is tracked with `track` as it is, as the filter tracks it, so
-  /// that the filter can take over its tracks (search_td's `tracked`).
-  int max_features = 100;
-};
 
 struct TdSearchResult {
   bool found = false;   ///< true when td_s is trustworthy enough to seed the filter
@@ -70,10 +47,13 @@ using TdSearchImageLoader = std::function<cv::Mat(const ovton::core::ImageEntry 
 /// Searches t_d over prior_td_s ± opt.range_s. Feature-level entries (ImageEntry::features) are used as given; others
 /// are decoded and tracked. Never throws for weak data: `found` is false and `why` says what was missing. Throws
 /// DataError (from the loader) for an unreadable image. When the window starts at the first image and all of it was
-/// tracked, `tracked` (if given) receives those tracks and the tracker, for a filter with opt.track to go on from.
+/// tracked, `tracked` (if given) receives those tracks and the tracker, for a filter with `track` to go on from. The
+/// images are tracked with `track` (LK starting points from `rotation_prior` when given and track.gyro_prior).
 TdSearchResult search_td(const std::vector<ovton::core::ImageEntry> &images,
                          const std::vector<ovton::core::ImuData> &imu, const ovton::core::CameraCalib &cam,
-                         double prior_td_s, const TdSearchOptions &opt = {}, const TdSearchImageLoader &load = {},
-                         ovton::core::TrackedStart *tracked = nullptr);
+                         double prior_td_s, const TdSearchOptions &opt = {},
+                         const ovton::core::TrackKLTOptions &track = {},
+                         std::shared_ptr<const ovton::core::GyroRotationPrior> rotation_prior = nullptr,
+                         const TdSearchImageLoader &load = {}, ovton::core::TrackedStart *tracked = nullptr);
 
 } // namespace ovton::msckf
