@@ -1,9 +1,9 @@
 // Dynamic initialisation (ov_msckf_ton/init): pre-integration against the trajectory it integrates, the window solver
 // on synthetic tracks with known biases, `auto` telling still from moving, and the real moving EuRoC cut without ground
 // truth against the ground-truth start.
+#include "estimator_test_util.h"
 #include "ov_core/cam/camera_model.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_core/math/so3.h"
 #include "ov_eval/init_check.h"
 #include "ov_eval/metrics.h"
@@ -260,14 +260,12 @@ struct CutRun {
 CutRun run_cut(const ovton::core::Dataset &d, InitMode mode) {
   VioOptions opt = load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
   opt.init.mode = mode;
-  VioManager vio(opt, d.cam, d.imu_calib);
-  if (mode == InitMode::GroundTruth)
-    vio.set_groundtruth(d.groundtruth);
+  opt.td.search.enabled = false; // the initialisers and the filter, from the configured t_d
+  const ovtest::EstimatorRun run = ovtest::run_estimator(d, opt);
   CutRun r;
-  vio.set_state_callback([&](const ovton::core::StateSample &s) { r.traj.push_back(s); });
-  ovton::core::Replay(d).run(vio);
-  r.init_message = vio.init_message();
-  r.images_before_init = vio.counters().images_before_init;
+  r.traj = run.traj;
+  r.init_message = run.report.init_message;
+  r.images_before_init = run.report.counters.images_before_init;
   return r;
 }
 

@@ -1,11 +1,8 @@
 #include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_core/math/so3.h"
-#include "ov_core/track/track_pipeline.h"
 #include "ov_core/types/errors.h"
 #include "ov_core/types/state_interpolation.h"
 #include "ov_msckf_ton/state/state_helper.h"
-
-#include "ov_core/io/image_store.h"
 
 #include <algorithm>
 #include <chrono>
@@ -41,11 +38,19 @@ TdObservation td_observation(TdMode m) {
 
 } // namespace
 
-VioManager::VioManager(const VioOptions &opt, const ovton::core::CameraCalib &cam, const ovton::core::ImuCalib &imu)
-    : opt_(opt), camera_(cam), tracker_(camera_, opt.track), propagator_(noise_from(imu, opt), opt.imu.gravity_mag),
-      updater_(cam, opt.update.msckf), slam_(cam, opt.slam.updater, updater_),
-      state_(std::make_unique<State>(estimates_td(opt.td.mode))), health_(opt) {
+VioManager::VioManager(const VioOptions &opt, const ovton::core::CameraCalib &cam, const ovton::core::ImuCalib &imu,
+                       FilterAids aids, StateCallback on_state, std::vector<std::shared_ptr<FilterObserver>> observers)
+    : opt_(opt), camera_(cam), propagator_(noise_from(imu, opt), opt.imu.gravity_mag), updater_(cam, opt.update.msckf),
+      slam_(cam, opt.slam.updater, updater_), state_(std::make_unique<State>(estimates_td(opt.td.mode))),
+      aids_(std::move(aids)), on_state_(std::move(on_state)), observers_(std::move(observers)), health_(opt) {
   validate_vio_options(opt_);
+  for (const auto &o : observers_) {
+    if (!o)
+      throw ovton::core::UsageError("VioManager: a null observer");
+    want_velocities_ = want_velocities_ || o->wants_velocities();
+  }
+  // Residual records feed the residual log and each image's feature fates.
+  want_records_ = want_frames_ = !observers_.empty();
   state_->td = opt.td.init_s;
   // The calibration as the filter holds it; a variable (and a column in the updates) only where it is estimated.
   CalibState &c = state_->calib;
@@ -57,26 +62,20 @@ VioManager::VioManager(const VioOptions &opt, const ovton::core::CameraCalib &ca
     inertial_init_ =
         std::make_unique<InertialInitializer>(opt.init, opt.update.msckf.sigma_px, cam.T_BC,
                                               0.5 * (cam.intrinsics(0) + cam.intrinsics(1)), opt.imu.gravity_mag);
-  if (uses_fvon(opt.td.mode))
+  if (uses_fvon(opt.td.mode)) {
     fvon_ = std::make_unique<FvonVelocityProvider>(cam, opt.ton.fvon, opt.update.msckf.td_velocity_debias != 0.0);
-  td_model_ = make_td_model(opt_, [this](int64_t t_cam_ns) {
-    if (!td_oracle_)
-      throw ovton::core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
-    return td_oracle_(t_cam_ns);
-  });
+    fvon_->set_evaluate_both(want_velocities_);
+  }
+  if (opt.init.mode == InitMode::GroundTruth && aids_.groundtruth.empty())
+    throw ovton::core::UsageError("ground-truth initialisation needs the recording's ground truth");
+  td_model_ = make_td_model(opt_, aids_.td_truth);
 }
 
 const TpnDriver *VioManager::tpn() const {
   return tpn_driver_of(*td_model_);
 }
 
-void VioManager::set_velocity_log(ovton::core::VelocityLogWriter *log) {
-  velocity_log_ = log;
-  if (fvon_)
-    fvon_->set_evaluate_both(log != nullptr);
-}
-
-void VioManager::log_velocities(const std::vector<const ovton::core::Feature *> &feats, const VelocityProvider &used) {
+void VioManager::show_velocities(const std::vector<const ovton::core::Feature *> &feats, const VelocityProvider &used) {
   const double focal = 0.5 * (camera_.calib().intrinsics(0) + camera_.calib().intrinsics(1));
   std::vector<ovton::core::VelocityLogRow> rows;
   for (const auto *f : feats) {
@@ -119,7 +118,9 @@ void VioManager::log_velocities(const std::vector<const ovton::core::Feature *> 
       rows.push_back(r);
     }
   }
-  velocity_log_->write(rows);
+  for (const auto &o : observers_)
+    if (o->wants_velocities())
+      o->on_velocities(rows);
 }
 
 double VioManager::td_for_image_s(int64_t t_cam_ns) const {
@@ -137,32 +138,6 @@ void VioManager::on_imu(const ovton::core::ImuData &m) {
                ovton::core::s_to_ns(std::max(opt_.init.window_s, opt_.init.dynamic.window_s) + 1.0))
       init_imu_.pop_front();
   }
-}
-
-void VioManager::on_image(const ovton::core::ImageEntry &e) {
-  if (e.features) {
-    process_features(e.t_cam_ns, *e.features);
-    return;
-  }
-  const auto t0 = Clock::now();
-  if (frame_source_) {
-    const ovton::core::TrackedFrame f = frame_source_(e); // may wait for the tracking thread; rethrows its error
-    if (f.on_caller_thread) {
-      times_.image_load += f.wait_image_ms;
-      times_.tracking += f.track_ms;
-    } else {
-      times_.image_load += ms_since(t0);
-      times_.tracking_thread += f.track_ms;
-    }
-    db_.add_frame(e.t_cam_ns, f.features);
-    process_frame(e.t_cam_ns, t0);
-    return;
-  }
-  cv::Mat gray = image_source_ ? image_source_(e) : ovton::core::load_image(e);
-  if (gray.empty())
-    throw ovton::core::DataError(e.path, "unreadable image (listed for stamp " + std::to_string(e.t_cam_ns) + ")");
-  times_.image_load += ms_since(t0);
-  process_image(e.t_cam_ns, gray);
 }
 
 InitFrame VioManager::init_frame(int64_t t_cam_ns, int64_t t_imu_ns) const {
@@ -184,7 +159,7 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
   std::optional<Eigen::Matrix<double, ImuState::kSize, ImuState::kSize>> P_imu; // a dynamic initialisation's own
   if (io.mode == InitMode::GroundTruth) {
     ovton::core::StateSample g;
-    if (!ovton::core::interpolate_state(gt_, t_imu, g)) {
+    if (!ovton::core::interpolate_state(aids_.groundtruth, t_imu, g)) {
       init_msg_ = "no ground truth at the first image";
       return false;
     }
@@ -256,23 +231,10 @@ void VioManager::add_calibration_variables() {
     s.calib.imu_intrinsics_index = add(Eigen::VectorXd::Constant(12, o.sigma_imu_intrinsics));
 }
 
-void VioManager::process_image(int64_t t_cam_ns, const cv::Mat &gray) {
-  const auto t0 = Clock::now();
-  const auto &tracked = tracker_.track(t_cam_ns, gray);
-  db_.add_frame(t_cam_ns, tracked);
-  times_.tracking += ms_since(t0);
-  process_frame(t_cam_ns, t0);
-}
-
-void VioManager::process_features(int64_t t_cam_ns, const std::vector<ovton::core::PointObservation> &obs) {
-  const auto t0 = Clock::now();
-  for (const auto &o : obs)
-    db_.add_observation(o.id, t_cam_ns, o.uv, camera_.undistort(o.uv));
-  times_.tracking += ms_since(t0);
-  process_frame(t_cam_ns, t0);
-}
-
-void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time_point t_start) {
+void VioManager::process_frame(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features) {
+  const auto t_start = Clock::now();
+  db_.add_frame(t_cam_ns, features);
+  fate_.clear();
   ++counters_.images;
   auto t0 = Clock::now();
 
@@ -298,8 +260,7 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
     finish_image(t_cam_ns);
     ++times_.frames;
     times_.total += ms_since(t_start);
-    if (on_state_)
-      on_state_(snapshot());
+    hand_out(t_cam_ns, features);
     return;
   }
   // The clone's t_d Jacobian needs the body rate AT the image time (interpolated reading), not the mean over the
@@ -330,8 +291,28 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
 
   ++times_.frames;
   times_.total += ms_since(t_start);
+  hand_out(t_cam_ns, features);
+}
+
+void VioManager::hand_out(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features) {
+  const ovton::core::StateSample state = snapshot(); // checks the filter's health first
+  if (want_frames_) {
+    FrameFeatures f;
+    f.t_cam_ns = t_cam_ns;
+    f.t_imu_ns = state.t_ns;
+    for (const auto &tf : features) {
+      f.ids.push_back(tf.id);
+      f.uv.push_back(tf.uv);
+      const auto it = fate_.find(tf.id);
+      f.fate.push_back(it == fate_.end() ? FrameFeatures::Tracked : it->second);
+    }
+    for (const auto &o : observers_)
+      o->on_frame(f);
+  }
+  for (const auto &o : observers_)
+    o->on_filter(*this);
   if (on_state_)
-    on_state_(snapshot());
+    on_state_(state);
 }
 
 void VioManager::propagate_to_image(int64_t t_cam_ns) {
@@ -443,11 +424,12 @@ void VioManager::msckf_update(const std::vector<const ovton::core::Feature *> &f
                               const VelocityProvider &velocities) {
   State &s = *state_;
   std::vector<ResidualRecord> records;
-  if (velocity_log_)
-    log_velocities(feats, velocities);
+  if (want_velocities_)
+    show_velocities(feats, velocities);
   UpdateStats st;
-  td_tracked_update(
-      [&] { st = updater_.update(s, feats, td_observation(opt_.td.mode), velocities, log_ ? &records : nullptr); });
+  td_tracked_update([&] {
+    st = updater_.update(s, feats, td_observation(opt_.td.mode), velocities, want_records_ ? &records : nullptr);
+  });
   ++counters_.updates;
   health_.on_update(s.t_imu_ns, st);
   counters_.features_used += st.features_used;
@@ -458,8 +440,12 @@ void VioManager::msckf_update(const std::vector<const ovton::core::Feature *> &f
     counters_.td_rows_by_source[k] += st.td_obs_used[k];
   }
   counters_.td_features += st.td_features_used;
-  if (log_)
-    log_->write(records, s);
+  if (want_records_) {
+    for (const auto &o : observers_)
+      o->on_residuals(records, s);
+    for (const auto &r : records)
+      fate_[r.feature_id] = r.status == ResidualStatus::Accepted ? FrameFeatures::Used : FrameFeatures::Gated;
+  }
   // A feature used in an update must not be used again: its information is in the state now.
   std::vector<size_t> ids;
   ids.reserve(feats.size());
