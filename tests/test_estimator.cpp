@@ -61,8 +61,8 @@ std::vector<StateSample> feed_jittered(const core::Dataset &data, EstimatorSetup
   std::vector<Event> events;
   int64_t burst = 0;
   for (size_t i = 0; i < data.imu.size(); ++i) {
-    if (i % 8 == 0) // a burst of 8 readings arrives together
-      burst = data.imu[std::min(i + 7, data.imu.size() - 1)].t_imu_ns + imu_delay(rng);
+    if (i % 8 == 0) // a burst of 8 readings arrives together, after the one before
+      burst = std::max(burst, data.imu[std::min(i + 7, data.imu.size() - 1)].t_imu_ns + imu_delay(rng));
     events.push_back({burst, false, i});
   }
   int64_t last_image_arrival = 0;

@@ -68,7 +68,7 @@ int cmd_run(const Args &args) {
     return 0; // --help
   req.threaded = !no_prefetch && std::thread::hardware_concurrency() >= 2;
   // One thread means one: OpenCV's own pool (TBB in Debian's build, which OPENCV_FOR_THREADS_NUM does not stop) would
-  // otherwise run part of the tracker on a second core (measured: a quarter of the process's CPU on a 40 s render).
+  // otherwise run part of the tracker on a second core (docs/benchmarks.md, "One thread is one thread").
   if (opencv_threads >= 0)
     cv::setNumThreads(opencv_threads);
   else if (no_prefetch)
@@ -154,8 +154,7 @@ int cmd_run(const Args &args) {
     std::cout << "final t_d " << r.traj.back().td_s * 1e3 << " ms (sigma " << r.traj.back().td_sigma_s * 1e3
               << " ms)\n";
   if (r.report.td_search && r.report.td_search->weak_excitation)
-    // Measured on the quickstart's gentle built-in flight with the realistic IMU (docs/robustness.md, "Weak
-    // excitation"): started at the true 10 ms, sr ended at 5.5 ± 0.3 ms.
+    // A gentle flight with a realistic IMU pulls t_d confidently off the truth (docs/robustness.md, "Weak excitation").
     std::cout << "caution: the rotation rate barely changes over the first images (RMS angular acceleration "
               << r.report.td_search->rms_alpha
               << " rad/s^2): t_d is weakly observable, its estimate can be pulled by IMU "

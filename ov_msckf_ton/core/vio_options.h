@@ -40,12 +40,11 @@ struct TimeOffsetOptions {
   double rate_random_walk = 1e-5;
   /// Covariance matching (td/td_noise_adapter.h): the process noise follows the t_d corrections the updates make,
   /// so that σ(t_d) stays honest when the model's prediction is off. Applies to random walk, drift and tpn (a
-  /// constant stays constant). Measured in docs/ton.md: TPN's t_d NEES 4.9 -> 1.0 on the worked case.
+  /// constant stays constant). docs/ton.md measures what it does for TPN's t_d NEES.
   bool adaptive_noise = true;
   /// Covariance matching sums the t_d corrections over the last this-many seconds (0: one image per sample). A
   /// prediction that trails the offset corrects it by many small steps of one sign that no single image shows.
-  /// Measured in docs/ton.md ("t_d noise over blocks"): on the 40-s protocol cells ton's t_d NEES 2.27 -> 1.23
-  /// at 6 s; unchanged on the 20-s Monte-Carlo renders.
+  /// docs/ton.md, "t_d noise over blocks", has what it does on the protocol cells and the Monte-Carlo renders.
   double adaptive_block_s = 6.0;
   /// The body rate in the clone's t_d Jacobian: 0 = the gyro reading at the image time; > 0 = the mean reading over
   /// this window centred on it (the replay then hands over half of it past the image: latency in a live system). A
@@ -76,8 +75,8 @@ struct TonOptions {
   /// Images per TPN label: each label is the mean of t̂_d over this many images, and the propagation moves t_d at
   /// (t_d^TPN − last label) / the labels' spacing. 1 is the paper (a label per image). Why 10: per image, the
   /// filter's estimate jitters by more than a drift moves it, and the LSTM then learns the jitter's mean reversion,
-  /// not the trend — on the worked case's +0.5 ms/s drift TPN drove t_d at −0.3 to −0.7 ms/s and the noise adapter
-  /// made up for it (docs/ton.md, "TPN's labels"; protocol t_d RMSE −27 to −32 % with 10).
+  /// not the trend, and drives t_d against the drift while the noise adapter makes up for it (docs/ton.md, "TPN's
+  /// labels").
   int tpn_label_images = 10;
 };
 

@@ -72,9 +72,9 @@ void imu_step_impl(const ImuState &x, const ImuIntrinsics *D, const Eigen::Vecto
     *Phi = F;
   if (Q) {
     // Sample noise enters the pose and velocity exactly where the bias errors do (n_g like δb_g, n_a like δb_a),
-    // but it is not a change of the bias: the bias rows of those columns (F's identity) must not carry it. They did
-    // until session 2, which let the accelerometer bias wander ~10⁴× faster than its random walk, so the filter
-    // could not take the metric scale from the accelerometer (trajectories 3–9 % too large, position NEES 10–150).
+    // but it is not a change of the bias: the bias rows of those columns (F's identity) must not carry it, or the
+    // accelerometer bias wanders ~10⁴× faster than its random walk and the filter cannot take the metric scale from
+    // the accelerometer (test_propagation.cpp).
     Eigen::Matrix<double, 15, 6> Gn;
     Gn.leftCols<3>() = F.block<15, 3>(0, G);
     Gn.rightCols<3>() = F.block<15, 3>(0, A);

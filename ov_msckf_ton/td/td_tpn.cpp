@@ -73,7 +73,7 @@ public:
     dt_since_image_ = 0.0;
     // The labels are the filter's own estimates: while t_d is still converging (σ above tpn_start_sigma_s) they
     // trace the convergence transient, not the offset's motion, and a network trained on them extrapolates the
-    // transient (measured: on a constant +10 ms offset, t_d overshot to 14 ms and the trajectory diverged).
+    // transient: on a constant offset t_d then overshoots and the trajectory can diverge (docs/ton.md).
     if (s.td_sigma() > start_sigma_s_) {
       // Converging again: the block labels start over, and t_d is not driven at the last labels' rate meanwhile.
       start_block();
