@@ -23,6 +23,23 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
 
   // 1. The rows with a residual, in tracks of 3+; the camera's intrinsics and image height.
   const diag::UsedData data = diag::select_data(log, opt, rep);
+  if (data.observations < diag::kMinObservations) {
+    // A log of a platform that did not move (the filter made ZUPTs, no feature update) or of a run too short: valid,
+    // and nothing in it can show an effect. A verdict, not an error.
+    rep.not_testable = "only " + std::to_string(data.observations) +
+                       " usable observations (accepted or gated, in tracks of 3+): no feature update to test (a "
+                       "platform that did not move, or a run too short)";
+    for (size_t c = 0; c < diag::candidate_table().size(); ++c) {
+      CandidateResult cr;
+      cr.key = diag::candidate_table()[c].key;
+      cr.description = diag::candidate_table()[c].description;
+      cr.testable = false;
+      cr.rank = static_cast<int>(c + 1);
+      cr.note = "not testable on this log";
+      rep.candidates.push_back(cr);
+    }
+    return rep;
+  }
   diag::set_intrinsics(data, opt, log.file, rep);
 
   // 2. The residual design: every candidate's effect on the residual, what the tracks' points absorb projected out.
@@ -45,6 +62,13 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   const auto results = diag::test_candidates(d, rep.time_from_rates ? &dr : nullptr, rate_why,
                                              have_bias ? &db : nullptr, bias_why, opt, rep, selected);
   rep.candidates = diag::rank_candidates(results, selected);
+  // The accelerometer's inputs are there but the log is too short for its design: a limit of this log.
+  if (!have_bias && !opt.calibration.empty() && !opt.imu.empty())
+    for (CandidateResult &c : rep.candidates)
+      if (c.key.rfind("accel_scale", 0) == 0) {
+        c.testable = false;
+        c.note = "not testable on this log: " + bias_why;
+      }
 
   // 4b. A focal error the rates name is sized from two views and the gyro, with the focal in the model while the
   // depths are fitted (focal_two_view.h): the rates' column reads it low.

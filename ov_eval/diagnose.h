@@ -78,9 +78,13 @@ struct CandidateResult {
   double explained_added = 0;            ///< share it adds to the candidates selected before it
   double sigma = 0;                      ///< Gaussian-equivalent significance of its terms (Wald, cluster-robust)
   bool explained = false;                ///< verdict: selected by the stepwise procedure
-  int rank = 0;                          ///< 1-based; selected candidates first, in selection order
-  BinnedCurve curve;                     ///< for the plot
-  std::string note;                      ///< why it was skipped or what limits it
+  /// false: not testable on this log — it cannot show the effect at a size that matters (too few independent
+  /// clusters for its terms, or the smallest size it could name is larger than a calibration is plausibly off by;
+  /// the note says which). Not an effect, and not evidence of its absence.
+  bool testable = true;
+  int rank = 0;      ///< 1-based; selected candidates first, in selection order
+  BinnedCurve curve; ///< for the plot
+  std::string note;  ///< why it was skipped or what limits it
 };
 
 struct TimeBin {
@@ -96,6 +100,7 @@ struct UnexplainedStructure {
   double explained = 0; ///< share of the leftover's loss the bin means remove
   double sigma = 0;     ///< Gaussian-equivalent significance of the bin means (Wald, cluster-robust)
   bool flagged = false; ///< sigma and share pass the candidates' bars: the verdict UNEXPLAINED
+  bool testable = true; ///< false: more bin means than the log's independent clusters can test
   std::string largest;  ///< the bin with the largest mean, and that mean (px, u and v)
 };
 
@@ -115,9 +120,13 @@ struct DiagnoseReport {
   /// What the residual keeps beyond its noise after the selected candidates, by time, image region and image speed;
   /// a flagged entry is the verdict UNEXPLAINED (an effect no candidate models).
   std::vector<UnexplainedStructure> unexplained;
+  /// Non-empty: nothing is testable on this log (too few observations, e.g. a platform that did not move, so that
+  /// the filter made no feature update), and why. Every candidate is then listed as not testable.
+  std::string not_testable;
 };
 
-/// Runs every candidate on the log. Throws DataError when the log has too few usable rows to say anything.
+/// Runs every candidate on the log. A log with too few usable rows to say anything gets a report whose candidates are
+/// all not testable (DiagnoseReport::not_testable says why), not an error: a still platform writes such a log.
 DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt = {});
 
 /// Writes diagnose.md, diagnose.json and PNG plots (top candidates, δt per time bin) into out_dir; returns the files.
