@@ -4,7 +4,8 @@
 // Every candidate effect predicts the logged residual r (2 rows per observation, pixels) as a linear function of
 // logged columns, r ≈ X_c·β_c. The candidates are fitted by robust (Huber) weighted least squares and selected by
 // forward stepwise regression: the candidate that removes the largest share of the residual's loss is tested first
-// (significance of its coefficients with standard errors clustered by feature track, and share of loss explained);
+// (significance of its coefficients with standard errors clustered by the time of the updates, and share of loss
+// explained);
 // if it passes, it joins the model and the remaining candidates are tested for what they add beyond it. Nested
 // candidates (offset drift contains a constant offset) are thereby credited only with what their extra terms add.
 // docs/diagnose.md gives each model, its sign convention and the thresholds. The stages live in ov_eval/diagnose/

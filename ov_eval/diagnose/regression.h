@@ -13,7 +13,7 @@
 namespace ovton::eval::diag {
 
 /// Rows to be explained (r) and the columns that may explain them (D), with the clusters the rows' errors are
-/// correlated within (a track for the residual, a second for the rates).
+/// correlated within (a quarter second of updates for the residual and for the rates, a window for the accelerometer).
 struct Design {
   Eigen::MatrixXd D;        ///< n × kNumCols (candidates.h); a column a design does not fill stays zero
   Eigen::VectorXd r;        ///< the data: residual components (u and v rows interleaved) or whitened rate rows
