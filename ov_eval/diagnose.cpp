@@ -26,6 +26,8 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   if (data.observations < diag::kMinObservations) {
     // A log of a platform that did not move (the filter made ZUPTs, no feature update) or of a run too short: valid,
     // and nothing in it can show an effect. A verdict, not an error.
+    if (opt.have_camera || (opt.fu > 0 && opt.fv > 0)) // given, not fitted: there are no rows to fit them from
+      diag::set_intrinsics(data, opt, log.file, rep);
     rep.not_testable = "only " + std::to_string(data.observations) +
                        " usable observations (accepted or gated, in tracks of 3+): no feature update to test (a "
                        "platform that did not move, or a run too short)";
