@@ -61,16 +61,16 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
 
   // 4. Stepwise selection in each family, then the ranking.
   std::vector<size_t> selected;
-  const auto results = diag::test_candidates(d, rep.time_from_rates ? &dr : nullptr, rate_why,
-                                             have_bias ? &db : nullptr, bias_why, opt, rep, selected);
-  rep.candidates = diag::rank_candidates(results, selected);
+  auto results = diag::test_candidates(d, rep.time_from_rates ? &dr : nullptr, rate_why, have_bias ? &db : nullptr,
+                                       bias_why, opt, rep, selected);
   // The accelerometer's inputs are there but the log is too short for its design: a limit of this log.
   if (!have_bias && !opt.calibration.empty() && !opt.imu.empty())
-    for (CandidateResult &c : rep.candidates)
-      if (c.key.rfind("accel_scale", 0) == 0) {
-        c.testable = false;
-        c.note = "not testable on this log: " + bias_why;
+    for (size_t c = 0; c < results.size(); ++c) // results follow the candidate table
+      if (diag::candidate_table()[c].needs == diag::Needs::AccelBias) {
+        results[c].testable = false;
+        results[c].note = "not testable on this log: " + bias_why;
       }
+  rep.candidates = diag::rank_candidates(results, selected);
 
   // 4b. A focal error the rates name is sized from two views and the gyro, with the focal in the model while the
   // depths are fitted (focal_two_view.h): the rates' column reads it low.

@@ -141,6 +141,8 @@ std::vector<CandidateResult> rank_candidates(std::vector<CandidateResult> res, c
     if (std::find(order.begin(), order.end(), c) == order.end())
       rest.push_back(c);
   std::stable_sort(rest.begin(), rest.end(), [&](size_t a, size_t b) {
+    if (res[a].testable != res[b].testable) // what the log can resolve before what it cannot
+      return res[a].testable;
     if ((res[a].sigma > 0) != (res[b].sigma > 0))
       return res[a].sigma > 0;
     if (res[a].explained_added != res[b].explained_added)
