@@ -3,7 +3,7 @@
 // `ovton` binary's (`ovton run --residual-log`, as a user makes them); diagnose is called as the library, with what
 // `ovton diagnose --dataset` passes. On real data the residuals' errors are correlated across the tracks of an update
 // and over the clone window, and a short flight has few independent clusters: a clean flight must flag nothing, and
-// what the log cannot resolve is said to be not testable (docs/diagnose.md, "The residual's clusters").
+// what the log cannot resolve is said to be not testable (docs/diagnose_undeclared.md, "Real data and short flights").
 #include "diagnose_test_util.h"
 #include "ov_core/io/dataset.h"
 #include "ov_eval/diagnose.h"

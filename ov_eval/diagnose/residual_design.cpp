@@ -46,9 +46,9 @@ Eigen::Vector2d lagrange_derivative(double t0, double t1, double t2, const Eigen
 /// The residual rows' clusters [s] and the Newey-West lags over them. The residuals of every track an update
 /// processes share that update's clone poses, and consecutive updates share most of their clones (the shipped
 /// configs' window: 20 clones, a second at 20 Hz), so the rows' errors correlate across tracks and over the window.
-/// Clustered per track, the scores were taken as independent between tracks, and a short real flight named a
-/// camera-IMU translation its images cannot resolve (docs/diagnose.md, "The residual's clusters"). A track belongs to
-/// the cluster of its update's time; the lags span the window.
+/// Clustered per track, the scores would be taken as independent between tracks, which they are not: a short real
+/// flight then names a camera-IMU translation its images cannot resolve (docs/diagnose_undeclared.md, "Real data and
+/// short flights"). A track belongs to the cluster of its update's time; the lags span the window.
 constexpr double kResidualClusterS = 0.25;
 constexpr int kResidualHacLags = 4;
 
