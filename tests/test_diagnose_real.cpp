@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <sys/wait.h>
 
 using namespace ovton::core;
 using namespace ovton::eval;
