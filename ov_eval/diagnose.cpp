@@ -63,13 +63,17 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
   std::vector<size_t> selected;
   auto results = diag::test_candidates(d, rep.time_from_rates ? &dr : nullptr, rate_why, have_bias ? &db : nullptr,
                                        bias_why, opt, rep, selected);
-  // The accelerometer's inputs are there but the log is too short for its design: a limit of this log.
-  if (!have_bias && !opt.calibration.empty() && !opt.imu.empty())
-    for (size_t c = 0; c < results.size(); ++c) // results follow the candidate table
-      if (diag::candidate_table()[c].needs == diag::Needs::AccelBias) {
-        results[c].testable = false;
-        results[c].note = "not testable on this log: " + bias_why;
-      }
+  // The inputs of the rates or of the accelerometer's design are there but the log is too short for it: a limit of
+  // this log, not a missing input.
+  const bool rates_short = !rep.time_from_rates && !opt.imu.empty() && opt.have_camera;
+  const bool accel_short = !have_bias && !opt.calibration.empty() && !opt.imu.empty();
+  for (size_t c = 0; c < results.size(); ++c) { // results follow the candidate table
+    const diag::Needs needs = diag::candidate_table()[c].needs;
+    if ((rates_short && needs == diag::Needs::Rates) || (accel_short && needs == diag::Needs::AccelBias)) {
+      results[c].testable = false;
+      results[c].note = "not testable on this log: " + (needs == diag::Needs::Rates ? rate_why : bias_why);
+    }
+  }
   rep.candidates = diag::rank_candidates(results, selected);
 
   // 4b. A focal error the rates name is sized from two views and the gyro, with the focal in the model while the
