@@ -273,7 +273,7 @@ int cmd_benchmark(const Args &args) {
       "ovton benchmark: per-frame cost by stage, x real time and resident memory, mode after mode on one thread");
   std::string config, dataset, generate_dir, modes_str = "sr", init, json;
   double gen_seconds = 30.0;
-  bool quiet = false, threaded = false;
+  bool quiet = false, threaded = false, realtime = false;
   RunRequest req;
   desc.add_options()("help,h", "this help")                                                                       //
       ("dataset,d", po::value(&dataset), "dataset folder (EuRoC or SCube) or ROS bag (.bag)")                     //
@@ -285,6 +285,9 @@ int cmd_benchmark(const Args &args) {
        "static|groundtruth|auto|dynamic (overrides the config; groundtruth with --generate)") //
       ("max-images", po::value(&req.max_images), "stop each mode after this many images")     //
       ("json", po::value(&json), "also write the numbers as JSON")                            //
+      ("realtime", po::bool_switch(&realtime),
+       "feed the recording at its own pace, as sensors deliver it: the latency line is then a live system's (the "
+       "cost columns still hold; x realtm is 1)") //
       ("prefetch", po::bool_switch(&threaded),
        "track and filter on threads of their own while the next image is decoded (as `ovton run` does)") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bars");
@@ -294,6 +297,7 @@ int cmd_benchmark(const Args &args) {
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
   req.threaded = threaded;
+  req.pace = realtime ? 1.0 : 0.0;
   if (dataset.empty() && generate_dir.empty())
     throw ovton::core::UsageError("give --dataset DIR, or --generate DIR to render a dataset to benchmark");
   if (!dataset.empty() && !generate_dir.empty())

@@ -33,6 +33,7 @@ RunResult run_dataset(const ovton::core::Dataset &data, const RunRequest &req) {
   ProgressBar bar(req.label.empty() ? "run " + ovton::msckf::to_string(req.opt.td.mode) : req.label, !req.progress);
   PlayOptions po;
   po.max_images = req.max_images;
+  po.pace = req.pace;
   bool search_said = false;
   // The search's outcome as soon as it is known, so that it is seen even when the run fails later.
   const auto say_search = [&](const EstimatorStatus &st) {

@@ -27,6 +27,8 @@ struct RunRequest {
   /// Track and filter on threads of their own while the next image is decoded here (EstimatorSetup::threaded); false:
   /// everything on this thread. Same results.
   bool threaded = true;
+  /// Feed at this multiple of real time (PlayOptions::pace; 0: as fast as it goes).
+  double pace = 0.0;
   /// More observers of the filter (e.g. a Foxglove recording).
   std::vector<std::shared_ptr<ovton::msckf::FilterObserver>> observers;
   /// Called after each image fed with (images fed, images in the dataset); the benchmark samples memory here.

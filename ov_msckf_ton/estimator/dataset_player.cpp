@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
+#include <thread>
 
 namespace ovton {
 
@@ -41,14 +43,25 @@ PlayResult play(const core::Dataset &data, Estimator &est, const PlayOptions &op
   const auto wall0 = Clock::now();
   const size_t n = data.images.size();
   const size_t n_feed = opt.max_images > 0 ? std::min(n, static_cast<size_t>(opt.max_images)) : n;
+  // With a pace, a message is fed when its stamp is due (the first one's stamp is now).
+  const int64_t t_first = std::min(data.images.empty() ? INT64_MAX : data.images.front().t_cam_ns,
+                                   data.imu.empty() ? INT64_MAX : data.imu.front().t_imu_ns);
+  const auto wait_for = [&](int64_t t_ns) {
+    if (opt.pace > 0)
+      std::this_thread::sleep_until(wall0 + std::chrono::nanoseconds(static_cast<int64_t>(
+                                                static_cast<double>(t_ns - t_first) / opt.pace)));
+  };
   size_t k = 0; // next IMU reading
   const auto feed_imu_to = [&](int64_t t_ns) {
-    for (; k < data.imu.size() && data.imu[k].t_imu_ns <= t_ns; ++k)
+    for (; k < data.imu.size() && data.imu[k].t_imu_ns <= t_ns; ++k) {
+      wait_for(data.imu[k].t_imu_ns);
       est.feed_imu(data.imu[k]);
+    }
   };
   for (size_t i = 0; i < n_feed; ++i) {
     const core::ImageEntry &e = data.images[i];
     feed_imu_to(e.t_cam_ns);
+    wait_for(e.t_cam_ns);
     if (e.features) {
       est.feed_features(e.t_cam_ns, *e.features);
     } else {

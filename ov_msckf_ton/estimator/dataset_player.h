@@ -23,6 +23,9 @@ std::shared_ptr<const core::GyroRotationPrior> rotation_prior_for(const core::Da
 
 struct PlayOptions {
   long max_images = 0; ///< feed at most this many images (0 or less: all)
+  /// Feed at this multiple of real time, each message when its stamp is due (1: as a live system receives them, so
+  /// that latencies are a live system's); 0: as fast as the estimator takes them.
+  double pace = 0.0;
   /// Called after each image fed with (images fed, images in the recording); false stops the run (an interrupt): the
   /// estimator is stopped rather than finished.
   std::function<bool(size_t, size_t)> on_progress;
