@@ -33,8 +33,10 @@ ReplayStats Replay::run(ReplayConsumer &c, const std::function<bool(size_t, size
       ++st.images_fed;
     }
     if (progress && !progress(i + 1, images_.size()))
-      break;
+      return st;
   }
+  if (dataset_ && !dataset_->truncated_file.empty())
+    throw DataError(dataset_->truncated_file, dataset_->truncated_reason);
   return st;
 }
 

@@ -30,15 +30,17 @@ struct ReplayStats {
 
 class Replay {
 public:
-  explicit Replay(const Dataset &d) : images_(d.images), imu_(d.imu) {}
+  explicit Replay(const Dataset &d) : images_(d.images), imu_(d.imu), dataset_(&d) {}
   Replay(const std::vector<ImageEntry> &images, const std::vector<ImuData> &imu) : images_(images), imu_(imu) {}
 
-  /// progress(i, n) is called after each image; returning false stops the replay early (e.g. on SIGINT).
+  /// progress(i, n) is called after each image; returning false stops the replay early (e.g. on SIGINT). A dataset
+  /// that ends in a cut (Dataset::truncated_file) throws DataError naming it once its last image has been fed.
   ReplayStats run(ReplayConsumer &c, const std::function<bool(size_t, size_t)> &progress = {}) const;
 
 private:
   const std::vector<ImageEntry> &images_;
   const std::vector<ImuData> &imu_;
+  const Dataset *dataset_ = nullptr;
 };
 
 } // namespace ovton::core
