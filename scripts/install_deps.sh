@@ -19,6 +19,25 @@ for a in "$@"; do
     PKGS+=("$a")
   fi
 done
+# The MCAP writer and reader that are not ovton's own (scripts/mcap_tools: Foxglove's @mcap/core, its ROS 2 CDR
+# serializer), for the tests that check ovton's MCAP files against them (tests/test_mcap_external.cpp). Optional:
+# without node/npm or the registry those tests skip with a message.
+npm_tools() {
+  local dir
+  dir="$(dirname "$0")/mcap_tools"
+  [ -d "$dir/node_modules/@mcap/core" ] && return 0
+  if ! command -v npm >/dev/null 2>&1; then
+    echo "install_deps: npm not found: the independent MCAP writer's tests will skip (apt-get install nodejs npm)"
+    return 0
+  fi
+  if timeout 300 npm ci --prefix "$dir" --no-audit --no-fund --loglevel=error >/dev/null 2>&1; then
+    echo "install_deps: npm packages of scripts/mcap_tools installed"
+  else
+    echo "install_deps: npm ci in scripts/mcap_tools failed (offline?): the independent MCAP writer's tests will skip"
+  fi
+}
+npm_tools
+
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

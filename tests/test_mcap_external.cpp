@@ -1,0 +1,221 @@
+// ovton's MCAP and rosbag2 readers and writers against ones that are not ovton's (scripts/mcap_tools): Foxglove's
+// @mcap/core and ROS 2 CDR serializer (node), and a Python standard-library writer of rosbag2 SQLite bags. Recordings
+// they make of a folder replay to the folder's trajectory byte for byte; files ovton writes (an export, a run's
+// --mcap-out) are read by Foxglove's reader with every channel decoded by its schema. Skipped with a message when node
+// or the npm packages (scripts/mcap_tools: npm ci) or python3 are not there; the real-data cases also need
+// ../shared/data.
+#include "ov_core/io/dataset.h"
+#include "ov_core/io/image_store.h"
+#include "ov_core/io/mcap_export.h"
+#include "ov_core/io/rosbag_reader.h"
+#include "ov_core/io/run_mcap_writer.h"
+#include "ov_sim/simulator.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+using namespace ovton::core;
+
+namespace {
+
+const std::string kTools = std::string(OVTON_SOURCE_DIR) + "/scripts/mcap_tools";
+
+int shell(const std::string &cmd, const std::string &out) {
+  const int rc = std::system((cmd + " >" + out + " 2>&1").c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+std::string why_no_tools() {
+  if (std::system("node --version >/dev/null 2>&1") != 0)
+    return "node is not installed";
+  if (!fs::exists(kTools + "/node_modules/@mcap/core"))
+    return "the npm packages of scripts/mcap_tools are not installed (npm ci --prefix scripts/mcap_tools)";
+  if (std::system("python3 --version >/dev/null 2>&1") != 0)
+    return "python3 is not installed";
+  return "";
+}
+
+#define REQUIRE_TOOLS()                                                                                                \
+  do {                                                                                                                 \
+    const std::string why = why_no_tools();                                                                            \
+    if (!why.empty())                                                                                                  \
+      GTEST_SKIP() << why << ": the independent MCAP writer and reader cannot run";                                    \
+  } while (0)
+
+std::string ovton() {
+  return (fs::read_symlink("/proc/self/exe").parent_path() / "ovton").string();
+}
+
+std::string bytes_of(const std::string &file) {
+  std::ifstream in(file, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/// `node check_mcap.mjs FILE`'s JSON (the test looks for pieces of it), or a failure.
+std::string foxglove_read(const std::string &file, const std::string &out) {
+  EXPECT_EQ(shell("node " + kTools + "/check_mcap.mjs " + file, out), 0) << ovtest::read_text(out);
+  return ovtest::read_text(out);
+}
+
+/// `ovton run` on each recording (calibrated by the folder) gives the folder's trajectory, byte for byte.
+void expect_same_trajectory(const std::string &folder, const std::vector<std::string> &recordings,
+                            const std::string &run_args, const std::string &dir) {
+  const std::string err = dir + "/run.err";
+  ASSERT_EQ(shell(ovton() + " " + run_args + " --dataset " + folder + " -o " + dir + "/folder.csv", err), 0)
+      << ovtest::read_text(err);
+  const std::string want = bytes_of(dir + "/folder.csv");
+  EXPECT_GT(std::count(want.begin(), want.end(), '\n'), 30);
+  for (const std::string &r : recordings) {
+    ASSERT_EQ(shell(ovton() + " " + run_args + " --dataset " + r + " --calib " + folder + " -o " + dir + "/r.csv", err),
+              0)
+        << r << ": " << ovtest::read_text(err);
+    const std::string got = bytes_of(dir + "/r.csv");
+    EXPECT_TRUE(got == want) << r << ": the trajectory differs from the folder's (" << got.size() << " bytes, not "
+                             << want.size() << "; the run said: " << ovtest::read_text(err) << ")";
+  }
+}
+
+} // namespace
+
+// A short rendered flight written by @mcap/core (indexed; and without any index) and by the Python rosbag2 writer
+// (split in two .db3 files): each replays as the folder.
+TEST(McapExternal, IndependentWritersReplayARenderedFolder) {
+  REQUIRE_TOOLS();
+  ovtest::TempDir d;
+  ovton::sim::SimOptions o;
+  o.out_dir = d / "flight";
+  o.duration_s = 2.0;
+  o.seed = 21;
+  ovton::sim::write_simulation(o);
+  const std::string log = d / "w.log";
+  ASSERT_EQ(shell("node " + kTools + "/write_mcap.mjs --folder " + o.out_dir + " --out " + (d / "a.mcap"), log), 0)
+      << ovtest::read_text(log);
+  ASSERT_EQ(
+      shell("node " + kTools + "/write_mcap.mjs --no-index --folder " + o.out_dir + " --out " + (d / "b.mcap"), log), 0)
+      << ovtest::read_text(log);
+  ASSERT_EQ(
+      shell("python3 " + kTools + "/write_db3.py --split-images 25 --folder " + o.out_dir + " --out " + (d / "bag"),
+            log),
+      0)
+      << ovtest::read_text(log);
+  EXPECT_NE(ovtest::read_text(log).find("\"files\": 2"), std::string::npos) << ovtest::read_text(log);
+  const std::string cfg = std::string(OVTON_SOURCE_DIR) + "/config/sim/estimator_config.yaml";
+  expect_same_trajectory(o.out_dir, {d / "a.mcap", d / "b.mcap", d / "bag"}, "run -q -c " + cfg, d.str());
+  // JPEG through both writers (jpeg-js's encoder): read, and replayed without error.
+  ASSERT_EQ(shell("node " + kTools + "/write_mcap.mjs --images jpeg --dump-jpeg " + (d / "jpg") + " --folder " +
+                      o.out_dir + " --out " + (d / "j.mcap"),
+                  log),
+            0)
+      << ovtest::read_text(log);
+  ASSERT_EQ(shell("python3 " + kTools + "/write_db3.py --images jpeg --jpeg-from " + (d / "jpg") + " --folder " +
+                      o.out_dir + " --out " + (d / "jbag"),
+                  log),
+            0)
+      << ovtest::read_text(log);
+  BagOptions calib;
+  calib.calib = {o.out_dir};
+  const Dataset folder = load_dataset(o.out_dir);
+  for (const std::string &r : {d / "j.mcap", d / "jbag"}) {
+    const Dataset j = load_recording(r, calib);
+    ASSERT_EQ(j.images.size(), folder.images.size()) << r;
+    const cv::Mat x = load_image(j.images[5]), y = load_image(folder.images[5]);
+    EXPECT_LT(cv::norm(x, y, cv::NORM_L1) / static_cast<double>(x.total()), 2.0) << r;
+  }
+}
+
+// The real moving cut, as in BagReal: @mcap/core's raw images and the Python writer's PNG CompressedImages (its raw
+// images, decoded by Python, take 10 s here: scripts/experiments/mcap_compressed_ape.sh runs them), byte-identical to
+// the folder's run.
+TEST(McapExternal, RealMovingCutByteIdentical) {
+  REQUIRE_TOOLS();
+  OVTEST_REQUIRE_SHARED_DATA();
+  ovtest::TempDir d;
+  const std::string folder = ovtest::shared_data() + "/euroc_v1_01_moving", log = d / "w.log";
+  ASSERT_EQ(shell("node " + kTools + "/write_mcap.mjs --folder " + folder + " --out " + (d / "m.mcap"), log), 0)
+      << ovtest::read_text(log);
+  ASSERT_EQ(shell("python3 " + kTools + "/write_db3.py --images png --folder " + folder + " --out " + (d / "bag"), log),
+            0)
+      << ovtest::read_text(log);
+  const std::string cfg = std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml";
+  expect_same_trajectory(folder, {d / "m.mcap", d / "bag"}, "run -q -c " + cfg + " --init groundtruth --max-images 60",
+                         d.str());
+}
+
+// What ovton writes opens in Foxglove's reader: an export (raw, and JPEG in lz4 chunks), every message decoded.
+TEST(McapExternal, ExportReadByFoxgloveReader) {
+  REQUIRE_TOOLS();
+  ovtest::TempDir d;
+  ovton::sim::SimOptions o;
+  o.out_dir = d / "flight";
+  o.duration_s = 1.0;
+  o.seed = 22;
+  ovton::sim::write_simulation(o);
+  const Dataset folder = load_dataset(o.out_dir);
+  McapExportOptions e;
+  write_mcap(folder, d / "raw.mcap", e);
+  const std::string raw = foxglove_read(d / "raw.mcap", d / "raw.json");
+  EXPECT_NE(raw.find("\"profile\":\"ros2\""), std::string::npos) << raw;
+  EXPECT_NE(raw.find("\"dataCrc\":\"ok\""), std::string::npos) << raw;
+  const std::string n = std::to_string(folder.images.size());
+  EXPECT_NE(raw.find("\"/cam0/image_raw\":{\"schema\":\"sensor_msgs/msg/Image\",\"schemaEncoding\":\"ros2msg\","
+                     "\"messageEncoding\":\"cdr\",\"count\":" +
+                     n),
+            std::string::npos)
+      << raw;
+  EXPECT_NE(raw.find("\"/imu0\":{\"schema\":\"sensor_msgs/msg/Imu\""), std::string::npos) << raw;
+  EXPECT_NE(raw.find("\"/cam0/camera_info\":{\"schema\":\"sensor_msgs/msg/CameraInfo\""), std::string::npos) << raw;
+  EXPECT_NE(raw.find("\"child_frame_id\":\"cam0\""), std::string::npos) << raw;
+  e.image_format = "jpeg";
+  e.mcap.compression = "lz4";
+  write_mcap(folder, d / "jpg.mcap", e);
+  const std::string jpg = foxglove_read(d / "jpg.mcap", d / "jpg.json");
+  EXPECT_NE(jpg.find("\"/cam0/image_raw/compressed\":{\"schema\":\"sensor_msgs/msg/CompressedImage\""),
+            std::string::npos)
+      << jpg;
+  EXPECT_NE(jpg.find("\"format\":\"jpeg\""), std::string::npos) << jpg;
+}
+
+// A run's --mcap-out as Foxglove reads it: every channel's schema is one Foxglove or ROS 2 defines, and decodes.
+TEST(McapExternal, RunMcapReadByFoxgloveReader) {
+  REQUIRE_TOOLS();
+  ovtest::TempDir d;
+  {
+    RunMcapWriter w(d / "run.mcap");
+    StateSample g;
+    g.t_ns = 900;
+    w.set_truth({g,
+                 [] {
+                   StateSample s;
+                   s.t_ns = 5000;
+                   return s;
+                 }()},
+                {{0, 0.002}});
+    for (int i = 0; i < 5; ++i) {
+      w.add_image(
+          1000 + 100 * i, 1002 + 100 * i, cv::Mat(48, 64, CV_8UC1, cv::Scalar(40 * i)),
+          {{1, Eigen::Vector2d(10, 20), FeatureStatus::Used}, {2, Eigen::Vector2d(30, 5), FeatureStatus::Gated}});
+      StateSample s;
+      s.t_ns = 1002 + 100 * i;
+      s.has_td = true;
+      s.td_s = 0.002;
+      s.td_sigma_s = 0.001;
+      w.add_state(s);
+    }
+  }
+  const std::string j = foxglove_read(d / "run.mcap", d / "run.json");
+  for (const char *piece :
+       {"\"/ovton/image\":{\"schema\":\"sensor_msgs/msg/CompressedImage\"",
+        "\"/ovton/features\":{\"schema\":\"foxglove_msgs/msg/ImageAnnotations\"",
+        "\"/ovton/pose\":{\"schema\":\"geometry_msgs/msg/PoseStamped\"",
+        "\"/ovton/pose_truth\":{\"schema\":\"geometry_msgs/msg/PoseStamped\"",
+        "\"/tf\":{\"schema\":\"tf2_msgs/msg/TFMessage\"", "\"/ovton/path\":{\"schema\":\"nav_msgs/msg/Path\"",
+        "\"/ovton/path_truth\":{\"schema\":\"nav_msgs/msg/Path\"",
+        "\"/ovton/td_ms\":{\"schema\":\"std_msgs/msg/Float64\"", "\"text\":\"used 1  gated 1  tracked 0\"",
+        "\"dataCrc\":\"ok\""})
+    EXPECT_NE(j.find(piece), std::string::npos) << piece << "\n" << j;
+}
