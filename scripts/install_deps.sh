@@ -4,13 +4,14 @@
 # other arguments are extra packages a script needs (check_format.sh: clang-format).
 set -euo pipefail
 # librosbag-storage-dev + libsensor-msgs-dev: ROS 1 bags read and written without ROS (Debian's rosbag storage library);
-# libroscpp-core-dev (roscpp_serialization, rostime, cpp_common) and libconsole-bridge-dev are linked directly, so named.
+# libroscpp-core-dev (roscpp_serialization, rostime, cpp_common), libconsole-bridge-dev and libroslz4-dev (the bag check
+# decompresses lz4 chunks, rosbag_check.cpp) are linked directly, so named.
 # libboost-dev: Boost.Math's headers (χ² and F distributions: the χ² gate, diagnose's Wald tests).
 # libdeflate-dev: the fast decoder of 8-bit gray PNGs (ov_core/io/png_gray.cpp; optional in CMake, cv::imread without).
 # libzstd-dev, liblz4-dev, zlib1g-dev, libsqlite3-dev: MCAP chunks (zstd, lz4, CRC-32) and rosbag2 .db3 files; the MCAP
 # and CDR parsing is ovton's own (no library for them is packaged).
 PKGS=(build-essential cmake ccache libeigen3-dev libopencv-dev libyaml-cpp-dev libboost-dev libboost-program-options-dev
-      libgtest-dev python3 librosbag-storage-dev libsensor-msgs-dev libroscpp-core-dev libconsole-bridge-dev
+      libgtest-dev python3 librosbag-storage-dev libsensor-msgs-dev libroscpp-core-dev libconsole-bridge-dev libroslz4-dev
       libdeflate-dev libzstd-dev liblz4-dev zlib1g-dev libsqlite3-dev)
 for a in "$@"; do
   if [ "$a" = "--sanitize" ]; then

@@ -18,6 +18,7 @@
 #include <sqlite3.h>
 #include <zstd.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -219,4 +220,39 @@ TEST_F(Ros2Bag, CompressedImagesInRos1Bags) {
   ASSERT_EQ(j.images.size(), folder_->images.size());
   const cv::Mat x = load_image(j.images[3]), y = load_image(folder_->images[3]);
   EXPECT_LT(cv::norm(x, y, cv::NORM_L1) / static_cast<double>(x.total()), 2.0);
+}
+
+// Damaged lengths in a ROS 1 bag are named before anything is allocated for them (rosbag and roscpp would size buffers
+// by them: up to 4 GiB for one field).
+TEST_F(Ros2Bag, DamagedRos1LengthsNamedBeforeAllocation) {
+  if (!rosbag_supported())
+    GTEST_SKIP() << "built with OVTON_WITH_ROSBAG=OFF";
+  ovtest::TempDir d;
+  BagWriteOptions w;
+  w.kalibr_files = false;
+  write_bag(*folder_, d / "ok.bag", w);
+  std::ifstream in(d / "ok.bag", std::ios::binary);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto damaged = [&](const std::string &name, size_t at, uint32_t value) {
+    std::string b = good;
+    std::memcpy(&b[at], &value, 4);
+    std::ofstream(d / name, std::ios::binary).write(b.data(), static_cast<std::streamsize>(b.size()));
+    return d / name;
+  };
+  // The first record after the magic is the bag header: its header length.
+  const std::string a = damaged("header.bag", 13, 0xfffffff0u);
+  ovtest::expect_data_error([&] { load_bag(a, calib()); }, "header.bag: byte 13: the record's header runs past", 0,
+                            "record length");
+  // An image's pixel count (after "mono8", is_bigendian and step) inside an uncompressed chunk.
+  const size_t enc = good.find("mono8");
+  ASSERT_NE(enc, std::string::npos);
+  const std::string b = damaged("pixels.bag", enc + 5 + 1 + 4, 0xffffff00u);
+  try {
+    load_bag(b, calib());
+    ADD_FAILURE() << "expected a DataError";
+  } catch (const DataError &e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("pixels.bag: message "), std::string::npos) << m;
+    EXPECT_NE(m.find("sequence data declares 4294967040 bytes"), std::string::npos) << m;
+  }
 }

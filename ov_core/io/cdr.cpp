@@ -27,8 +27,15 @@ bool host_little_endian() {
 } // namespace
 
 CdrReader::CdrReader(const uint8_t *data, size_t size, const std::string &file, const std::string &where,
-                     size_t full_size)
-    : data_(data), size_(size), full_size_(full_size > size ? full_size : size), file_(file), where_(where) {
+                     size_t full_size, Wire wire)
+    : data_(data), size_(size), full_size_(full_size > size ? full_size : size), wire_(wire), file_(file),
+      where_(where) {
+  if (wire == Wire::Ros1) { // little-endian, packed, from the first byte
+    pos_ = 0;
+    max_align_ = 1;
+    swap_ = !host_little_endian();
+    return;
+  }
   if (size < 4)
     fail("a CDR message of " + std::to_string(size) + " bytes has no encapsulation header");
   // Representation identifier (big-endian): 0/1 plain CDR big/little endian, 6/7 XCDR2 plain big/little endian.
@@ -50,7 +57,7 @@ void CdrReader::fail(const std::string &what) const {
 
 void CdrReader::align(size_t n) {
   n = n < max_align_ ? n : max_align_;
-  const size_t rel = pos_ - 4; // alignment counts from the end of the encapsulation header
+  const size_t rel = pos_ - 4; // alignment counts from the end of the encapsulation header (1 for ROS 1: none)
   pos_ += (n - rel % n) % n;
 }
 
@@ -85,6 +92,10 @@ double CdrReader::f64(const char *field) {
 std::string CdrReader::string(const char *field) {
   const uint32_t n = u32(field);
   need(n, field);
+  if (wire_ == Wire::Ros1) {
+    pos_ += n;
+    return std::string(reinterpret_cast<const char *>(data_ + pos_ - n), n);
+  }
   if (n == 0) // some writers give an empty string no terminator at all
     return std::string();
   if (data_[pos_ + n - 1] != 0)

@@ -3,13 +3,18 @@
 // 4-byte encapsulation header (byte order, options), then the fields in order, each primitive aligned to its own size
 // relative to the end of that header (XCDR2 caps the alignment at 4); strings as a uint32 length that counts a
 // terminating NUL, then the bytes and the NUL; sequences as a uint32 count, then the elements. ovton reads the few
-// sensor_msgs it needs and writes those and the visualisation messages; no ROS library is involved.
+// sensor_msgs it needs and writes those and the visualisation messages; no ROS library is involved. The reader also
+// reads ROS 1's serialisation (no header, no alignment, strings without a NUL), so that ROS 1 bag messages are read
+// with the same bounds checks instead of a deserialiser that allocates whatever a damaged length field says.
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 namespace ovton::core {
+
+/// How a message is serialised: ROS 2's CDR or ROS 1's own format.
+enum class Wire { Cdr, Ros1 };
 
 /// Reads one serialised message. Every read is bounds-checked: running past the end, a string without its NUL or a
 /// sequence longer than the bytes left throws DataError(file, where + ": ..." naming the byte and the field).
@@ -18,7 +23,9 @@ public:
   /// `data` holds the message from its encapsulation header. When only the first `size` bytes of a message of
   /// `full_size` bytes are in memory (a reader peeking at an image's header), sequences may extend past `size` up to
   /// `full_size`: seq_bytes() then returns their place without the bytes.
-  CdrReader(const uint8_t *data, size_t size, const std::string &file, const std::string &where, size_t full_size = 0);
+  CdrReader(const uint8_t *data, size_t size, const std::string &file, const std::string &where, size_t full_size = 0,
+            Wire wire = Wire::Cdr);
+  Wire wire() const { return wire_; }
 
   uint8_t u8(const char *field);
   bool boolean(const char *field) { return u8(field) != 0; }
@@ -51,6 +58,7 @@ private:
   size_t size_, full_size_, pos_ = 4;
   bool swap_ = false;
   size_t max_align_ = 8;
+  Wire wire_ = Wire::Cdr;
   std::string file_, where_;
 };
 

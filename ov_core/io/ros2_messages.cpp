@@ -13,11 +13,15 @@ namespace {
 
 Ros2Header read_header(CdrReader &r) {
   Ros2Header h;
-  const int32_t sec = r.i32("header.stamp.sec");
+  if (r.wire() == Wire::Ros1)
+    r.u32("header.seq");
+  // ROS 1's seconds are unsigned, ROS 2's signed.
+  const int64_t sec =
+      r.wire() == Wire::Ros1 ? static_cast<int64_t>(r.u32("header.stamp.secs")) : r.i32("header.stamp.sec");
   const uint32_t nsec = r.u32("header.stamp.nanosec");
   if (nsec >= 1000000000u)
     r.fail("header.stamp.nanosec " + std::to_string(nsec) + " is not below 10^9");
-  h.stamp_ns = static_cast<int64_t>(sec) * 1000000000LL + nsec;
+  h.stamp_ns = sec * 1000000000LL + nsec;
   h.frame_id = r.string("header.frame_id");
   return h;
 }
@@ -47,8 +51,8 @@ Ros2Type ros2_type(const std::string &name) {
 }
 
 Ros2Image decode_ros2_image(const uint8_t *data, size_t size, const std::string &file, const std::string &where,
-                            size_t full_size) {
-  CdrReader r(data, size, file, where, full_size);
+                            size_t full_size, Wire wire) {
+  CdrReader r(data, size, file, where, full_size, wire);
   Ros2Image m;
   m.header = read_header(r);
   m.pixels.height = r.u32("height");
@@ -63,8 +67,8 @@ Ros2Image decode_ros2_image(const uint8_t *data, size_t size, const std::string 
 }
 
 Ros2CompressedImage decode_ros2_compressed_image(const uint8_t *data, size_t size, const std::string &file,
-                                                 const std::string &where, size_t full_size) {
-  CdrReader r(data, size, file, where, full_size);
+                                                 const std::string &where, size_t full_size, Wire wire) {
+  CdrReader r(data, size, file, where, full_size, wire);
   Ros2CompressedImage m;
   m.header = read_header(r);
   m.format = r.string("format");
@@ -73,8 +77,8 @@ Ros2CompressedImage decode_ros2_compressed_image(const uint8_t *data, size_t siz
 }
 
 ImuData decode_ros2_imu(const uint8_t *data, size_t size, const std::string &file, const std::string &where,
-                        std::string *frame_id) {
-  CdrReader r(data, size, file, where);
+                        std::string *frame_id, Wire wire) {
+  CdrReader r(data, size, file, where, 0, wire);
   ImuData d;
   Ros2Header h = read_header(r);
   d.t_imu_ns = h.stamp_ns;

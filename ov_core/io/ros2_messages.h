@@ -53,14 +53,15 @@ struct Ros2Transform {
 };
 
 /// Decoders. `size` bytes of the message are at `data`; an image may be given as its first bytes only, `full_size`
-/// being the whole message's (its header, size and encoding are then checked without the pixels).
+/// being the whole message's (its header, size and encoding are then checked without the pixels). Wire::Ros1 reads the
+/// same messages as a ROS 1 bag stores them (the fields are the same; the header has a seq).
 Ros2Image decode_ros2_image(const uint8_t *data, size_t size, const std::string &file, const std::string &where,
-                            size_t full_size = 0);
+                            size_t full_size = 0, Wire wire = Wire::Cdr);
 Ros2CompressedImage decode_ros2_compressed_image(const uint8_t *data, size_t size, const std::string &file,
-                                                 const std::string &where, size_t full_size = 0);
+                                                 const std::string &where, size_t full_size = 0, Wire wire = Wire::Cdr);
 /// Throws DataError for non-finite rates. `frame_id`, when given, receives the header's frame.
 ImuData decode_ros2_imu(const uint8_t *data, size_t size, const std::string &file, const std::string &where,
-                        std::string *frame_id = nullptr);
+                        std::string *frame_id = nullptr, Wire wire = Wire::Cdr);
 Ros2CameraInfo decode_ros2_camera_info(const uint8_t *data, size_t size, const std::string &file,
                                        const std::string &where);
 std::vector<Ros2Transform> decode_ros2_tf(const uint8_t *data, size_t size, const std::string &file,

@@ -2,18 +2,19 @@
 #include "ov_core/io/bag_calibration.h"
 #include "ov_core/io/image_store.h"
 #include "ov_core/io/recording_topics.h"
-#include "ov_core/io/rosbag_messages.h"
+#include "ov_core/io/ros2_messages.h"
+#include "ov_core/io/rosbag_check.h"
 #include "ov_core/types/errors.h"
 
+#include <ros/serialization.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
-#include <sensor_msgs/Image.h>
-#include <sensor_msgs/Imu.h>
 
 #include <fstream>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <new>
 
 namespace ovton::core {
 
@@ -31,31 +32,47 @@ template <typename F> auto with_bag_errors(const std::string &file, const std::s
   } catch (const ros::Exception &e) {
     throw DataError(file, where + (where.empty() ? "" : ": ") + "unreadable (" + e.what() +
                               "): the bag is corrupt or truncated");
+  } catch (const std::bad_alloc &) {
+    // A length field the structure check cannot see (inside a compressed chunk) asked for more memory than there is.
+    throw DataError(file, where + (where.empty() ? "" : ": ") +
+                              "unreadable (a length beyond the memory there is): the bag is corrupt");
   }
 }
 
-int64_t stamp_ns(const ros::Time &t) {
-  return static_cast<int64_t>(t.sec) * 1000000000LL + static_cast<int64_t>(t.nsec);
+/// A message's serialised bytes, copied out of the bag. They are decoded by ovton's own reader (ros2_messages.h,
+/// Wire::Ros1), which checks every length against the message: roscpp's deserialiser sizes a vector by whatever a
+/// damaged length field says (4 GiB) before it looks.
+std::vector<uint8_t> raw_bytes(const rosbag::MessageInstance &m, const std::string &file, const std::string &where) {
+  return with_bag_errors(file, where, [&] {
+    std::vector<uint8_t> b(m.size());
+    ros::serialization::OStream s(b.data(), static_cast<uint32_t>(b.size()));
+    m.write(s);
+    return b;
+  });
 }
 
-/// A message as its type, or a DataError naming it.
-template <typename Msg>
-boost::shared_ptr<Msg> instantiate(const rosbag::MessageInstance &m, const std::string &file,
-                                   const std::string &where) {
-  auto msg = with_bag_errors(file, where, [&] { return m.instantiate<Msg>(); });
-  if (!msg)
-    throw DataError(file, where + ": not a " + ros::message_traits::DataType<Msg>::value());
-  return msg;
-}
-
-/// The header stamp of a camera message, after checking it against the calibration's size (for a compressed image by
-/// its file header).
-template <typename Msg>
-int64_t checked_image_stamp(const rosbag::MessageInstance &m, const CameraCalib &cam, const std::string &file,
-                            const std::string &where) {
-  const auto img = instantiate<Msg>(m, file, where);
-  check_image_message(*img, cam.width, cam.height, file, where);
-  return stamp_ns(img->header.stamp);
+/// The gray pixels of a camera message (checked against `check` instead when given: then an empty Mat) and its stamp.
+cv::Mat read_image(const rosbag::MessageInstance &m, bool compressed, const std::string &file, const std::string &where,
+                   const CameraCalib *check, int64_t *stamp_ns) {
+  const std::vector<uint8_t> b = raw_bytes(m, file, where);
+  if (compressed) {
+    const Ros2CompressedImage img = decode_ros2_compressed_image(b.data(), b.size(), file, where, 0, Wire::Ros1);
+    if (stamp_ns)
+      *stamp_ns = img.header.stamp_ns;
+    if (check) {
+      check_compressed_image(img.format, img.data.data, img.data.size, check->width, check->height, file, where);
+      return cv::Mat();
+    }
+    return compressed_to_gray(img.format, img.data.data, img.data.size, file, where);
+  }
+  const Ros2Image img = decode_ros2_image(b.data(), b.size(), file, where, 0, Wire::Ros1);
+  if (stamp_ns)
+    *stamp_ns = img.header.stamp_ns;
+  if (check) {
+    check_raw_image(img.pixels, check->width, check->height, file, where);
+    return cv::Mat();
+  }
+  return raw_image_to_gray(img.pixels, file, where);
 }
 
 /// The images of one topic, read from the bag when the replay asks for them. rosbag::Bag reads through one file handle
@@ -72,9 +89,7 @@ public:
   cv::Mat load(const ImageEntry &e) const override {
     std::lock_guard<std::mutex> lock(mutex_);
     const auto &[m, index] = messages.at(e.store_index);
-    const std::string where = message_label(index, topic_);
-    return compressed_ ? image_to_gray(*instantiate<sensor_msgs::CompressedImage>(m, file_, where), file_, where)
-                       : image_to_gray(*instantiate<sensor_msgs::Image>(m, file_, where), file_, where);
+    return read_image(m, compressed_, file_, message_label(index, topic_), nullptr, nullptr);
   }
 
 private:
@@ -95,6 +110,7 @@ Dataset load_bag(const std::string &file, const BagOptions &opt) {
     std::ifstream in(file, std::ios::binary);
     throw DataError(file, in ? "not a ROS 1 bag (no #ROSBAG V2.0 header)" : "bag not found or unreadable");
   }
+  check_rosbag_structure(file);
   BagCalibration calib = resolve_bag_calibration(file, opt.calib);
   auto bag = std::make_unique<rosbag::Bag>();
   with_bag_errors(file, "", [&] { bag->open(file, rosbag::bagmode::Read); });
@@ -127,12 +143,12 @@ Dataset load_bag(const std::string &file, const BagOptions &opt) {
         continue;
       const std::string where = message_label(index, topic);
       if (topic == imu_topic) {
-        msgs.imu.emplace_back(imu_from_message(*instantiate<sensor_msgs::Imu>(m, file, where), file, where), index);
+        const std::vector<uint8_t> b = raw_bytes(m, file, where);
+        msgs.imu.emplace_back(decode_ros2_imu(b.data(), b.size(), file, where, nullptr, Wire::Ros1), index);
         continue;
       }
       ImageEntry e;
-      e.t_cam_ns = compressed ? checked_image_stamp<sensor_msgs::CompressedImage>(m, calib.cam, file, where)
-                              : checked_image_stamp<sensor_msgs::Image>(m, calib.cam, file, where);
+      read_image(m, compressed, file, where, &calib.cam, &e.t_cam_ns);
       e.path = file + ": " + where;
       e.store_index = store->messages.size();
       store->messages.emplace_back(m, index);
