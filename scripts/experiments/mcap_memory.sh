@@ -37,7 +37,8 @@ replay() { # name, dataset, extra args
   rss=$(awk -F: '/Maximum resident set size/ {printf "%.0f", $2 / 1024}' "$time")
   wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n = split($2, p, ":"); s = 0; for (i = 1; i <= n; ++i) s = s * 60 + p[i]; print s}' "$time")
   cpu=$(awk -F': ' '/User time/ {u = $2} /System time/ {s = $2} END {print u + s}' "$time")
-  images=$(grep -oE '^mode [^:]+: [0-9]+ images' "$time" | grep -oE '[0-9]+ images' | grep -oE '[0-9]+')
+  images=$(cat "$SCRATCH/run_$name.txt" "$time" | grep -oE '^mode [^:]+: [0-9]+ images' | grep -oE '[0-9]+ images' |
+    grep -oE '[0-9]+')
   printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$mb" "$images" "$rss" "$wall" "$cpu" \
     "$(awk -v n="$images" -v w="$wall" 'BEGIN {printf "%.1f", n / w}')" >> "$ROWS"
   cmp -s "$SCRATCH/traj_$name.csv" "$SCRATCH/traj_folder.csv" 2>/dev/null && echo "$name: same trajectory as the folder" >> "$OUT/identical.txt" || true
