@@ -7,7 +7,7 @@
 #include "ov_core/io/mcap_writer.h"
 #include "ov_core/io/ros2_messages.h"
 #include "ov_core/io/ros2_schemas.h"
-#include "test_util.h"
+#include "test_mcap_util.h"
 
 #include <gtest/gtest.h>
 
@@ -20,14 +20,8 @@ using namespace ovton::core;
 
 namespace {
 
-std::string bytes_of(const std::string &file) {
-  std::ifstream in(file, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-void write_bytes(const std::string &file, const std::string &b) {
-  std::ofstream(file, std::ios::binary | std::ios::trunc).write(b.data(), static_cast<std::streamsize>(b.size()));
-}
+using ovtest::bytes_of;
+using ovtest::write_bytes;
 
 /// Message i of a test file: its index in its first bytes, then a pattern (some messages large enough to span chunks).
 std::vector<uint8_t> payload(size_t i) {

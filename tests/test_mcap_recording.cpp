@@ -11,7 +11,7 @@
 #include "ov_core/io/ros2_reader.h"
 #include "ov_core/io/ros2_schemas.h"
 #include "ov_sim/simulator.h"
-#include "test_util.h"
+#include "test_mcap_util.h"
 
 #include <gtest/gtest.h>
 
@@ -24,19 +24,12 @@ using namespace ovton::core;
 
 namespace {
 
-std::string bytes_of(const std::string &file) {
-  std::ifstream in(file, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
+using ovtest::bytes_of;
+using ovtest::write_bytes;
 
-void write_bytes(const std::string &file, const std::string &b) {
-  std::ofstream(file, std::ios::binary | std::ios::trunc).write(b.data(), static_cast<std::streamsize>(b.size()));
-}
-
-int run_ovton(const std::string &args, const std::string &err) {
-  const std::string bin = (fs::read_symlink("/proc/self/exe").parent_path() / "ovton").string();
-  const int rc = std::system((bin + " " + args + " >/dev/null 2>" + err).c_str());
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+/// `ovton ARGS`, its output (messages included) to `out`; the exit code.
+int run_ovton(const std::string &args, const std::string &out) {
+  return ovtest::shell(ovtest::ovton_binary() + " " + args, out);
 }
 
 /// A short rendered flight and its MCAP export beside it (same stem: the folder is the file's calibration).
@@ -44,12 +37,7 @@ class McapRecording : public ::testing::Test {
 protected:
   static void SetUpTestSuite() {
     dir_ = new ovtest::TempDir();
-    ovton::sim::SimOptions o;
-    o.out_dir = (*dir_) / "flight";
-    o.duration_s = 3.0;
-    o.seed = 12;
-    ovton::sim::write_simulation(o);
-    folder_ = new Dataset(load_dataset(o.out_dir));
+    folder_ = new Dataset(load_dataset(ovtest::render_flight((*dir_) / "flight", 3.0, 12)));
     McapExportOptions e;
     e.mcap.chunk_size = 1u << 20;
     write_mcap(*folder_, (*dir_) / "flight.mcap", e);
@@ -61,22 +49,7 @@ protected:
   static std::string mcap() { return (*dir_) / "flight.mcap"; }
 
   static void expect_like_folder(const Dataset &m, bool exact_pixels) {
-    ASSERT_EQ(m.images.size(), folder_->images.size());
-    ASSERT_EQ(m.imu.size(), folder_->imu.size());
-    for (size_t i = 0; i < m.imu.size(); ++i) {
-      ASSERT_EQ(m.imu[i].t_imu_ns, folder_->imu[i].t_imu_ns);
-      ASSERT_EQ(m.imu[i].wm, folder_->imu[i].wm);
-      ASSERT_EQ(m.imu[i].am, folder_->imu[i].am);
-    }
-    for (size_t i = 0; i < m.images.size(); i += 5) {
-      ASSERT_EQ(m.images[i].t_cam_ns, folder_->images[i].t_cam_ns);
-      const cv::Mat x = load_image(m.images[i]), y = load_image(folder_->images[i]);
-      ASSERT_EQ(x.size(), y.size());
-      if (exact_pixels)
-        EXPECT_EQ(cv::countNonZero(x != y), 0) << "image " << i;
-      else
-        EXPECT_LT(cv::norm(x, y, cv::NORM_L1) / static_cast<double>(x.total()), 2.0) << "image " << i;
-    }
+    ovtest::expect_like_folder(m, *folder_, exact_pixels);
   }
 
   static ovtest::TempDir *dir_;

@@ -11,7 +11,7 @@
 #include "ov_core/io/rosbag_reader.h"
 #include "ov_core/io/rosbag_writer.h"
 #include "ov_sim/simulator.h"
-#include "test_util.h"
+#include "test_mcap_util.h"
 
 #include <gtest/gtest.h>
 
@@ -113,12 +113,7 @@ class Ros2Bag : public ::testing::Test {
 protected:
   static void SetUpTestSuite() {
     dir_ = new ovtest::TempDir();
-    ovton::sim::SimOptions o;
-    o.out_dir = (*dir_) / "flight";
-    o.duration_s = 2.0;
-    o.seed = 13;
-    ovton::sim::write_simulation(o);
-    folder_ = new Dataset(load_dataset(o.out_dir));
+    folder_ = new Dataset(load_dataset(ovtest::render_flight((*dir_) / "flight", 2.0, 13)));
     McapExportOptions e;
     e.kalibr_files = false;
     write_mcap(*folder_, (*dir_) / "all.mcap", e);
@@ -130,16 +125,7 @@ protected:
     delete dir_;
   }
 
-  static void expect_like_folder(const Dataset &m) {
-    ASSERT_EQ(m.images.size(), folder_->images.size());
-    ASSERT_EQ(m.imu.size(), folder_->imu.size());
-    for (size_t i = 0; i < m.imu.size(); ++i)
-      ASSERT_EQ(m.imu[i].t_imu_ns, folder_->imu[i].t_imu_ns);
-    for (size_t i = 0; i < m.images.size(); i += 9) {
-      ASSERT_EQ(m.images[i].t_cam_ns, folder_->images[i].t_cam_ns);
-      EXPECT_EQ(cv::countNonZero(load_image(m.images[i]) != load_image(folder_->images[i])), 0) << i;
-    }
-  }
+  static void expect_like_folder(const Dataset &m) { ovtest::expect_like_folder(m, *folder_, true, 9); }
   static BagOptions calib() {
     BagOptions o;
     o.calib = {(*dir_) / "flight"};
@@ -231,12 +217,11 @@ TEST_F(Ros2Bag, DamagedRos1LengthsNamedBeforeAllocation) {
   BagWriteOptions w;
   w.kalibr_files = false;
   write_bag(*folder_, d / "ok.bag", w);
-  std::ifstream in(d / "ok.bag", std::ios::binary);
-  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string good = ovtest::bytes_of(d / "ok.bag");
   const auto damaged = [&](const std::string &name, size_t at, uint32_t value) {
     std::string b = good;
     std::memcpy(&b[at], &value, 4);
-    std::ofstream(d / name, std::ios::binary).write(b.data(), static_cast<std::streamsize>(b.size()));
+    ovtest::write_bytes(d / name, b);
     return d / name;
   };
   // The first record after the magic is the bag header: its header length.

@@ -32,7 +32,7 @@ int cmd_export(const Args &args) {
   std::string dataset, out, format, compression, image_format = "raw";
   bool quiet = false, no_kalibr = false, no_summary = false;
   int jpeg_quality = 95;
-  double chunk_kb = 4096;
+  double chunk_kb = 1024;
   ovton::core::BagWriteOptions bag_opt;
   ovton::core::McapExportOptions mcap_opt;
   ovton::core::BagOptions in;
@@ -51,7 +51,7 @@ int cmd_export(const Args &args) {
       ("image-format", po::value(&image_format),
        "raw (mono8 sensor_msgs/Image, default), jpeg or png (sensor_msgs/CompressedImage on CAM_TOPIC/compressed)") //
       ("jpeg-quality", po::value(&jpeg_quality), "with --image-format jpeg: quality 1-100 (default 95)")            //
-      ("chunk-kb", po::value(&chunk_kb), "mcap: chunk size in kB (default 4096)")                                   //
+      ("chunk-kb", po::value(&chunk_kb), "mcap: chunk size in kB (default 1024)")                                   //
       ("no-summary", po::bool_switch(&no_summary),
        "mcap: no summary section or index (as a recorder that crashed leaves a file; for tests)") //
       ("no-kalibr", po::bool_switch(&no_kalibr),

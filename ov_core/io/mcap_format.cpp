@@ -25,14 +25,20 @@ template <typename T> void put_le(std::vector<uint8_t> &b, T v) {
     b.push_back(static_cast<uint8_t>(v >> (8 * i)));
 }
 
+/// The first room for a decoder's output: what `out` already holds (its memory is reused from chunk to chunk), at least
+/// a few times the input, never past `limit`.
+void start_output(std::vector<uint8_t> &out, uint64_t limit, size_t n) {
+  out.resize(static_cast<size_t>(std::min<uint64_t>(limit, std::max<uint64_t>(out.capacity(), n * 4 + 4096))));
+}
+
 /// Grows `out` towards `limit` as a streaming decoder asks for room: a size field that lies costs nothing.
 void grow(std::vector<uint8_t> &out, size_t used, uint64_t limit) {
   const size_t want = std::max<size_t>(used + (1u << 20), out.size() * 2);
   out.resize(static_cast<size_t>(std::min<uint64_t>(want, limit)));
 }
 
-std::vector<uint8_t> zstd_decompress(const uint8_t *src, size_t n, uint64_t size, const std::string &file,
-                                     const std::string &where) {
+void zstd_decompress(const uint8_t *src, size_t n, uint64_t size, std::vector<uint8_t> &out, const std::string &file,
+                     const std::string &where) {
   const auto fail = [&](const std::string &what) {
     throw DataError(file, where + ": zstd data " + what + ": the chunk is corrupt");
   };
@@ -44,7 +50,7 @@ std::vector<uint8_t> zstd_decompress(const uint8_t *src, size_t n, uint64_t size
   std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx *)> ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
   // One byte more than declared is room enough to see that the data holds more.
   const uint64_t limit = size + 1;
-  std::vector<uint8_t> out(static_cast<size_t>(std::min<uint64_t>(limit, n * 4 + 4096)));
+  start_output(out, limit, n);
   ZSTD_inBuffer in{src, n, 0};
   size_t used = 0;
   while (used < limit) {
@@ -65,11 +71,10 @@ std::vector<uint8_t> zstd_decompress(const uint8_t *src, size_t n, uint64_t size
     fail("decompresses to " + std::to_string(used) + (used > size ? "+" : "") + " bytes, the chunk says " +
          std::to_string(size));
   out.resize(used);
-  return out;
 }
 
-std::vector<uint8_t> lz4_decompress(const uint8_t *src, size_t n, uint64_t size, const std::string &file,
-                                    const std::string &where) {
+void lz4_decompress(const uint8_t *src, size_t n, uint64_t size, std::vector<uint8_t> &out, const std::string &file,
+                    const std::string &where) {
   const auto fail = [&](const std::string &what) {
     throw DataError(file, where + ": lz4 data " + what + ": the chunk is corrupt");
   };
@@ -78,7 +83,7 @@ std::vector<uint8_t> lz4_decompress(const uint8_t *src, size_t n, uint64_t size,
     throw std::bad_alloc();
   std::unique_ptr<LZ4F_dctx, size_t (*)(LZ4F_dctx *)> ctx(raw, LZ4F_freeDecompressionContext);
   const uint64_t limit = size + 1;
-  std::vector<uint8_t> out(static_cast<size_t>(std::min<uint64_t>(limit, n * 4 + 4096)));
+  start_output(out, limit, n);
   size_t used = 0, read = 0;
   while (used < limit) {
     if (used == out.size())
@@ -98,7 +103,6 @@ std::vector<uint8_t> lz4_decompress(const uint8_t *src, size_t n, uint64_t size,
     fail("decompresses to " + std::to_string(used) + (used > size ? "+" : "") + " bytes, the chunk says " +
          std::to_string(size));
   out.resize(used);
-  return out;
 }
 
 } // namespace
@@ -175,8 +179,8 @@ bool compression_supported(const std::string &name) {
   return name.empty() || name == "zstd" || name == "lz4";
 }
 
-std::vector<uint8_t> decompress(const std::string &compression, const uint8_t *src, size_t n,
-                                uint64_t uncompressed_size, const std::string &file, const std::string &where) {
+void decompress_into(const std::string &compression, const uint8_t *src, size_t n, uint64_t uncompressed_size,
+                     std::vector<uint8_t> &out, const std::string &file, const std::string &where) {
   if (uncompressed_size >= (uint64_t{1} << 40))
     throw DataError(file, where + ": chunk declares " + std::to_string(uncompressed_size) +
                               " bytes of records: the chunk is corrupt");
@@ -184,13 +188,21 @@ std::vector<uint8_t> decompress(const std::string &compression, const uint8_t *s
     if (n != uncompressed_size)
       throw DataError(file, where + ": uncompressed chunk holds " + std::to_string(n) + " bytes of records, it says " +
                                 std::to_string(uncompressed_size));
-    return std::vector<uint8_t>(src, src + n);
+    out.assign(src, src + n);
+  } else if (compression == "zstd") {
+    zstd_decompress(src, n, uncompressed_size, out, file, where);
+  } else if (compression == "lz4") {
+    lz4_decompress(src, n, uncompressed_size, out, file, where);
+  } else {
+    throw DataError(file, where + ": unknown chunk compression '" + compression + "' (supported: zstd, lz4, none)");
   }
-  if (compression == "zstd")
-    return zstd_decompress(src, n, uncompressed_size, file, where);
-  if (compression == "lz4")
-    return lz4_decompress(src, n, uncompressed_size, file, where);
-  throw DataError(file, where + ": unknown chunk compression '" + compression + "' (supported: zstd, lz4, none)");
+}
+
+std::vector<uint8_t> decompress(const std::string &compression, const uint8_t *src, size_t n,
+                                uint64_t uncompressed_size, const std::string &file, const std::string &where) {
+  std::vector<uint8_t> out;
+  decompress_into(compression, src, n, uncompressed_size, out, file, where);
+  return out;
 }
 
 std::vector<uint8_t> compress(const std::string &compression, const uint8_t *src, size_t n) {

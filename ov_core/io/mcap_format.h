@@ -75,6 +75,9 @@ bool compression_supported(const std::string &name);
 /// with what a damaged size field claims. Throws DataError(file, where...) for damaged data or another size.
 std::vector<uint8_t> decompress(const std::string &compression, const uint8_t *src, size_t n,
                                 uint64_t uncompressed_size, const std::string &file, const std::string &where);
+/// The same into `out`, whose memory is reused (a reader walking chunk after chunk allocates once).
+void decompress_into(const std::string &compression, const uint8_t *src, size_t n, uint64_t uncompressed_size,
+                     std::vector<uint8_t> &out, const std::string &file, const std::string &where);
 /// Compresses a chunk's records ("zstd", "lz4" or "").
 std::vector<uint8_t> compress(const std::string &compression, const uint8_t *src, size_t n);
 

@@ -63,12 +63,18 @@ McapReader::~McapReader() {
 }
 
 std::vector<uint8_t> McapReader::read_at(uint64_t offset, uint64_t n, const std::string &what) const {
+  std::vector<uint8_t> out;
+  read_into(offset, n, what, out);
+  return out;
+}
+
+void McapReader::read_into(uint64_t offset, uint64_t n, const std::string &what, std::vector<uint8_t> &out) const {
   if (offset > size_ || n > size_ - offset)
     throw DataError(file_, at_byte(what.c_str(), offset) + ": " + std::to_string(n) +
                                " bytes would run past the end "
                                "of the file (" +
                                std::to_string(size_) + " bytes)");
-  std::vector<uint8_t> out(static_cast<size_t>(n));
+  out.resize(static_cast<size_t>(n));
   uint64_t done = 0;
   while (done < n) {
     const ssize_t r = ::pread(fd_, out.data() + done, static_cast<size_t>(n - done), static_cast<off_t>(offset + done));
@@ -79,7 +85,6 @@ std::vector<uint8_t> McapReader::read_at(uint64_t offset, uint64_t n, const std:
                                  (r < 0 ? std::string(std::strerror(errno)) : std::string("file shrank")) + ")");
     done += static_cast<uint64_t>(r);
   }
-  return out;
 }
 
 McapScan McapReader::scan(const std::function<void(const McapChannel &)> &on_channel,
@@ -151,7 +156,7 @@ McapScan McapReader::scan(const std::function<void(const McapChannel &)> &on_cha
   };
 
   uint64_t pos = data_start_;
-  std::vector<uint8_t> content;
+  std::vector<uint8_t> content, records; // reused from record to record
   for (;;) {
     const auto cut = [&](const std::string &reason) {
       out.complete = false;
@@ -175,13 +180,13 @@ McapScan McapReader::scan(const std::function<void(const McapChannel &)> &on_cha
     if (op == mcap::kDataEnd || op == mcap::kFooter)
       return out;
     if (op == mcap::kSchema || op == mcap::kChannel || op == mcap::kMessage) {
-      content = read_at(content_at, len, "record");
+      read_into(content_at, len, "record", content);
       if (op == mcap::kMessage && len < kMessageHeader)
         throw DataError(file_, at_byte("message record", pos) + ": " + std::to_string(len) + " bytes is too short");
       handle(op, content.data(), content.size(), -1, content_at, pos, at_byte("record", pos));
     } else if (op == mcap::kChunk) {
       const std::string where = at_byte("chunk", pos);
-      content = read_at(content_at, len, "chunk");
+      read_into(content_at, len, "chunk", content);
       mcap::FieldReader r(content.data(), content.size(), file_, where);
       r.u64("message start time");
       r.u64("message end time");
@@ -192,8 +197,7 @@ McapScan McapReader::scan(const std::function<void(const McapChannel &)> &on_cha
       if (csize > r.left())
         r.fail("its records need " + std::to_string(csize) + " bytes, the chunk holds " + std::to_string(r.left()));
       const uint64_t records_at = r.position();
-      const std::vector<uint8_t> records =
-          mcap::decompress(compression, content.data() + records_at, csize, usize, file_, where);
+      mcap::decompress_into(compression, content.data() + records_at, csize, usize, records, file_, where);
       if (crc != 0 && mcap::crc32(0, records.data(), records.size()) != crc)
         throw DataError(file_, where + ": CRC mismatch in its " + std::to_string(records.size()) +
                                    " bytes of records: the chunk is corrupt");
@@ -222,26 +226,24 @@ McapScan McapReader::scan(const std::function<void(const McapChannel &)> &on_cha
   }
 }
 
-std::vector<uint8_t> McapReader::decompress_chunk(const ChunkPlace &c) const {
-  const auto raw = read_at(c.data_offset, c.compressed_size, "chunk");
-  return mcap::decompress(c.compression, raw.data(), raw.size(), c.uncompressed_size, file_,
-                          at_byte("chunk", c.record_offset));
-}
-
 std::vector<uint8_t> McapReader::fetch(const McapMessageRef &ref) const {
   if (ref.chunk < 0)
     return read_at(ref.offset, ref.size, "message");
   std::lock_guard<std::mutex> lock(mutex_);
   if (ref.chunk >= static_cast<int64_t>(chunks_.size()))
     throw UsageError("McapReader::fetch: no chunk " + std::to_string(ref.chunk) + " in " + file_);
+  const ChunkPlace &c = chunks_[static_cast<size_t>(ref.chunk)];
+  const std::string where = at_byte("chunk", c.record_offset);
+  if (ref.offset > c.uncompressed_size || ref.size > c.uncompressed_size - ref.offset)
+    throw DataError(file_, where + ": a message lies past its records (the file changed since it was read)");
+  if (c.compression.empty()) // the records are in the file as they are
+    return read_at(c.data_offset + ref.offset, ref.size, where);
   if (cached_chunk_ != ref.chunk) {
     cached_chunk_ = -1;
-    cached_ = decompress_chunk(chunks_[static_cast<size_t>(ref.chunk)]);
+    read_into(c.data_offset, c.compressed_size, where, packed_);
+    mcap::decompress_into(c.compression, packed_.data(), packed_.size(), c.uncompressed_size, cached_, file_, where);
     cached_chunk_ = ref.chunk;
   }
-  if (ref.offset > cached_.size() || ref.size > cached_.size() - ref.offset)
-    throw DataError(file_, at_byte("chunk", chunks_[static_cast<size_t>(ref.chunk)].record_offset) +
-                               ": a message lies past its records (the file changed since it was read)");
   return std::vector<uint8_t>(cached_.begin() + static_cast<std::ptrdiff_t>(ref.offset),
                               cached_.begin() + static_cast<std::ptrdiff_t>(ref.offset + ref.size));
 }

@@ -64,7 +64,9 @@ public:
   McapScan scan(const std::function<void(const McapChannel &)> &on_channel,
                 const std::function<void(const McapMessage &)> &on_message);
 
-  /// The data of a message found by scan(). Safe to call from several threads.
+  /// The data of a message found by scan(): read from the file directly when its chunk is uncompressed, else from
+  /// the chunk decompressed (the last one is kept: a replay asks for the images in order). Safe to call from several
+  /// threads.
   std::vector<uint8_t> fetch(const McapMessageRef &ref) const;
 
 private:
@@ -73,7 +75,7 @@ private:
     std::string compression;
   };
   std::vector<uint8_t> read_at(uint64_t offset, uint64_t n, const std::string &what) const;
-  std::vector<uint8_t> decompress_chunk(const ChunkPlace &c) const;
+  void read_into(uint64_t offset, uint64_t n, const std::string &what, std::vector<uint8_t> &out) const;
 
   std::string file_, profile_;
   int fd_ = -1;
@@ -81,7 +83,7 @@ private:
   std::vector<ChunkPlace> chunks_;
   mutable std::mutex mutex_;
   mutable int64_t cached_chunk_ = -1;
-  mutable std::vector<uint8_t> cached_;
+  mutable std::vector<uint8_t> cached_, packed_; ///< the last compressed chunk fetched, decompressed; its bytes
 };
 
 } // namespace ovton::core

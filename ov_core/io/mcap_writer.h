@@ -13,7 +13,7 @@ namespace ovton::core {
 
 struct McapWriteOptions {
   std::string compression = "zstd"; ///< zstd | lz4 | none
-  size_t chunk_size = 4u << 20;     ///< records are collected until a chunk holds this many bytes
+  size_t chunk_size = 1u << 20;     ///< records are collected until a chunk holds this many bytes
   bool chunked = true;              ///< false: every record directly in the data section (no compression, no index)
   bool summary = true;              ///< summary section and summary offsets (message indexes follow chunks anyway)
   std::string profile = "ros2";
