@@ -56,7 +56,7 @@ for ROUND in $(seq 1 "$REPEATS"); do
   replay rosbag "$SCRATCH/flight.bag" --calib "$CAL"
 done
 {
-  echo "Made by \`scripts/experiments/mcap_memory.sh $OUT $LONG_S\` ($(date -u +%F), commit $(git rev-parse --short HEAD));"
+  echo "Made by \`scripts/experiments/mcap_memory.sh $OUT $LONG_S $REPEATS\` ($(date -u +%F), commit $(git rev-parse --short HEAD));"
   echo "data: \`ovton simulate --builtin --realism clean --duration-s $LONG_S --seed 1\`, then \`ovton export --no-kalibr\`"
   echo "to MCAP (\`--compression none\` and zstd, raw mono8 images) and to a ROS 1 bag; run: \`ovton run --dataset D"
   echo "-c $CFG\` (recordings with \`--calib\` the folder's calibration without its images), under /usr/bin/time -v;"
