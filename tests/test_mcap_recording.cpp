@@ -32,14 +32,14 @@ int run_ovton(const std::string &args, const std::string &out) {
   return ovtest::shell(ovtest::ovton_binary() + " " + args, out);
 }
 
-/// A short rendered flight and its MCAP export beside it (same stem: the folder is the file's calibration).
+/// A small folder and its MCAP export beside it (same stem: the folder is the file's calibration).
 class McapRecording : public ::testing::Test {
 protected:
   static void SetUpTestSuite() {
     dir_ = new ovtest::TempDir();
-    folder_ = new Dataset(load_dataset(ovtest::render_flight((*dir_) / "flight", 3.0, 12)));
+    folder_ = new Dataset(load_dataset(ovtest::small_folder((*dir_) / "flight")));
     McapExportOptions e;
-    e.mcap.chunk_size = 1u << 20;
+    e.mcap.chunk_size = 16u << 10; // several chunks, for the cut file
     write_mcap(*folder_, (*dir_) / "flight.mcap", e);
   }
   static void TearDownTestSuite() {
@@ -239,16 +239,20 @@ TEST_F(McapRecording, DamageNamesTheFileAndPlace) {
   expect("/json/image", "topic /json/image is recorded in the message encoding 'json'");
 }
 
-// The user's path: `ovton run` on the folder and on its MCAP export.
-TEST_F(McapRecording, ReplaysToTheByteIdenticalTrajectory) {
-  const std::string cfg = std::string(OVTON_SOURCE_DIR) + "/config/sim/estimator_config.yaml", err = (*dir_) / "e";
-  const std::string common = "run -q -c " + cfg + " --max-images 40 ";
-  ASSERT_EQ(run_ovton(common + "--dataset " + ((*dir_) / "flight") + " -o " + ((*dir_) / "f.csv"), err), 0)
+// The user's path: `ovton run` on a rendered folder and on its MCAP export.
+TEST(McapRun, ReplaysToTheByteIdenticalTrajectory) {
+  ovtest::TempDir d;
+  const Dataset folder = load_dataset(ovtest::render_flight(d / "flight", 2.5, 12));
+  write_mcap(folder, d / "flight.mcap");
+  const std::string cfg = std::string(OVTON_SOURCE_DIR) + "/config/sim/estimator_config.yaml", err = d / "e";
+  const std::string common = "run -q -c " + cfg + " ";
+  ASSERT_EQ(run_ovton(common + "--dataset " + (d / "flight") + " -o " + (d / "f.csv"), err), 0)
       << ovtest::read_text(err);
-  ASSERT_EQ(run_ovton(common + "--dataset " + mcap() + " -o " + ((*dir_) / "m.csv"), err), 0) << ovtest::read_text(err);
-  const std::string a = bytes_of((*dir_) / "f.csv"), b = bytes_of((*dir_) / "m.csv");
-  EXPECT_GT(std::count(a.begin(), a.end(), '\n'), 30);
+  ASSERT_EQ(run_ovton(common + "--dataset " + (d / "flight.mcap") + " -o " + (d / "m.csv"), err), 0)
+      << ovtest::read_text(err);
+  const std::string a = bytes_of(d / "f.csv"), b = bytes_of(d / "m.csv");
+  EXPECT_GT(std::count(a.begin(), a.end(), '\n'), 40);
   EXPECT_TRUE(a == b) << "trajectories differ";
-  EXPECT_EQ(run_ovton("info --dataset " + mcap() + " --cam-topic /nope", err), 3);
+  EXPECT_EQ(run_ovton("info --dataset " + (d / "flight.mcap") + " --cam-topic /nope", err), 3);
   EXPECT_NE(ovtest::read_text(err).find("no topic /nope"), std::string::npos) << ovtest::read_text(err);
 }

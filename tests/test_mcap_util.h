@@ -1,12 +1,17 @@
 #pragma once
 // Shared by the MCAP and ROS 2 recording tests (test_mcap*.cpp, test_ros2*.cpp): file bytes, the ovton binary, a
 // short rendered flight, and the check that a recording reads back as the folder it was made from.
+#include "io_test_util.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/image_store.h"
 #include "ov_sim/simulator.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
 
 #include <filesystem>
 #include <fstream>
@@ -42,6 +47,38 @@ inline std::string render_flight(const std::string &dir, double duration_s, uint
   o.duration_s = duration_s;
   o.seed = seed;
   ovton::sim::write_simulation(o);
+  return dir;
+}
+
+/// A small EuRoC folder written in no time: `images` random smooth 64x48 gray PNGs (smooth: JPEG keeps them within a
+/// grey level or two) at 20 Hz and a varying 200 Hz IMU log around them, for the tests that read recordings without
+/// running the filter on them.
+inline std::string small_folder(const std::string &dir, int images = 20, uint64_t seed = 1) {
+  const std::string m = dir + "/mav0";
+  std::string cam = kCamYaml;
+  cam.replace(cam.find("[752, 480]"), 10, "[64, 48]");
+  write_text(m + "/cam0/sensor.yaml", cam);
+  write_text(m + "/imu0/sensor.yaml", kImuYaml);
+  std::ostringstream list, imu;
+  list << "#timestamp [ns],filename\n";
+  cv::RNG rng(seed);
+  std::filesystem::create_directories(m + "/cam0/data");
+  for (int i = 0; i < images; ++i) {
+    const int64_t t = 1050000000LL + 50000000LL * i;
+    list << t << "," << t << ".png\n";
+    cv::Mat coarse(6, 8, CV_8UC1), img;
+    rng.fill(coarse, cv::RNG::UNIFORM, 0, 256);
+    cv::resize(coarse, img, cv::Size(64, 48), 0, 0, cv::INTER_LINEAR);
+    cv::imwrite(m + "/cam0/data/" + std::to_string(t) + ".png", img);
+  }
+  imu << "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],"
+         "a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n";
+  imu.precision(17);
+  for (int k = 0; k <= 10 * (images + 2); ++k)
+    imu << 1000000000LL + 5000000LL * k << "," << 0.1 * std::sin(0.1 * k) << ",0.02," << 1e-3 * k << ",0.1,"
+        << 0.2 * std::cos(0.05 * k) << ",9.81\n";
+  write_text(m + "/cam0/data.csv", list.str());
+  write_text(m + "/imu0/data.csv", imu.str());
   return dir;
 }
 

@@ -113,7 +113,7 @@ class Ros2Bag : public ::testing::Test {
 protected:
   static void SetUpTestSuite() {
     dir_ = new ovtest::TempDir();
-    folder_ = new Dataset(load_dataset(ovtest::render_flight((*dir_) / "flight", 2.0, 13)));
+    folder_ = new Dataset(load_dataset(ovtest::small_folder((*dir_) / "flight", 20, 13)));
     McapExportOptions e;
     e.kalibr_files = false;
     write_mcap(*folder_, (*dir_) / "all.mcap", e);
@@ -125,7 +125,7 @@ protected:
     delete dir_;
   }
 
-  static void expect_like_folder(const Dataset &m) { ovtest::expect_like_folder(m, *folder_, true, 9); }
+  static void expect_like_folder(const Dataset &m) { ovtest::expect_like_folder(m, *folder_, true, 3); }
   static BagOptions calib() {
     BagOptions o;
     o.calib = {(*dir_) / "flight"};
