@@ -23,6 +23,25 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
 
   // 1. The rows with a residual, in tracks of 3+; the camera's intrinsics and image height.
   const diag::UsedData data = diag::select_data(log, opt, rep);
+  if (data.observations < diag::kMinObservations) {
+    // A log of a platform that did not move (the filter made ZUPTs, no feature update) or of a run too short: valid,
+    // and nothing in it can show an effect. A verdict, not an error.
+    if (opt.have_camera || (opt.fu > 0 && opt.fv > 0)) // given, not fitted: there are no rows to fit them from
+      diag::set_intrinsics(data, opt, log.file, rep);
+    rep.not_testable = "only " + std::to_string(data.observations) +
+                       " usable observations (accepted or gated, in tracks of 3+): no feature update to test (a "
+                       "platform that did not move, or a run too short)";
+    for (size_t c = 0; c < diag::candidate_table().size(); ++c) {
+      CandidateResult cr;
+      cr.key = diag::candidate_table()[c].key;
+      cr.description = diag::candidate_table()[c].description;
+      cr.testable = false;
+      cr.rank = static_cast<int>(c + 1);
+      cr.note = "not testable on this log";
+      rep.candidates.push_back(cr);
+    }
+    return rep;
+  }
   diag::set_intrinsics(data, opt, log.file, rep);
 
   // 2. The residual design: every candidate's effect on the residual, what the tracks' points absorb projected out.
@@ -42,8 +61,19 @@ DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt) {
 
   // 4. Stepwise selection in each family, then the ranking.
   std::vector<size_t> selected;
-  const auto results = diag::test_candidates(d, rep.time_from_rates ? &dr : nullptr, rate_why,
-                                             have_bias ? &db : nullptr, bias_why, opt, rep, selected);
+  auto results = diag::test_candidates(d, rep.time_from_rates ? &dr : nullptr, rate_why, have_bias ? &db : nullptr,
+                                       bias_why, opt, rep, selected);
+  // The inputs of the rates or of the accelerometer's design are there but the log is too short for it: a limit of
+  // this log, not a missing input.
+  const bool rates_short = !rep.time_from_rates && !opt.imu.empty() && opt.have_camera;
+  const bool accel_short = !have_bias && !opt.calibration.empty() && !opt.imu.empty();
+  for (size_t c = 0; c < results.size(); ++c) { // results follow the candidate table
+    const diag::Needs needs = diag::candidate_table()[c].needs;
+    if ((rates_short && needs == diag::Needs::Rates) || (accel_short && needs == diag::Needs::AccelBias)) {
+      results[c].testable = false;
+      results[c].note = "not testable on this log: " + (needs == diag::Needs::Rates ? rate_why : bias_why);
+    }
+  }
   rep.candidates = diag::rank_candidates(results, selected);
 
   // 4b. A focal error the rates name is sized from two views and the gyro, with the focal in the model while the

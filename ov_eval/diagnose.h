@@ -4,7 +4,8 @@
 // Every candidate effect predicts the logged residual r (2 rows per observation, pixels) as a linear function of
 // logged columns, r ≈ X_c·β_c. The candidates are fitted by robust (Huber) weighted least squares and selected by
 // forward stepwise regression: the candidate that removes the largest share of the residual's loss is tested first
-// (significance of its coefficients with standard errors clustered by feature track, and share of loss explained);
+// (significance of its coefficients with standard errors clustered by the time of the updates, and share of loss
+// explained);
 // if it passes, it joins the model and the remaining candidates are tested for what they add beyond it. Nested
 // candidates (offset drift contains a constant offset) are thereby credited only with what their extra terms add.
 // docs/diagnose.md gives each model, its sign convention and the thresholds. The stages live in ov_eval/diagnose/
@@ -78,9 +79,13 @@ struct CandidateResult {
   double explained_added = 0;            ///< share it adds to the candidates selected before it
   double sigma = 0;                      ///< Gaussian-equivalent significance of its terms (Wald, cluster-robust)
   bool explained = false;                ///< verdict: selected by the stepwise procedure
-  int rank = 0;                          ///< 1-based; selected candidates first, in selection order
-  BinnedCurve curve;                     ///< for the plot
-  std::string note;                      ///< why it was skipped or what limits it
+  /// false: not testable on this log — it cannot show the effect at a size that matters (too few independent
+  /// clusters for its terms, or the smallest size it could name is larger than a calibration is plausibly off by;
+  /// the note says which). Not an effect, and not evidence of its absence.
+  bool testable = true;
+  int rank = 0;      ///< 1-based; selected candidates first, in selection order
+  BinnedCurve curve; ///< for the plot
+  std::string note;  ///< why it was skipped or what limits it
 };
 
 struct TimeBin {
@@ -96,6 +101,7 @@ struct UnexplainedStructure {
   double explained = 0; ///< share of the leftover's loss the bin means remove
   double sigma = 0;     ///< Gaussian-equivalent significance of the bin means (Wald, cluster-robust)
   bool flagged = false; ///< sigma and share pass the candidates' bars: the verdict UNEXPLAINED
+  bool testable = true; ///< false: more bin means than the log's independent clusters can test
   std::string largest;  ///< the bin with the largest mean, and that mean (px, u and v)
 };
 
@@ -115,9 +121,13 @@ struct DiagnoseReport {
   /// What the residual keeps beyond its noise after the selected candidates, by time, image region and image speed;
   /// a flagged entry is the verdict UNEXPLAINED (an effect no candidate models).
   std::vector<UnexplainedStructure> unexplained;
+  /// Non-empty: nothing is testable on this log (too few observations, e.g. a platform that did not move, so that
+  /// the filter made no feature update), and why. Every candidate is then listed as not testable.
+  std::string not_testable;
 };
 
-/// Runs every candidate on the log. Throws DataError when the log has too few usable rows to say anything.
+/// Runs every candidate on the log. A log with too few usable rows to say anything gets a report whose candidates are
+/// all not testable (DiagnoseReport::not_testable says why), not an error: a still platform writes such a log.
 DiagnoseReport diagnose(const ResidualLog &log, const DiagnoseOptions &opt = {});
 
 /// Writes diagnose.md, diagnose.json and PNG plots (top candidates, δt per time bin) into out_dir; returns the files.

@@ -1,6 +1,6 @@
 #pragma once
 // Realism presets of `ovton simulate --realism` (docs/simulate.md, "Realism"):
-//  - clean: the renderer as it was before (blotch texture wall to wall, instantaneous images with 1.5 grey levels
+//  - clean: the plain renderer (blotch texture wall to wall, instantaneous images with 1.5 grey levels
 //    of noise, the ADIS16448 datasheet IMU). Kept byte for byte: regression tests rely on it.
 //  - euroc: tuned on the real V1_01 moving cut with `ovton trackstats` (plain room with textured objects, lamps,
 //    auto-exposure with motion blur, PSF, vignetting, shot and read noise, 8 bits) and an IMU error model measured

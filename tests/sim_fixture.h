@@ -23,12 +23,14 @@ inline ovton::core::Dataset feature_flight(const std::string &dir, double durati
   return ovton::core::load_dataset(dir);
 }
 
-/// Options of a run on such a flight: `mode`, ground-truth initialisation, sigma_px matching the data's noise.
+/// Options of a run on such a flight: `mode`, ground-truth initialisation, sigma_px matching the data's noise, and no
+/// coarse t_d search (the filter on its own, from the configured t_d).
 inline ovton::msckf::VioOptions gt_run_options(ovton::msckf::TdMode mode, double sigma_px) {
   ovton::msckf::VioOptions opt;
   opt.td.mode = mode;
+  opt.td.search.enabled = false;
   opt.init.mode = ovton::msckf::InitMode::GroundTruth;
-  opt.update.sigma_px = sigma_px;
+  opt.update.msckf.sigma_px = sigma_px;
   return opt;
 }
 

@@ -2,9 +2,9 @@
 // intrinsics and the rolling-shutter readout, and the propagation's w.r.t. the IMU scale and misalignment, each against
 // finite differences in the state's ⊞ convention (state.h); the IMU block's covariance propagation with them; and a
 // whole run with every calibration on staying consistent.
+#include "estimator_test_util.h"
 #include "fd_check.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_core/math/so3.h"
 #include "ov_eval/nees.h"
 #include "ov_msckf_ton/core/vio_manager.h"
@@ -18,6 +18,7 @@
 #include "sim_fixture.h"
 #include "test_util.h"
 
+#include <optional>
 #include <random>
 
 using namespace ovton::msckf;
@@ -256,12 +257,13 @@ TEST(CalibrationRun, EveryCalibrationOnStaysConsistentOnCleanData) {
   VioOptions opt = ovtest::gt_run_options(TdMode::Sr, 0.5);
   opt.calibration.extrinsics = opt.calibration.intrinsics = opt.calibration.readout = true;
   opt.calibration.imu_intrinsics = true;
-  VioManager vio(opt, data.cam, data.imu_calib);
-  vio.set_groundtruth(data.groundtruth);
+  std::optional<State> last;
+  const auto run = ovtest::run_estimator(data, opt, {ovtest::peek([&](const VioManager &f) { last = f.state(); })});
   ovton::eval::NeesAccumulator nees(data.groundtruth, data.td_truth);
-  vio.set_state_callback([&](const ovton::core::StateSample &s) { nees.add(s); });
-  ovton::core::Replay(data).run(vio);
-  const State &s = vio.state();
+  for (const auto &st : run.traj)
+    nees.add(st);
+  ASSERT_TRUE(last);
+  const State &s = *last;
   const CalibState &c = s.calib;
   const auto sigma = [&](int i) { return std::sqrt(s.P(i, i)); };
   const Eigen::Vector3d e_rot = ovton::core::so3_log(c.R_BC * data.cam.T_BC.topLeftCorner<3, 3>().transpose());

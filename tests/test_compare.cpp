@@ -1,12 +1,11 @@
 // `ovton compare`: the report (tables, plots) over real runs on a small simulated dataset, the parallel runner, mode
 // list parsing, and the command itself end to end when the ovton binary is built beside this test.
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_core/types/errors.h"
 #include "ov_eval/report.h"
-#include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_sim/simulator.h"
 #include "test_util.h"
+#include "tools/compare_report.h"
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -83,26 +82,6 @@ protected:
     dir_.reset();
   }
 
-  /// What tools/compare_report.cpp does per mode through run_dataset(), with the VioManager directly (the test
-  /// binary does not link the CLI).
-  static RunRecord run_mode(const Dataset &data, const std::string &name) {
-    ovton::msckf::VioOptions opt;
-    opt.td.mode = ovton::msckf::parse_td_mode(name);
-    opt.init.mode = ovton::msckf::InitMode::GroundTruth;
-    ovton::msckf::VioManager vio(opt, data.cam, data.imu_calib);
-    if (data.has_td_truth())
-      vio.set_td_oracle([&data](int64_t t) { return data.td_truth_at(t); });
-    vio.set_groundtruth(data.groundtruth);
-    RunRecord rec;
-    vio.set_state_callback([&](const StateSample &s) { rec.traj.push_back(s); });
-    const auto t0 = std::chrono::steady_clock::now();
-    const ReplayStats st = Replay(data).run(vio);
-    rec.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    rec.frames = static_cast<long>(st.images_fed);
-    rec.data_span_s = ns_to_s(data.images.back().t_cam_ns - data.images.front().t_cam_ns);
-    return rec;
-  }
-
   static std::unique_ptr<ovtest::TempDir> dir_;
   static std::unique_ptr<Dataset> data_;
 };
@@ -118,27 +97,26 @@ TEST_F(CompareTest, ThreeModesGiveTableAndPlots) {
   const auto names = parse_name_list("off, sr,oracle", ovton::msckf::all_td_mode_names(), "mode");
   ASSERT_EQ(names, (std::vector<std::string>{"off", "sr", "oracle"}));
 
-  std::atomic<int> calls{0};
-  const auto runs = run_parallel(
-      names, 2, [&](const std::string &n) { return run_mode(data, n); },
-      [&](const RunRecord &, size_t done, size_t total) {
-        EXPECT_EQ(done, static_cast<size_t>(++calls));
-        EXPECT_EQ(total, 3u);
-      });
+  // What `ovton compare --modes off,sr,oracle --init groundtruth` does, through the same function.
+  ovton::cli::CompareRequest req;
+  req.modes = ovton::cli::parse_compare_modes("off,sr,oracle");
+  req.base.init.mode = ovton::msckf::InitMode::GroundTruth;
+  req.out_dir = (*dir_) / "results";
+  req.jobs = 2;
+  req.info.command_line = "ovton compare --dataset " + data.root + " --modes off,sr,oracle --out X --init groundtruth";
+  std::ostringstream log;
+  req.log = &log;
+  const ovton::cli::CompareResult res = ovton::cli::run_compare(data, req);
+  const auto &runs = res.runs;
   ASSERT_EQ(runs.size(), 3u);
-  EXPECT_EQ(calls.load(), 3);
+  EXPECT_EQ(res.failed, 0);
   for (size_t i = 0; i < runs.size(); ++i) {
     EXPECT_EQ(runs[i].name, names[i]); // order of the request, whichever finished first
     EXPECT_TRUE(runs[i].ok()) << runs[i].status;
     EXPECT_GT(runs[i].traj.size(), 100u);
+    EXPECT_NE(log.str().find("[" + std::to_string(i + 1) + "/3]"), std::string::npos) << log.str(); // a line each
   }
-
-  const auto rows = evaluate_runs(runs, data);
-  ReportInfo info;
-  info.command_line = "ovton compare --dataset " + data.root + " --modes off,sr,oracle --out X --init groundtruth";
-  info.jobs = 2;
-  const std::string out = (*dir_) / "results";
-  const ReportFiles f = write_report(out, runs, rows, data, info);
+  const ReportFiles &f = res.files;
 
   const auto csv = read_csv(f.csv);
   ASSERT_EQ(csv.size(), 3u);
@@ -178,7 +156,7 @@ TEST_F(CompareTest, ThreeModesGiveTableAndPlots) {
   EXPECT_EQ(fs::path(f.top_png).filename(), "top.png");
 
   const std::string md = ovtest::read_text(f.md);
-  EXPECT_NE(md.find(info.command_line), std::string::npos);
+  EXPECT_NE(md.find(req.info.command_line), std::string::npos);
   EXPECT_NE(md.find(data.root), std::string::npos);
   EXPECT_NE(md.find("| oracle | ok |"), std::string::npos) << md;
   EXPECT_NE(md.find("![t_d estimate and truth over time](td.png)"), std::string::npos);

@@ -6,6 +6,7 @@
 #include "ov_eval/diagnose.h"
 #include "ov_eval/diagnose/candidates.h"
 #include "ov_eval/diagnose/filter_calibration.h"
+#include "ov_eval/diagnose/regression.h"
 #include "ov_eval/diagnose/selection.h"
 #include "ov_msckf_ton/update/residual_log.h"
 #include "test_util.h"
@@ -228,9 +229,16 @@ TEST(Diagnose, BadLogsFailWithFileAndLine) {
   // A short row and a non-number.
   ovtest::write_text(dir / "short.csv", header + "\n" + good + "\n1,2,3\n");
   ovtest::expect_data_error([&] { load_residual_log(dir / "short.csv"); }, "short.csv", 3, "short row");
-  // Too few rows to say anything: an error, not a verdict.
+  // Too few rows to say anything (a still platform's log holds none): a verdict, every candidate not testable, not an
+  // error and not an effect; the report is written.
   ovtest::write_text(dir / "tiny.csv", header + "\n" + good + "\n");
-  EXPECT_THROW(diagnose(load_residual_log(dir / "tiny.csv")), DataError);
+  const DiagnoseReport tiny = diagnose(load_residual_log(dir / "tiny.csv"));
+  EXPECT_FALSE(tiny.not_testable.empty());
+  ASSERT_EQ(tiny.candidates.size(), ovton::eval::diag::candidate_table().size());
+  for (const auto &c : tiny.candidates)
+    EXPECT_TRUE(!c.explained && !c.testable) << c.key;
+  EXPECT_NE(format_ranking(tiny).find("nothing testable on this log"), std::string::npos) << format_ranking(tiny);
+  EXPECT_EQ(write_diagnose_report(tiny, dir / "tiny_diagnose").size(), 2u); // diagnose.md and .json, no plot
 }
 
 // The calibration log beside a residual log (the filter's calibration per update): its path, a round trip through
@@ -297,4 +305,19 @@ TEST(Diagnose, AccelerometerBiasEvidenceRankedAfterWhatTheImagesShow) {
   const auto alone = diag::rank_candidates(res, {accel});
   EXPECT_EQ(alone[0].key, "accel_scale_axes");
   EXPECT_EQ(alone[0].note, "");
+}
+
+// The bar a candidate's Wald statistic must reach (the "not testable" sizes rest on it): the inverse of the σ, larger
+// with fewer independent clusters than against χ².
+TEST(Diagnose, WaldBarInvertsTheSigmaAndGrowsWithFewClusters) {
+  for (int k : {1, 3, 8}) {
+    double previous = 0;
+    for (double df : {0.0, 40.0, 8.0, 3.0}) {
+      const double W = diag::wald_at_sigma(5.0, k, df);
+      EXPECT_NEAR(diag::wald_to_sigma(W, k, df), 5.0, 1e-6) << k << " " << df;
+      EXPECT_GT(W, previous) << k << " " << df;
+      previous = W;
+    }
+  }
+  EXPECT_NEAR(diag::wald_at_sigma(5.0, 1, 0.0), 25.0, 1e-6);
 }

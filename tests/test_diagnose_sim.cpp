@@ -8,8 +8,8 @@
 //  acceleration (ψ = α·t_r), and the plain flight's ≈ 0.15 rad/s² leaves t_r at ±5 ms (measured: 15.2 ± 4.8 ms for
 //  25 through the filter, 14.0 ± 5.3 ms with the true poses).
 #include "diagnose_test_util.h"
+#include "estimator_test_util.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_core/math/so3.h"
 #include "ov_eval/diagnose.h"
 #include "ov_msckf_ton/core/vio_manager.h"
@@ -182,17 +182,11 @@ DiagnoseReport filter_case(const Plant &p, const std::string &mode, double td_in
   opt.td.mode = ovton::msckf::parse_td_mode(mode);
   opt.td.init_s = td_init_s;
   opt.init.mode = ovton::msckf::InitMode::GroundTruth;
-  opt.update.sigma_px = o.features.pixel_noise;
+  opt.update.msckf.sigma_px = o.features.pixel_noise;
   opt.calibration = calibration;
-  ovton::msckf::VioManager vio(opt, data.cam, data.imu_calib);
-  vio.set_groundtruth(data.groundtruth);
+  opt.td.search.enabled = false; // the filter alone, from td_init_s
   const std::string log_file = dir / "res.csv";
-  {
-    ovton::msckf::ResidualLogWriter log(log_file);
-    vio.set_residual_log(&log);
-    Replay(data).run(vio);
-    vio.set_residual_log(nullptr);
-  }
+  ovtest::run_estimator(data, opt, {std::make_shared<ovton::msckf::ResidualLogObserver>(log_file)});
   DiagnoseOptions dopt = diagnose_options(data); // with the calibration log, as `ovton diagnose` reads it
   dopt.calibration = load_calibration_log(calibration_log_path(log_file));
   if (edit)

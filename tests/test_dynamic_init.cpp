@@ -1,9 +1,9 @@
 // Dynamic initialisation (ov_msckf_ton/init): pre-integration against the trajectory it integrates, the window solver
 // on synthetic tracks with known biases, `auto` telling still from moving, and the real moving EuRoC cut without ground
 // truth against the ground-truth start.
+#include "estimator_test_util.h"
 #include "ov_core/cam/camera_model.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_core/math/so3.h"
 #include "ov_eval/init_check.h"
 #include "ov_eval/metrics.h"
@@ -158,7 +158,7 @@ TEST(DynamicInit, RecoversMovingStateAndBiases) {
   for (int64_t t_start = traj.t_begin_ns() + 1000000000LL; trials < 24; t_start += 1100000000LL, ++trials) {
     const SyntheticWindow w = synthetic_window(traj, cam, t_start, bg, ba, rng, rng, 0.5);
     DynamicInitOptions o;
-    const DynamicInitResult r = dynamic_initialize(w.frames, w.imu, T_BC, 458.0, 9.81, 1e-4, 1e-4, o);
+    const DynamicInitResult r = dynamic_initialize(w.frames, w.imu, T_BC, 458.0, 9.81, 1e-4, 1e-4, 1.0, o);
     if (!r.ok) {
       std::cout << "trial " << trials << ": " << r.why << "\n";
       continue;
@@ -195,7 +195,7 @@ TEST(DynamicInit, CovarianceMatchesMonteCarloSpread) {
   const ovton::core::CameraModel cam(ovton::sim::euroc_cam0_calib());
   const Eigen::Vector3d bg(0.004, -0.02, 0.03), ba(0.05, -0.08, 0.1);
   DynamicInitOptions o;
-  o.sigma_px = 0.5;
+  const double sigma_px = 0.5;
   o.max_sigma_rollpitch_deg = o.max_sigma_vel = 1e9; // the spread is measured, not gated
   const int64_t t_start = traj.t_begin_ns() + 3000000000LL;
   std::mt19937 noise_rng(11);
@@ -204,8 +204,9 @@ TEST(DynamicInit, CovarianceMatchesMonteCarloSpread) {
   Eigen::Matrix<double, 5, 1> mean = Eigen::Matrix<double, 5, 1>::Zero();
   for (int i = 0; i < runs; ++i) {
     std::mt19937 landmark_rng(7); // the same scene every run
-    const SyntheticWindow w = synthetic_window(traj, cam, t_start, bg, ba, landmark_rng, noise_rng, o.sigma_px);
-    const DynamicInitResult r = dynamic_initialize(w.frames, w.imu, cam.calib().T_BC, 458.0, 9.81, 1e-4, 1e-4, o);
+    const SyntheticWindow w = synthetic_window(traj, cam, t_start, bg, ba, landmark_rng, noise_rng, sigma_px);
+    const DynamicInitResult r =
+        dynamic_initialize(w.frames, w.imu, cam.calib().T_BC, 458.0, 9.81, 1e-4, 1e-4, sigma_px, o);
     ASSERT_TRUE(r.ok) << r.why;
     const auto e = tilt_velocity_error(r, w.truth);
     const auto C = tilt_velocity_cov(r, o.sigma_inflation);
@@ -243,7 +244,7 @@ TEST(DynamicInit, RefusesAStillWindow) {
       frames[k].obs.emplace_back(i, Eigen::Vector2d(0.01 * static_cast<double>(i) - 0.2, 0.005 * (i % 7)));
   }
   const DynamicInitResult r =
-      dynamic_initialize(frames, imu, cam.calib().T_BC, 458.0, 9.81, 1e-4, 1e-4, DynamicInitOptions{});
+      dynamic_initialize(frames, imu, cam.calib().T_BC, 458.0, 9.81, 1e-4, 1e-4, 1.0, DynamicInitOptions{});
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.why.find("too little image motion"), std::string::npos) << r.why;
 }
@@ -259,14 +260,12 @@ struct CutRun {
 CutRun run_cut(const ovton::core::Dataset &d, InitMode mode) {
   VioOptions opt = load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
   opt.init.mode = mode;
-  VioManager vio(opt, d.cam, d.imu_calib);
-  if (mode == InitMode::GroundTruth)
-    vio.set_groundtruth(d.groundtruth);
+  opt.td.search.enabled = false; // the initialisers and the filter, from the configured t_d
+  const ovtest::EstimatorRun run = ovtest::run_estimator(d, opt);
   CutRun r;
-  vio.set_state_callback([&](const ovton::core::StateSample &s) { r.traj.push_back(s); });
-  ovton::core::Replay(d).run(vio);
-  r.init_message = vio.init_message();
-  r.images_before_init = vio.counters().images_before_init;
+  r.traj = run.traj;
+  r.init_message = run.report.init_message;
+  r.images_before_init = run.report.counters.images_before_init;
   return r;
 }
 

@@ -3,10 +3,10 @@
 // after initialisation (one the reader's range check lets through) must not come out as NaN rows.
 #include "io_test_util.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_core/types/errors.h"
 #include "ov_msckf_ton/core/filter_health.h"
 #include "ov_msckf_ton/core/vio_manager.h"
+#include "ov_msckf_ton/estimator/dataset_player.h"
 #include "ov_sim/simulator.h"
 #include "test_util.h"
 
@@ -176,12 +176,14 @@ TEST(FilterHealth, AbsurdImuReadingAfterInitialisationStopsTheRun) {
 
   VioOptions opt;
   opt.init.mode = InitMode::GroundTruth;
-  VioManager vio(opt, data.cam, data.imu_calib);
-  vio.set_groundtruth(data.groundtruth);
+  opt.td.search.enabled = false;
   std::vector<ovton::core::StateSample> rows;
-  vio.set_state_callback([&](const ovton::core::StateSample &s) { rows.push_back(s); });
+  ovton::EstimatorSetup setup = ovton::setup_for(data, opt);
+  setup.threaded = false;
+  ovton::Estimator est(std::move(setup));
+  est.add_state_callback([&](const ovton::core::StateSample &s) { rows.push_back(s); });
   try {
-    ovton::core::Replay(data).run(vio);
+    ovton::play(data, est);
     FAIL() << "a run through a 4000 m/s^2 spike ended normally with " << rows.size() << " rows";
   } catch (const ovton::core::EstimatorFailure &e) {
     EXPECT_GT(e.t_ns(), data.imu[k].t_imu_ns) << e.what();

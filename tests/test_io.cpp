@@ -1,7 +1,6 @@
-// Dataset readers, trajectory files and replay: the real EuRoC folder, hand-made folders, and bad input.
+// Dataset readers and trajectory files: the real EuRoC folder, hand-made folders, and bad input.
 #include "io_test_util.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_core/io/trajectory_io.h"
 #include "ov_core/types/errors.h"
 #include "test_util.h"
@@ -217,49 +216,6 @@ TEST(TrajectoryFiles, PositionOnlyAndBadRows) {
   expect_data_error([&] { read_trajectory(tmp / "cols.csv"); }, "cols.csv", 1, "unknown layout");
   write_text(tmp / "empty.csv", "#only a header\n");
   expect_data_error([&] { read_trajectory(tmp / "empty.csv"); }, "empty.csv", 0, "no rows");
-}
-
-namespace {
-struct RecordingConsumer : ReplayConsumer {
-  double td = 0.0;
-  std::vector<std::pair<char, int64_t>> events;
-  void on_imu(const ImuData &m) override { events.push_back({'i', m.t_imu_ns}); }
-  void on_image(const ImageEntry &e) override { events.push_back({'c', e.t_cam_ns}); }
-  double td_for_image_s(int64_t) const override { return td; }
-};
-} // namespace
-
-TEST(Replay, FeedsImuUpToImageImuClockTime) {
-  std::vector<ImuData> imu(101);
-  for (int i = 0; i <= 100; ++i)
-    imu[i].t_imu_ns = 5000000LL * i; // 200 Hz over 0.5 s
-  std::vector<ImageEntry> img;
-  for (int k = 1; k <= 9; ++k)
-    img.push_back({50000000LL * k, "", {}, 0, {}}); // 20 Hz camera stamps
-  for (double td : {0.0, 0.012, -0.0125}) {
-    RecordingConsumer c;
-    c.td = td;
-    const ReplayStats st = Replay(img, imu).run(c);
-    EXPECT_EQ(st.images_fed + st.images_skipped, img.size());
-    int64_t last_imu = -1;
-    size_t n_img = 0;
-    for (const auto &[kind, t] : c.events) {
-      if (kind == 'i') {
-        EXPECT_GT(t, last_imu);
-        last_imu = t;
-      } else {
-        ++n_img;
-        // The IMU already fed must reach the image's IMU-clock time t_cam + td.
-        EXPECT_GE(last_imu, t + s_to_ns(td)) << "td " << td;
-        EXPECT_LT(last_imu - (t + s_to_ns(td)), 5000000LL) << "fed more than one reading past the image";
-      }
-    }
-    EXPECT_EQ(n_img, st.images_fed);
-  }
-  RecordingConsumer late;
-  late.td = 0.1; // the last images fall beyond the IMU log
-  const ReplayStats st = Replay(img, imu).run(late);
-  EXPECT_EQ(st.images_skipped, 1u);
 }
 
 TEST(ScubeReader, BundledSample) {

@@ -1,8 +1,8 @@
 // Real data: the real moving EuRoC cut (../shared/data/euroc_v1_01_moving, 4.45 s in flight), its image stamps
 // shifted by a constant offset with `perturb`, initialised from its ground truth: `sr` must recover the planted
 // offset to within 1 ms. Skips without ../shared/data.
+#include "estimator_test_util.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_eval/metrics.h"
 #include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_msckf_ton/core/vio_options.h"
@@ -30,11 +30,8 @@ RealRun run_sr_on_shifted_cut(double td_ms) {
       ovton::msckf::load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
   opt.td.mode = ovton::msckf::TdMode::Sr;
   opt.init.mode = ovton::msckf::InitMode::GroundTruth;
-  ovton::msckf::VioManager vio(opt, d.cam, d.imu_calib);
-  vio.set_groundtruth(d.groundtruth);
-  std::vector<ovton::core::StateSample> traj;
-  vio.set_state_callback([&](const ovton::core::StateSample &s) { traj.push_back(s); });
-  ovton::core::Replay(d).run(vio);
+  opt.td.search.enabled = false; // the filter alone: how far its own t_d converges from 0
+  const std::vector<ovton::core::StateSample> traj = ovtest::run_estimator(d, opt).traj;
   RealRun r;
   if (traj.empty())
     return r;

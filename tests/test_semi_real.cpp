@@ -2,8 +2,8 @@
 // declare the noise that log really has, as a fully synthetic folder does (config/sim takes the folder's values as
 // the truth). With the ADIS16448 datasheet declared, `sr` on the real cut's span was overconfident (NEES 58 / 108)
 // and 6 cm off instead of 1 cm. Skips without ../shared/data.
+#include "estimator_test_util.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_eval/metrics.h"
 #include "ov_eval/nees.h"
 #include "ov_msckf_ton/core/vio_manager.h"
@@ -45,17 +45,13 @@ TEST(SemiReal, SrIsConsistentOnTheRealCutsSpan) {
   ovton::sim::write_simulation(o);
 
   const ovton::core::Dataset d = ovton::core::load_dataset(o.out_dir);
-  const ovton::msckf::VioOptions opt =
+  ovton::msckf::VioOptions opt =
       ovton::msckf::load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/sim/estimator_config.yaml");
-  ovton::msckf::VioManager vio(opt, d.cam, d.imu_calib);
-  vio.set_groundtruth(d.groundtruth);
+  opt.td.search.enabled = false; // the filter alone, from the configured t_d
+  const std::vector<ovton::core::StateSample> traj = ovtest::run_estimator(d, opt).traj;
   ovton::eval::NeesAccumulator nees(d.groundtruth, d.td_truth);
-  std::vector<ovton::core::StateSample> traj;
-  vio.set_state_callback([&](const ovton::core::StateSample &s) {
+  for (const auto &s : traj)
     nees.add(s);
-    traj.push_back(s);
-  });
-  ovton::core::Replay(d).run(vio);
   ASSERT_FALSE(traj.empty()) << "the filter produced no trajectory";
   const ovton::eval::EvalResult e = ovton::eval::evaluate(traj, d.groundtruth, {}, ovton::eval::EvalOptions{});
   std::cout << "[ measured ] semi-real V1_01 span: NEES orientation " << nees.stats().ori() << ", position "

@@ -1,8 +1,8 @@
 // SLAM features (ov_msckf_ton/update/updater_slam.h): the landmark measurement Jacobians against finite differences
 // in the state's ⊞ convention, delayed initialisation consistent over Monte-Carlo trials, and a whole run.
+#include "estimator_test_util.h"
 #include "fd_check.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_core/math/so3.h"
 #include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_msckf_ton/state/state_helper.h"
@@ -13,6 +13,7 @@
 #include "sim_fixture.h"
 #include "test_util.h"
 
+#include <optional>
 #include <random>
 
 using namespace ovton::msckf;
@@ -298,13 +299,14 @@ TEST(SlamRun, LandmarksEnterLeaveAndKeepTheFilterConsistent) {
   const ovton::core::Dataset data = ovtest::feature_flight(tmp / "sim", 10.0, 4, 0.5);
   VioOptions opt = ovtest::gt_run_options(TdMode::Sr, 0.5);
   opt.slam.max_features = 50;
-  VioManager vio(opt, data.cam, data.imu_calib);
-  vio.set_groundtruth(data.groundtruth);
   size_t max_landmarks = 0;
-  vio.set_state_callback(
-      [&](const ovton::core::StateSample &) { max_landmarks = std::max(max_landmarks, vio.state().landmarks.size()); });
-  ovton::core::Replay(data).run(vio);
-  const VioCounters &c = vio.counters();
+  std::optional<State> last;
+  const auto run = ovtest::run_estimator(data, opt, {ovtest::peek([&](const VioManager &f) {
+                                           max_landmarks = std::max(max_landmarks, f.state().landmarks.size());
+                                           last = f.state();
+                                         })});
+  ASSERT_TRUE(last);
+  const VioCounters &c = run.report.counters;
   std::cout << "[slam run] " << c.slam_initialised << " landmarks initialised, " << c.slam_updates
             << " observations used, " << c.slam_gated << " gated; at most " << max_landmarks << " in the state\n";
   EXPECT_GT(c.slam_initialised, 50);
@@ -314,9 +316,9 @@ TEST(SlamRun, LandmarksEnterLeaveAndKeepTheFilterConsistent) {
   EXPECT_LT(c.slam_gated, 0.15 * (c.slam_updates + c.slam_gated));
   // Every landmark index is inside the covariance and distinct.
   std::set<int> idx;
-  for (const auto &[id, l] : vio.state().landmarks) {
+  for (const auto &[id, l] : last->landmarks) {
     EXPECT_GE(l.index, 0);
-    EXPECT_LE(l.index + 3, vio.state().dim());
+    EXPECT_LE(l.index + 3, last->dim());
     EXPECT_TRUE(idx.insert(l.index).second);
   }
 }

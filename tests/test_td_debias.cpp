@@ -163,10 +163,9 @@ TEST(TdDebias, ItsPredictionStencilIsItsDerivative) {
   }
   db.remove_observations_older_than(sc.stamps[2]);
   FvonProviderOptions o;
-  o.stencils = true;
   o.gate_px_s = 0; // the derivative is checked whatever the prediction's quality
   o.its.train.max_epochs = 300;
-  FvonVelocityProvider fvon(sc.calib, o);
+  FvonVelocityProvider fvon(sc.calib, o, /*stencils=*/true);
   UpdaterMSCKF up(sc.calib);
   const State s = make_state(sc, 0.0, 0.002, 0.004, 0.005);
   fvon.prepare(s, all_features(db), up);

@@ -1,8 +1,8 @@
 // FVON and TPN inside the filter (paper Algorithm 1): on a short feature-level simulation, FVON gives features whose
 // first observation has no tracked velocity a t_d constraint, the networks' cost is reported, and TPN drives the
 // t_d mean between images.
+#include "estimator_test_util.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_sim/simulator.h"
 #include "test_util.h"
@@ -29,22 +29,21 @@ ModeRun run_mode(const ovton::core::Dataset &data, TdMode mode, const VioOptions
   VioOptions opt = base;
   opt.td.mode = mode;
   opt.init.mode = InitMode::GroundTruth;
-  VioManager vio(opt, data.cam, data.imu_calib);
-  vio.set_groundtruth(data.groundtruth);
+  opt.td.search.enabled = false; // the filter alone, from the configured t_d
   ModeRun r;
-  vio.set_state_callback([&](const ovton::core::StateSample &s) {
-    r.td_hat.push_back(s.td_s);
-    const TpnDriver *t = vio.tpn();
-    r.tpn_next.push_back(t && t->has_prediction() ? t->prediction() : std::nan(""));
-  });
-  ovton::core::Replay(data).run(vio);
-  EXPECT_TRUE(vio.initialized()) << vio.init_message();
-  EXPECT_EQ(vio.counters().images_before_init, 0);
-  r.counters = vio.counters();
-  r.times = vio.times();
-  if (vio.fvon())
-    r.fvon = vio.fvon()->stats();
-  r.tpn_clamped = vio.td_model().stats().rate_clamped;
+  const auto run =
+      ovtest::run_estimator(data, opt, {ovtest::peek([&](const VioManager &f) {
+                              r.td_hat.push_back(f.state().td);
+                              const TpnDriver *t = f.tpn();
+                              r.tpn_next.push_back(t && t->has_prediction() ? t->prediction() : std::nan(""));
+                              if (f.fvon())
+                                r.fvon = f.fvon()->stats();
+                              r.tpn_clamped = f.td_model().stats().rate_clamped;
+                            })});
+  EXPECT_FALSE(run.traj.empty()) << run.report.init_message;
+  EXPECT_EQ(run.report.counters.images_before_init, 0);
+  r.counters = run.report.counters;
+  r.times = run.report.times;
   return r;
 }
 
@@ -73,9 +72,9 @@ std::unique_ptr<ovton::core::Dataset> simulate_constant_10ms(const ovtest::TempD
 /// fit, only on FVON supplying a velocity where the constant-speed model has none.
 VioOptions fast_networks() {
   VioOptions o;
-  o.ton.its_epochs = 200;
-  o.ton.f2f_epochs = 300;
-  o.ton.tpn_epochs = 300;
+  o.ton.fvon.its.train.max_epochs = 200;
+  o.ton.fvon.f2f.train.max_epochs = 300;
+  o.ton.tpn.tpn.train.max_epochs = 300;
   return o;
 }
 
@@ -128,8 +127,8 @@ TEST(TonFilter, FvonGateKeepsOnlyPredictionsThatAgreeWithTheTrack) {
   ovtest::TempDir dir;
   const auto data = simulate_constant_10ms(dir);
   VioOptions open = fast_networks(), shut = fast_networks(), normal = fast_networks();
-  open.ton.fvon_gate_px_s = 0.0;  // no check
-  shut.ton.fvon_gate_px_s = 1e-6; // nothing agrees this well with a noisy track
+  open.ton.fvon.gate_px_s = 0.0;  // no check
+  shut.ton.fvon.gate_px_s = 1e-6; // nothing agrees this well with a noisy track
   const ModeRun a = run_mode(*data, TdMode::Fvon, open);
   const ModeRun b = run_mode(*data, TdMode::Fvon, shut);
   const ModeRun c = run_mode(*data, TdMode::Fvon, normal);
@@ -211,17 +210,15 @@ TEST(TonFilter, TpnOnNoiseFreeDrift) {
   VioOptions opt = fast_networks();
   opt.td.mode = TdMode::Sir;
   opt.init.mode = InitMode::GroundTruth;
-  VioManager vio(opt, data->cam, data->imu_calib);
-  vio.set_groundtruth(data->groundtruth);
+  opt.td.search.enabled = false;
   // Table I's 1000 epochs per frame, as the filter uses by default (fast_networks() lowers them for speed).
   TpnDriver shadow{TpnDriverOptions()};
   ModeRun sir;
-  vio.set_state_callback([&](const ovton::core::StateSample &st) {
+  for (const auto &st : ovtest::run_estimator(*data, opt).traj) {
     sir.td_hat.push_back(st.td_s);
     shadow.step(st.td_s);
     sir.tpn_next.push_back(shadow.has_prediction() ? shadow.prediction() : std::nan(""));
-  });
-  ovton::core::Replay(*data).run(vio);
+  }
   const PredictionErrors open_est = prediction_errors(sir, [&](size_t k) { return sir.td_hat[k]; });
   const PredictionErrors open_truth = prediction_errors(sir, truth);
   std::cout << "[ton filter] TPN beside sir, " << open_est.n << " predictions: mean |t_d^TPN(K) - t_d(K)| "

@@ -1,6 +1,6 @@
 // The velocity log (ov_core/io/velocity_log.h) and its scoring against the truth (ov_eval/velocity_truth.h).
+#include "estimator_test_util.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_core/io/velocity_log.h"
 #include "ov_eval/velocity_truth.h"
 #include "ov_msckf_ton/core/vio_manager.h"
@@ -61,16 +61,10 @@ TEST(VelocityTruth, NoiseFreeTracksScoreNearZeroAndNetworksAreScored) {
   // frame of image acceleration; FVON (mode fvon) predicts with both networks for every new feature.
   ovtest::TempDir tmp;
   const ovton::core::Dataset data = ovtest::feature_flight(tmp / "sim", 6.0, 3, 0.0);
-  VioOptions opt = ovtest::gt_run_options(TdMode::Fvon, VioOptions().update.sigma_px);
-  opt.ton.its_epochs = 100;
-  opt.ton.f2f_epochs = 150;
-  VioManager vio(opt, data.cam, data.imu_calib);
-  vio.set_groundtruth(data.groundtruth);
-  {
-    ovton::core::VelocityLogWriter log(tmp / "vel.csv");
-    vio.set_velocity_log(&log);
-    ovton::core::Replay(data).run(vio);
-  }
+  VioOptions opt = ovtest::gt_run_options(TdMode::Fvon, VioOptions().update.msckf.sigma_px);
+  opt.ton.fvon.its.train.max_epochs = 100;
+  opt.ton.fvon.f2f.train.max_epochs = 150;
+  ovtest::run_estimator(data, opt, {std::make_shared<ovton::msckf::VelocityLogObserver>(tmp / "vel.csv")});
   const auto rows = ovton::core::read_velocity_log(tmp / "vel.csv");
   ASSERT_GT(rows.size(), 1000u);
   const ovton::eval::VelocityEvalResult r = ovton::eval::evaluate_velocities(rows, data);

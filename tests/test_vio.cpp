@@ -1,6 +1,6 @@
 // Estimator configuration, static initialisation, and whole runs of the VioManager.
+#include "estimator_test_util.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_core/types/errors.h"
 #include "ov_msckf_ton/core/static_init.h"
 #include "ov_msckf_ton/core/vio_manager.h"
@@ -87,18 +87,16 @@ TEST(StaticInit, RealEurocStillStartMatchesGroundTruth) {
 TEST(VioRun, RealEurocStillStartStaysPut) {
   OVTEST_REQUIRE_SHARED_DATA();
   const ovton::core::Dataset d = ovton::core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_micro");
-  const VioOptions opt = load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
-  VioManager vio(opt, d.cam, d.imu_calib);
-  std::vector<ovton::core::StateSample> traj;
-  vio.set_state_callback([&](const ovton::core::StateSample &s) { traj.push_back(s); });
-  ovton::core::Replay(d).run(vio);
-  ASSERT_TRUE(vio.initialized()) << vio.init_message();
-  ASSERT_GT(traj.size(), 50u);
+  VioOptions opt = load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
+  opt.td.search.enabled = false; // still images: nothing to search
+  const ovtest::EstimatorRun run = ovtest::run_estimator(d, opt);
+  const std::vector<ovton::core::StateSample> &traj = run.traj;
+  ASSERT_GT(traj.size(), 50u) << run.report.init_message;
   double max_move = 0.0;
   for (const auto &s : traj)
     max_move = std::max(max_move, (s.p - traj.front().p).norm());
   std::cout << "[still start] " << traj.size() << " poses, largest displacement " << max_move * 100 << " cm, "
-            << vio.counters().zupts << " zero-velocity updates\n";
+            << run.report.counters.zupts << " zero-velocity updates\n";
   EXPECT_LT(max_move, 0.05);
   // Gravity from static initialisation agrees with the ground truth's tilt.
   const ovton::core::StateSample &g = d.groundtruth.front();

@@ -1,8 +1,8 @@
 // A gentle flight with a vibrating gyro: the clone's t_d Jacobian must not take the vibration for motion
 // (docs/robustness.md, "Weak excitation").
+#include "estimator_test_util.h"
 #include "io_test_util.h"
 #include "ov_core/io/dataset.h"
-#include "ov_core/io/replay.h"
 #include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_sim/realism.h"
 #include "ov_sim/simulator.h"
@@ -27,13 +27,13 @@ TEST(WeakExcitation, VibratingGyroDoesNotMakeTdLookObservable) {
   const ovton::core::Dataset data = ovton::core::load_dataset(o.out_dir);
   const auto final_td = [&](double window_s) {
     ovton::msckf::VioOptions opt = ovtest::gt_run_options(ovton::msckf::TdMode::Sr, 0.0);
-    opt.update.sigma_px = 1.0;
+    opt.update.msckf.sigma_px = 1.0;
     opt.td.jacobian_rate_window_s = window_s;
-    ovton::msckf::VioManager vio(opt, data.cam, data.imu_calib);
-    vio.set_groundtruth(data.groundtruth);
-    ovton::core::Replay(data).run(vio);
-    const ovton::msckf::State &s = vio.state();
-    return std::make_pair(s.td, s.td_sigma());
+    std::pair<double, double> last;
+    ovtest::run_estimator(data, opt, {ovtest::peek([&](const ovton::msckf::VioManager &f) {
+                            last = {f.state().td, f.state().td_sigma()};
+                          })});
+    return last;
   };
   const auto [td_reading, sd_reading] = final_td(0.0);
   const auto [td_mean, sd_mean] = final_td(0.1);

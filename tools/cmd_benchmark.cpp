@@ -35,13 +35,14 @@ namespace {
 struct ModeBench {
   std::string mode;
   long images = 0, images_before_init = 0, updates = 0, features_used = 0;
-  long images_pretracked = 0; ///< images whose tracks the coarse t_d search handed over (no load or track cost here)
   double data_span_s = 0, wall_s = 0;
   // Mean cost per processed image [ms]. `other` is what the stage clocks do not see: IMU hand-over, replay,
   // trajectory output and the progress bar; total = wall / images, so the columns add up.
   double load = 0, track = 0, prop = 0, update = 0, nets = 0, other = 0, total = 0;
-  /// With --prefetch the tracking thread's time per image [ms]; not in `total` (`load` is the filter's wait for it).
+  /// With --prefetch the tracking thread's time per image [ms]; not in `total`.
   double track_thread = 0;
+  /// From an image's feed to its state out [ms], median and 99th percentile (the streaming API's latency).
+  double latency_p50 = 0, latency_p99 = 0;
   /// Process CPU time (user + system) per image [ms]: what a loaded, shared machine distorts least; with
   /// --prefetch it includes the decoding and tracking threads.
   double cpu = 0;
@@ -54,6 +55,14 @@ struct ModeBench {
   double realtime() const { return wall_s > 0 ? data_span_s / wall_s : 0.0; }
   double features_per_frame() const { return images > 0 ? static_cast<double>(features_used) / images : 0.0; }
 };
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty())
+    return std::nan("");
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
 
 std::string loadavg() {
   std::ifstream f("/proc/loadavg");
@@ -143,26 +152,27 @@ ModeBench bench_mode(const ovton::core::Dataset &data, RunRequest req, const std
     if (std::isfinite(v))
       b.peak = std::max(b.peak, v);
 
-  const auto &c = r.counters;
-  const auto &t = r.times;
+  const auto &c = r.report.counters;
+  const auto &t = r.report.times;
   b.images = c.images;
   b.images_before_init = c.images_before_init;
-  b.images_pretracked = static_cast<long>(r.images_pretracked);
   b.updates = c.updates;
   b.features_used = c.features_used;
-  b.data_span_s = r.data_span_s;
-  b.wall_s = r.wall_s;
-  b.interrupted = r.interrupted;
-  b.init_message = r.init_message;
+  b.data_span_s = r.play.data_span_s;
+  b.wall_s = r.play.wall_s;
+  b.interrupted = r.play.interrupted;
+  b.init_message = r.report.init_message;
+  b.latency_p50 = percentile(r.report.latency_ms, 0.5);
+  b.latency_p99 = percentile(r.report.latency_ms, 0.99);
   if (b.images > 0) {
     const double n = static_cast<double>(b.images);
-    b.load = t.image_load / n;
+    b.load = r.play.decode_ms / n;
     b.track = t.tracking / n;
     b.track_thread = t.tracking_thread / n;
     b.prop = t.propagation / n;
     b.update = t.update / n;
     b.nets = t.networks / n;
-    b.total = r.wall_s * 1e3 / n;
+    b.total = r.play.wall_s * 1e3 / n;
     b.cpu = cpu_s * 1e3 / n;
     b.other = b.total - (b.load + b.track + b.prop + b.update + b.nets);
   }
@@ -186,6 +196,11 @@ void print_tables(const std::vector<ModeBench> &res, std::ostream &os) {
     os << line;
   }
   os << "cpu = process CPU time per image [ms] (user + system); cpu/first: its ratio to the first mode's\n";
+  os << "latency [ms] from an image's feed to its state out (the streaming API's; with the coarse t_d search it "
+        "includes the images held while it decides):";
+  for (const auto &b : res)
+    os << " " << b.mode << " p50 " << num(b.latency_p50, 2) << ", p99 " << num(b.latency_p99, 2) << ";";
+  os << "\n";
   os << "\nresident memory [MB] at 25/50/75/100 % of the images; growth = 100 % - 25 %\n";
   std::snprintf(line, sizeof(line), "%-7s %8s %8s %8s %8s %8s %8s %8s\n", "mode", "start", "25%", "50%", "75%", "100%",
                 "peak", "growth");
@@ -204,15 +219,11 @@ void print_tables(const std::vector<ModeBench> &res, std::ostream &os) {
     os << "Modes after the first ran after it in the same process, on the same data already in memory and under the "
           "same machine load: read the 'x first' column as a ratio measured in the same run, not as an absolute.\n";
   for (const auto &b : res) {
-    if (b.images_pretracked > 0)
-      os << b.mode << ": the tracks of " << b.images_pretracked << " of " << b.images
-         << " images came from the coarse t_d search (their decoding and tracking are in cpu, not in load and track)\n";
     if (b.images_before_init > 0)
       os << b.mode << ": " << b.images_before_init << " of " << b.images
          << " images came before initialisation (load and tracking only)\n";
     if (b.track_thread > 0)
-      os << b.mode << ": tracking ran on its own thread, " << b.track_thread
-         << " ms/image there (not in total; load is the filter's wait for it)\n";
+      os << b.mode << ": tracking ran on its own thread, " << b.track_thread << " ms/image there (not in total)\n";
     if (b.interrupted)
       os << b.mode << ": interrupted; numbers cover the images processed\n";
   }
@@ -233,9 +244,8 @@ void write_json(const std::string &file, const std::vector<ModeBench> &res, cons
   for (size_t i = 0; i < res.size(); ++i) {
     const auto &b = res[i];
     out << (i ? "," : "") << "\n    {\"mode\": " << ovton::core::json_string(b.mode) << ", \"images\": " << b.images
-        << ", \"images_before_init\": " << b.images_before_init << ", \"images_pretracked\": " << b.images_pretracked
-        << ", \"updates\": " << b.updates << ", \"features_used\": " << b.features_used
-        << ", \"features_per_frame\": " << num(b.features_per_frame())
+        << ", \"images_before_init\": " << b.images_before_init << ", \"updates\": " << b.updates
+        << ", \"features_used\": " << b.features_used << ", \"features_per_frame\": " << num(b.features_per_frame())
         << ",\n     \"data_span_s\": " << num(b.data_span_s) << ", \"wall_s\": " << num(b.wall_s)
         << ", \"realtime_factor\": " << num(b.realtime())
         << ", \"ratio_to_first\": " << num(res.front().total > 0 ? b.total / res.front().total : NAN)
@@ -243,6 +253,7 @@ void write_json(const std::string &file, const std::vector<ModeBench> &res, cons
         << ", \"tracking_thread\": " << num(b.track_thread, 4) << ", \"propagation\": " << num(b.prop, 4)
         << ", \"update\": " << num(b.update, 4) << ", \"networks\": " << num(b.nets, 4)
         << ", \"other\": " << num(b.other, 4) << ", \"total\": " << num(b.total, 4) << ", \"cpu\": " << num(b.cpu, 4)
+        << "},\n     \"latency_ms\": {\"p50\": " << num(b.latency_p50, 3) << ", \"p99\": " << num(b.latency_p99, 3)
         << "},\n     \"rss_mb\": {\"start\": " << num(b.rss_start, 2) << ", \"p25\": " << num(b.rss_quarter[0], 2)
         << ", \"p50\": " << num(b.rss_quarter[1], 2) << ", \"p75\": " << num(b.rss_quarter[2], 2)
         << ", \"p100\": " << num(b.rss_quarter[3], 2) << ", \"peak\": " << num(b.peak, 2)
@@ -262,7 +273,7 @@ int cmd_benchmark(const Args &args) {
       "ovton benchmark: per-frame cost by stage, x real time and resident memory, mode after mode on one thread");
   std::string config, dataset, generate_dir, modes_str = "sr", init, json;
   double gen_seconds = 30.0;
-  bool quiet = false, no_track_thread = false;
+  bool quiet = false, threaded = false, realtime = false;
   RunRequest req;
   desc.add_options()("help,h", "this help")                                                                       //
       ("dataset,d", po::value(&dataset), "dataset folder (EuRoC or SCube) or ROS bag (.bag)")                     //
@@ -274,18 +285,19 @@ int cmd_benchmark(const Args &args) {
        "static|groundtruth|auto|dynamic (overrides the config; groundtruth with --generate)") //
       ("max-images", po::value(&req.max_images), "stop each mode after this many images")     //
       ("json", po::value(&json), "also write the numbers as JSON")                            //
-      ("prefetch", po::bool_switch(&req.prefetch),
-       "decode and track the next images on threads of their own (as `ovton run` does); `load` is then the wait for "
-       "one") //
-      ("no-track-thread", po::bool_switch(&no_track_thread),
-       "with --prefetch: track on the filter's thread, only decode on a second one") //
+      ("realtime", po::bool_switch(&realtime),
+       "feed the recording at its own pace, as sensors deliver it: the latency line is then a live system's (the "
+       "cost columns still hold; x realtm is 1)") //
+      ("prefetch", po::bool_switch(&threaded),
+       "track and filter on threads of their own while the next image is decoded (as `ovton run` does)") //
       ("quiet,q", po::bool_switch(&quiet), "no progress bars");
   ovton::core::BagOptions bag_opt;
   add_bag_options(desc, bag_opt);
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
-  req.track_thread = !no_track_thread;
+  req.threaded = threaded;
+  req.pace = realtime ? 1.0 : 0.0;
   if (dataset.empty() && generate_dir.empty())
     throw ovton::core::UsageError("give --dataset DIR, or --generate DIR to render a dataset to benchmark");
   if (!dataset.empty() && !generate_dir.empty())
@@ -314,16 +326,14 @@ int cmd_benchmark(const Args &args) {
   cv::setNumThreads(0);
 
   const ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
-  apply_dataset_defaults(data, false, req.opt);
+  ovton::apply_dataset_defaults(data, false, req.opt);
   const std::string load_start = loadavg();
   std::cout << "dataset " << dataset << ": " << data.images.size() << " images " << data.cam.width << "x"
             << data.cam.height << ", " << data.imu.size() << " IMU readings; init "
             << ovton::msckf::to_string(req.opt.init.mode) << "; config "
             << (config.empty() ? "built-in defaults" : config) << "\nmachine: " << std::thread::hardware_concurrency()
             << " cores, load average " << load_start << "; "
-            << (!req.prefetch      ? "one thread"
-                : req.track_thread ? "filter thread + tracking thread + image-decoding thread"
-                                   : "filter thread + image-decoding thread")
+            << (req.threaded ? "image decoding (main thread) + tracking thread + filter thread" : "one thread")
             << " per mode, modes run one after another\n"
             << std::flush;
 

@@ -90,7 +90,7 @@ int cmd_compare(const Args &args) {
   ovton::core::require_writable((std::filesystem::path(req.out_dir) / "results.md").string());
 
   const ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
-  apply_dataset_defaults(data, false, req.base);
+  ovton::apply_dataset_defaults(data, false, req.base);
   std::cerr << "compare: " << req.modes.size() << " modes on " << data.root << " (" << data.images.size()
             << " images), " << std::min<size_t>(req.jobs, req.modes.size()) << " at a time on "
             << std::thread::hardware_concurrency() << " cores\n";

@@ -22,7 +22,9 @@ int ovton::cli::cmd_diagnose(const ovton::cli::Args &args) {
       "error, gyro scale) are tested on the images' angular rate and its change down the rows against the\n"
       "raw gyro; principal-point and radial-distortion error on the residuals. Without --dataset all of\n"
       "them on the residuals (lower bounds). Ranks them by the share of their data they explain and says\n"
-      "which are significant. Writes diagnose.md, diagnose.json and PNG plots (docs/diagnose.md).\n\noptions");
+      "which are significant; what the log cannot resolve (too short, too few independent clusters, a platform\n"
+      "that did not move) is reported as not testable on it. Writes diagnose.md, diagnose.json and PNG plots\n"
+      "(docs/diagnose.md).\n\noptions");
   // clang-format off
   desc.add_options()
     ("help,h", "print this help")

@@ -29,11 +29,9 @@ int cmd_run(const Args &args) {
   po::options_description desc("ovton run: replay a dataset folder through the MSCKF and write its trajectory");
   std::string config, dataset, mode, format = "csv", init, nees_log, td_search, health;
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
-  bool quiet = false, no_prefetch = false, no_track_thread = false;
-  std::string search_tracks = "on";
+  bool quiet = false, no_prefetch = false;
   int opencv_threads = -1;
   RunRequest req;
-  size_t keep_mb = RunRequest::kKeepSearchImagesBytes >> 20;
   desc.add_options()("help,h", "this help")                                                               //
       ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")              //
       ("dataset,d", po::value(&dataset)->required(), "dataset folder (EuRoC or SCube) or ROS bag (.bag)") //
@@ -56,16 +54,9 @@ int cmd_run(const Args &args) {
       ("nees-log", po::value(&nees_log), "with --init groundtruth: write per-frame NEES (t_ns,ori,pos,td) here")(
           "max-images", po::value(&req.max_images), "stop after this many images") //
       ("no-prefetch", po::bool_switch(&no_prefetch),
-       "decode and track images on the filter's thread, OpenCV's thread pool off too unless --opencv-threads is "
-       "given (default: the next images are decoded and tracked on threads of their own; same results)") //
-      ("no-track-thread", po::bool_switch(&no_track_thread),
-       "track images on the filter's thread, decode them on a second one (same results)") //
-      ("search-images-mb", po::value(&keep_mb),
-       "the filter reuses up to this many MB of the images the coarse t_d search decoded (0: decodes them again; "
-       "same results)") //
-      ("search-tracks", po::value(&search_tracks),
-       "on|off: the filter takes the coarse t_d search's tracks of its window when it starts at the first image "
-       "(off: tracks those images again; same results)") //
+       "one thread: decode, track and filter on the main thread, OpenCV's thread pool off too unless "
+       "--opencv-threads is given (default: tracking and filter on threads of their own while the next image is "
+       "decoded; same results)") //
       ("opencv-threads", po::value(&opencv_threads),
        "threads of OpenCV's own pool inside the tracker (0: none, its work on the calling thread; default: "
        "OpenCV's choice, 0 with --no-prefetch)") //
@@ -75,18 +66,13 @@ int cmd_run(const Args &args) {
   po::variables_map vm;
   if (!parse_command_line(args, desc, vm))
     return 0; // --help
-  req.prefetch = !no_prefetch && std::thread::hardware_concurrency() >= 2;
-  req.track_thread = !no_track_thread;
+  req.threaded = !no_prefetch && std::thread::hardware_concurrency() >= 2;
   // One thread means one: OpenCV's own pool (TBB in Debian's build, which OPENCV_FOR_THREADS_NUM does not stop) would
-  // otherwise run part of the tracker on a second core (measured: a quarter of the process's CPU on a 40 s render).
+  // otherwise run part of the tracker on a second core (docs/benchmarks.md, "One thread is one thread").
   if (opencv_threads >= 0)
     cv::setNumThreads(opencv_threads);
   else if (no_prefetch)
     cv::setNumThreads(0);
-  if (search_tracks != "on" && search_tracks != "off")
-    throw ovton::core::UsageError("--search-tracks must be on or off");
-  req.reuse_search_tracks = search_tracks == "on";
-  req.keep_search_images_bytes = std::min<size_t>(keep_mb, size_t{1} << 30) << 20;
   if (format != "csv" && format != "tum")
     throw ovton::core::UsageError("--format must be csv or tum");
   req.tum = format == "tum";
@@ -103,7 +89,7 @@ int cmd_run(const Args &args) {
     req.opt.td.init_s = td_init_ms * 1e-3;
   }
   if (!td_search.empty())
-    req.opt.td.search = parse_on_off(td_search, "--td-search");
+    req.opt.td.search.enabled = parse_on_off(td_search, "--td-search");
   if (!health.empty())
     req.opt.health.enabled = parse_on_off(health, "--health-checks");
   // Every output is checked before the run: a typo should not cost a whole run.
@@ -119,7 +105,7 @@ int cmd_run(const Args &args) {
   }
 
   const ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
-  apply_dataset_defaults(data, !std::isnan(td_init_ms), req.opt);
+  ovton::apply_dataset_defaults(data, !std::isnan(td_init_ms), req.opt);
   if (!quiet)
     ovton::msckf::print_vio_options(req.opt, std::cerr);
 
@@ -131,11 +117,11 @@ int cmd_run(const Args &args) {
     throw ovton::core::EstimatorFailure(e.t_ns(), std::string(e.what()) + "; the rows before it are in " + req.output);
   }
 
-  const auto &c = r.counters;
-  const auto &tm = r.times;
+  const auto &c = r.report.counters;
+  const auto &tm = r.report.times;
   std::cout << std::fixed << std::setprecision(3);
-  std::cout << "mode " << ovton::msckf::to_string(req.opt.td.mode) << ": " << r.replay.images_fed << " images ("
-            << c.images_before_init << " before initialisation, " << r.replay.images_skipped << " beyond the IMU log), "
+  std::cout << "mode " << ovton::msckf::to_string(req.opt.td.mode) << ": " << r.play.images_fed << " images ("
+            << c.images_before_init << " before initialisation, " << r.report.images_skipped << " beyond the IMU log), "
             << c.updates << " updates, " << c.features_used << " features used, " << c.features_gated << " gated, "
             << c.zupts << " zero-velocity updates, " << c.td_rows << " observations constraining t_d\n";
   if (c.slam_initialised > 0)
@@ -145,11 +131,10 @@ int cmd_run(const Args &args) {
             << ", ITS-FVON " << c.td_rows_by_source[ovton::msckf::kVelocityItsFvon] << ", F2F-FVON "
             << c.td_rows_by_source[ovton::msckf::kVelocityF2fFvon] << " (" << c.td_features << " features); networks "
             << (tm.frames ? tm.networks / tm.frames : 0.0) << " ms/frame\n";
-  std::cout << "initialisation: " << r.init_message << "\n";
-  if (r.td_search)
-    std::cout << "coarse t_d search: " << r.td_search->summary() << "; the filter reused " << r.images_predecoded
-              << " of its decoded images and the tracks of " << r.images_pretracked << " images\n";
-  const auto &acc = r.acceptance;
+  std::cout << "initialisation: " << r.report.init_message << "\n";
+  if (r.report.td_search)
+    std::cout << "coarse t_d search: " << r.report.td_search->summary() << "\n";
+  const auto &acc = r.report.acceptance;
   if (acc.examined() > 0)
     std::cout << "update acceptance " << 100.0 * acc.acceptance() << " % of " << acc.examined() << " features ("
               << acc.gated << " gated, " << acc.failed_triangulation << " failed triangulation)\n";
@@ -164,15 +149,15 @@ int cmd_run(const Args &args) {
     std::cout << "per frame [ms]: image load " << tm.image_load / tm.frames << ", tracking "
               << (tm.tracking + tm.tracking_thread) / tm.frames << (tm.tracking_thread > 0 ? " (own thread)" : "")
               << ", propagation " << tm.propagation / tm.frames << ", update " << tm.update / tm.frames << "; "
-              << (r.wall_s > 0 ? r.data_span_s / r.wall_s : 0) << "x real time\n";
+              << (r.play.wall_s > 0 ? r.play.data_span_s / r.play.wall_s : 0) << "x real time\n";
   if (!r.traj.empty())
     std::cout << "final t_d " << r.traj.back().td_s * 1e3 << " ms (sigma " << r.traj.back().td_sigma_s * 1e3
               << " ms)\n";
-  if (r.td_search && r.td_search->weak_excitation)
-    // Measured on the quickstart's gentle built-in flight with the realistic IMU (docs/robustness.md, "Weak
-    // excitation"): started at the true 10 ms, sr ended at 5.5 ± 0.3 ms.
+  if (r.report.td_search && r.report.td_search->weak_excitation)
+    // A gentle flight with a realistic IMU pulls t_d confidently off the truth (docs/robustness.md, "Weak excitation").
     std::cout << "caution: the rotation rate barely changes over the first images (RMS angular acceleration "
-              << r.td_search->rms_alpha << " rad/s^2): t_d is weakly observable, its estimate can be pulled by IMU "
+              << r.report.td_search->rms_alpha
+              << " rad/s^2): t_d is weakly observable, its estimate can be pulled by IMU "
               << "errors the model lacks and its sigma can be optimistic\n";
   if (!nees_log.empty()) {
     std::ofstream out(nees_log);
@@ -201,8 +186,8 @@ int cmd_run(const Args &args) {
       std::cout << "evaluation skipped: " << e.what() << "\n";
     }
   }
-  std::cout << "trajectory: " << req.output << (r.interrupted ? " (interrupted; rows so far kept)" : "") << "\n";
-  return r.interrupted ? 130 : 0;
+  std::cout << "trajectory: " << req.output << (r.play.interrupted ? " (interrupted; rows so far kept)" : "") << "\n";
+  return r.play.interrupted ? 130 : 0;
 }
 
 } // namespace ovton::cli

@@ -75,7 +75,7 @@ int ovton::cli::cmd_track(const ovton::cli::Args &args) {
         config.empty() ? ovton::msckf::VioOptions{} : ovton::msckf::load_vio_options(config);
     const ovton::core::CameraModel camera(data.cam);
     ovton::core::TrackKLT tracker(camera, opt.track);
-    tracker.set_rotation_prior(make_rotation_prior(data, opt));
+    tracker.set_rotation_prior(ovton::rotation_prior_for(data, opt));
     long n = 0, feats = 0;
     for (const auto &e : data.images) {
       if (max_images > 0 && n >= max_images)

@@ -1,5 +1,4 @@
 #include "tools/compare_report.h"
-#include "ov_core/track/track_pipeline.h"
 #include "ov_core/types/errors.h"
 #include "tools/progress.h"
 #include "tools/run_pipeline.h"
@@ -9,6 +8,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <mutex>
+#include <optional>
 #include <ostream>
 #include <sstream>
 
@@ -94,46 +95,36 @@ CompareResult run_compare(const ovton::core::Dataset &data, const CompareRequest
 
   info.jobs = std::max(1, std::min(req.jobs, static_cast<int>(to_run.size())));
 
-  // One coarse t_d search for every mode that estimates t_d (off keeps its fixed value, oracle reads the truth).
-  ovton::msckf::VioOptions searched = req.base, unsearched = req.base;
-  searched.td.mode = TdMode::Sr;
-  unsearched.td.search = false;
-  // What the search did is shared read-only by every mode's filter instead of being done again: its tracks when its
-  // window starts at the first image (tracks do not depend on t_d), else the images it decoded.
-  auto decoded = std::make_shared<ovton::core::DecodedImages>();
-  auto tracked = std::make_shared<ovton::core::TrackedStart>();
-  if (const auto s = run_td_search(data, searched, decoded.get(), RunRequest::kKeepSearchImagesBytes, tracked.get())) {
-    info.notes.push_back("coarse t_d search (shared by the modes that estimate t_d): " + s->summary() +
-                         (tracked->tracker
-                              ? "; every mode takes its tracks of " + std::to_string(tracked->frames.size()) + " images"
-                              : ""));
-    if (req.log)
-      *req.log << "compare: " << info.notes.back() << "\n" << std::flush;
-  }
-
+  // Every mode that estimates t_d runs the same coarse search on the same images (the others keep their offset): the
+  // report quotes the first one's outcome.
+  std::mutex search_mutex;
+  std::optional<ovton::msckf::TdSearchResult> search;
   const auto run_one = [&](const std::string &name) {
     RunRequest rr;
     const ovton::msckf::ModeSpec &spec = spec_of.at(name);
-    rr.opt = spec.mode == TdMode::Off || spec.mode == TdMode::Oracle ? unsearched : searched;
+    rr.opt = req.base;
     ovton::msckf::apply_mode_spec(spec, rr.opt);
     rr.output = (fs::path(req.out_dir) / ("traj_" + name + ".csv")).string();
     rr.max_images = req.max_images;
-    if (tracked->tracker)
-      rr.tracked = tracked;
-    else if (!decoded->empty())
-      rr.decoded = decoded;
-    rr.progress = false; // parallel bars would overwrite each other; the log has one line per finished mode
+    rr.progress = false;
+    rr.threaded = false; // the modes run side by side, one thread each // parallel bars would overwrite each other; the
+                         // log has one line per finished mode
     // A diverged filter (EstimatorFailure) or a run without a single pose (DataError) throws: run_parallel makes
     // that the mode's status, "failed: <why>".
     RunResult r = run_dataset(data, rr);
+    if (r.report.td_search) {
+      const std::lock_guard<std::mutex> lock(search_mutex);
+      if (!search)
+        search = r.report.td_search;
+    }
     ovton::eval::RunRecord rec;
     rec.name = name;
     rec.traj = std::move(r.traj);
     rec.traj_file = rr.output;
-    rec.wall_s = r.wall_s;
-    rec.data_span_s = r.data_span_s;
-    rec.frames = static_cast<long>(r.replay.images_fed);
-    if (r.interrupted)
+    rec.wall_s = r.play.wall_s;
+    rec.data_span_s = r.play.data_span_s;
+    rec.frames = static_cast<long>(r.play.images_fed);
+    if (r.play.interrupted)
       rec.status = "interrupted";
     return rec;
   };
@@ -154,6 +145,11 @@ CompareResult run_compare(const ovton::core::Dataset &data, const CompareRequest
   for (const auto &r : res.runs) {
     res.failed += r.status.rfind("failed", 0) == 0;
     res.interrupted = res.interrupted || r.status == "interrupted" || r.status.rfind("not run", 0) == 0;
+  }
+  if (search) {
+    info.notes.push_back("coarse t_d search (the same in every mode that estimates t_d): " + search->summary());
+    if (req.log)
+      *req.log << "compare: " << info.notes.back() << "\n" << std::flush;
   }
   res.rows = ovton::eval::evaluate_runs(res.runs, data, req.report);
   res.files = ovton::eval::write_report(req.out_dir, res.runs, res.rows, data, info, req.report);

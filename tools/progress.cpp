@@ -14,7 +14,9 @@ void on_sigint(int) {
 } // namespace
 
 void install_interrupt_handler() {
+  // SIGTERM (a job scheduler, `kill`) stops a run as Ctrl-C does: the rows so far stay, the summary is printed.
   std::signal(SIGINT, on_sigint);
+  std::signal(SIGTERM, on_sigint);
 }
 bool interrupted() {
   return g_interrupted;
@@ -35,6 +37,13 @@ void ProgressBar::update(size_t done, size_t total, const std::string &extra) {
   std::fprintf(stderr, "\r%s [%.*s%*s] %5.1f%% %zu/%zu  %.0fs left  %s   ", label_.c_str(), filled,
                "##############################", width - filled, "", 100 * frac, done, total, eta, extra.c_str());
   std::fflush(stderr);
+}
+
+void ProgressBar::say(const std::string &line) {
+  if (!quiet_ && drawn_)
+    std::fprintf(stderr, "\r\033[K");
+  std::fprintf(stderr, "%s\n", line.c_str());
+  drawn_ = false; // the next update draws the bar again
 }
 
 void ProgressBar::finish() {

@@ -29,4 +29,9 @@ struct ImuCalib {
 
 std::string to_string(DistortionModel m);
 
+/// R_IC: camera -> IMU rotation (both calibrations' body-frame extrinsics).
+inline Eigen::Matrix3d camera_to_imu_rotation(const CameraCalib &cam, const ImuCalib &imu) {
+  return imu.T_BI.block<3, 3>(0, 0).transpose() * cam.T_BC.block<3, 3>(0, 0);
+}
+
 } // namespace ovton::core

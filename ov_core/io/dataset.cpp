@@ -393,6 +393,11 @@ double Dataset::td_truth_at(int64_t t_cam_ns) const {
   return interpolate_td(td_truth, t_cam_ns);
 }
 
+void check_not_truncated(const Dataset &d) {
+  if (!d.truncated_file.empty())
+    throw DataError(d.truncated_file, d.truncated_reason);
+}
+
 double interpolate_td(const std::vector<TdSample> &td_truth, int64_t t_cam_ns) {
   if (t_cam_ns <= td_truth.front().t_cam_ns)
     return td_truth.front().td_s;

@@ -20,8 +20,8 @@ struct Dataset {
   std::vector<TdSample> td_truth;       ///< empty when absent
   double td_prior_s = 0.0;              ///< offset from calibration (Kalibr timeshift_cam_imu), 0 for EuRoC
   /// Set when the recording ends in a cut (a recorder that crashed): the file and what is wrong there. The images and
-  /// readings before the cut are listed; Replay throws DataError(truncated_file, truncated_reason) after the last of
-  /// them, so a run writes its rows up to the cut and then reports it.
+  /// readings before the cut are listed; a player calls check_not_truncated after the last of them, so that a run
+  /// writes its rows up to the cut and then reports it.
   std::string truncated_file, truncated_reason;
 
   bool has_groundtruth() const { return !groundtruth.empty(); }
@@ -29,6 +29,9 @@ struct Dataset {
   /// True offset at a camera stamp, linearly interpolated (clamped at the ends). Throws when there is no truth.
   double td_truth_at(int64_t t_cam_ns) const;
 };
+
+/// Throws DataError(d.truncated_file, d.truncated_reason) when `d` ends in a cut (Dataset::truncated_file).
+void check_not_truncated(const Dataset &d);
 
 /// A true offset at a camera stamp from a non-empty td_truth list: linear between samples, clamped at the ends.
 double interpolate_td(const std::vector<TdSample> &td_truth, int64_t t_cam_ns);

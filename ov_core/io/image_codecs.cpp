@@ -4,6 +4,7 @@
 
 #include <dlfcn.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
 
@@ -12,17 +13,22 @@ namespace {
 
 constexpr const char *kPluginFile = "libovton_imgcodecs.so";
 
-// Next to the running binary first (a copied build folder keeps working), then where this tree's build put it (a
-// binary copied elsewhere alone, the test and fuzz executables in their own folders).
+// Where OVTON_IMGCODECS names it, next to the running binary (a copied build folder keeps working), where
+// `cmake --install` puts it, then where this tree's build put it (a binary copied elsewhere alone, the test and fuzz
+// executables in their own folders).
 std::vector<std::string> plugin_candidates() {
   std::vector<std::string> out;
+  if (const char *env = std::getenv("OVTON_IMGCODECS"))
+    out.push_back(env);
   std::error_code ec;
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
   if (!ec)
     out.push_back((exe.parent_path() / kPluginFile).string());
+#ifdef OVTON_IMGCODECS_INSTALLED
+  out.push_back(OVTON_IMGCODECS_INSTALLED);
+#endif
 #ifdef OVTON_IMGCODECS_PLUGIN
-  if (out.empty() || out.front() != OVTON_IMGCODECS_PLUGIN)
-    out.push_back(OVTON_IMGCODECS_PLUGIN);
+  out.push_back(OVTON_IMGCODECS_PLUGIN);
 #endif
   return out;
 }

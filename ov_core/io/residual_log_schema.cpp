@@ -255,7 +255,7 @@ std::vector<std::string> calib_real_names() {
   return names;
 }
 
-/// The IMU state's columns after the calibration's (added in session 35; older logs end before them).
+/// The IMU state's columns after the calibration's (older logs end before them).
 const char *const kStateColumns = ",t_imu_ns,q_WB_w,q_WB_x,q_WB_y,q_WB_z,v_W_0,v_W_1,v_W_2";
 constexpr size_t kStateCount = 8;
 

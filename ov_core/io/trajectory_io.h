@@ -1,5 +1,5 @@
 #pragma once
-// Trajectory files: the project CSV (ARCHITECTURE.md columns), TUM text, and EuRoC ground truth.
+// Trajectory files: the project CSV (columns in docs/architecture.md), TUM text, and EuRoC ground truth.
 #include "ov_core/types/sensor_data.h"
 #include <fstream>
 #include <string>

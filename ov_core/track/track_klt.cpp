@@ -119,24 +119,6 @@ void TrackKLT::reset() {
   out_.clear();
 }
 
-std::unique_ptr<TrackKLT> TrackKLT::clone() const {
-  auto c = std::make_unique<TrackKLT>(camera_, opt_);
-  c->has_prev_ = has_prev_;
-  c->t_prev_ns_ = t_prev_ns_;
-  c->prior_ = prior_;
-  c->next_id_ = next_id_;
-  c->img_ = img_.clone();
-  // lk_curr_ is rebuilt from the next image before it is read; the rest of the scratch is rewritten the same way.
-  c->lk_prev_ = lk_prev_;
-  c->ids_ = ids_;
-  c->pts_ = pts_;
-  c->xy_ = xy_;
-  c->out_ = out_;
-  c->stats_ = stats_;
-  c->totals_ = totals_;
-  return c;
-}
-
 const std::vector<TrackedFeature> &TrackKLT::track(int64_t t_cam_ns, const cv::Mat &gray) {
   if (gray.empty() || gray.type() != CV_8UC1)
     throw UsageError("TrackKLT: expected a non-empty 8-bit single-channel image");

@@ -87,7 +87,7 @@ int ransac_fundamental(const std::vector<cv::Point2f> &xy0, const std::vector<cv
 
 class TrackKLT {
 public:
-  TrackKLT(const TrackKLT &) = delete; // clone() copies the pixels
+  TrackKLT(const TrackKLT &) = delete; // a copy would share the pyramid's pixels
   TrackKLT &operator=(const TrackKLT &) = delete;
   /// Throws UsageError for options that cannot work (non-positive sizes, even LK window, ...).
   TrackKLT(const CameraModel &camera, const TrackKLTOptions &opt = {});
@@ -97,15 +97,11 @@ public:
   /// until the next call. Throws UsageError on a wrong image type/size or a stamp not after the previous one.
   const std::vector<TrackedFeature> &track(int64_t t_cam_ns, const cv::Mat &gray);
 
-  /// The raw gyro, for options().gyro_prior (shared: clones and other trackers of the same run use the same one).
+  /// The raw gyro, for options().gyro_prior (shared: the estimator swaps it when the coarse t_d search has decided).
   void set_rotation_prior(std::shared_ptr<const GyroRotationPrior> prior) { prior_ = std::move(prior); }
 
   /// Forgets all tracks (e.g. after a gap in the data); ids keep increasing so they never repeat.
   void reset();
-
-  /// An independent tracker in this one's state: fed the same images from here on, both output the same features.
-  /// (A copy would share the pyramid's pixels.)
-  std::unique_ptr<TrackKLT> clone() const;
 
   const std::vector<TrackedFeature> &current() const { return out_; }
   const TrackStats &last_stats() const { return stats_; }

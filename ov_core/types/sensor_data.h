@@ -1,5 +1,5 @@
 #pragma once
-// Sensor messages. Every stamp is int64 nanoseconds; the clock is in the name (see ARCHITECTURE.md).
+// Sensor messages. Every stamp is int64 nanoseconds; the clock is in the name (docs/architecture.md).
 #include "ov_core/types/time.h"
 
 #include <Eigen/Core>

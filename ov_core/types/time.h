@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -41,6 +42,20 @@ inline std::optional<int64_t> try_add_ns(int64_t a, int64_t b) {
   int64_t out = 0;
   if (__builtin_add_overflow(a, b, &out))
     return std::nullopt;
+  return out;
+}
+
+/// An image's IMU-clock time t_cam + t_d (t_imu = t_cam + t_d), or nothing when it has none in the int64 clock.
+inline std::optional<int64_t> try_imu_time_ns(int64_t t_cam_ns, double td_s) {
+  const auto td_ns = try_s_to_ns(td_s);
+  return td_ns ? try_add_ns(t_cam_ns, *td_ns) : std::nullopt;
+}
+
+/// a + b, held at the ends of the int64 clock instead of overflowing (for times that only bound a wait).
+inline int64_t saturating_add_ns(int64_t a, int64_t b) {
+  int64_t out = 0;
+  if (__builtin_add_overflow(a, b, &out))
+    return b > 0 ? std::numeric_limits<int64_t>::max() : std::numeric_limits<int64_t>::min();
   return out;
 }
 

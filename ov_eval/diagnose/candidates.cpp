@@ -192,6 +192,12 @@ std::vector<int> gyro_columns() {
   return gyro;
 }
 
+// Prior σ of the filter's calibration options (ov_msckf_ton/core/vio_options.h: TdOptions, CalibrationOptions), in
+// the units of each candidate's first estimate: the testable sizes are three of them (CandidateDef::testable_size).
+constexpr double kTdPriorMs = 10.0, kTdRatePriorMsPerS = 1.0, kReadoutPriorMs = 10.0, kFocalPriorPx = 2.0,
+                 kCenterPriorPx = 2.0, kDistortionPrior = 0.005, kImuPriorPct = 1.0, kImuPriorMrad = 10.0,
+                 kExtRotPriorDeg = 0.01 * 180.0 / M_PI, kExtPosPriorMm = 10.0;
+
 const char *const kOffsetFallback = "a lower bound, the poses absorb most of an offset";
 const char *const kAbsorbedFallback = "a lower bound, the poses absorb most of it";
 
@@ -199,7 +205,8 @@ const char *const kAbsorbedFallback = "a lower bound, the poses absorb most of i
 
 const std::vector<CandidateDef> &candidate_table() {
   // One candidate per entry: key, columns, columns with the camera, needs, estimates; its models on the residual and
-  // on rates, what the residual is worth for a rate-capable one; the plots' x axes on the residual and on rates.
+  // on rates, what the residual is worth for a rate-capable one; the plots' x axes on the residual and on rates; the
+  // size it must resolve to be testable.
   // clang-format off
   static const std::vector<CandidateDef> table = {
       {"td_const", {kV}, {}, Needs::Velocity, td_const,
@@ -207,75 +214,75 @@ const std::vector<CandidateDef> &candidate_table() {
        "constant time-offset error, from rates: ω_vis − ω_gyro = α·δt − b",
        kOffsetFallback,
        "image velocity V [px/s]",
-       "angular acceleration alpha, bias removed, / SE [1/s]"},
+       "angular acceleration alpha, bias removed, / SE [1/s]", 3 * kTdPriorMs},
       {"td_drift", {kV, kVt}, {}, Needs::Velocity, td_drift,
        "drifting time-offset error: r = V·(δt + ḋ·(t − t_mid))",
        "drifting time-offset error, from rates: ω_vis − ω_gyro = α·(δt + ḋ·(t − t_mid)) − b",
        kOffsetFallback,
        "fitted td_drift effect [px]",
-       "fitted alpha * dt(t), bias removed, / SE"},
+       "fitted alpha * dt(t), bias removed, / SE", 3 * kTdRatePriorMsPerS},
       {"rolling_shutter", {kVrow}, {}, Needs::Velocity, readout,
        "rolling-shutter readout: r = V·(row/height − 0.5)·t_r",
        "rolling-shutter readout, from rates: ψ_vis = α·t_r (rate change from top row to bottom)",
        kAbsorbedFallback,
        "V * (row fraction - 0.5) [px/s]",
-       "angular acceleration alpha / SE of psi_vis [1/s]"},
+       "angular acceleration alpha / SE of psi_vis [1/s]", 3 * kReadoutPriorMs},
       {"focal", {kFocal}, {}, Needs::Nothing, focal,
        "focal-length error: r = ε·(fu·x, fv·y), δf = ε·f",
        "focal-length error, from rates: ω_vis − ω̄_gyro = ε·∂ω_vis/∂ε (the whole rate fit's response) − b",
        kAbsorbedFallback,
        "image position from the centre (f * x), point-absorbed part removed [px]",
-       "response of w_vis to a unit focal error, bias removed, / SE"},
+       "response of w_vis to a unit focal error, bias removed, / SE", 3 * kFocalPriorPx},
       {"principal_point", {kPpU, kPpV}, {}, Needs::Nothing, principal_point,
        "principal-point error: r = (δcu, δcv)",
        "", "",
        "fitted principal_point effect [px]",
-       ""},
+       "", 3 * kCenterPriorPx},
       {"radial_k1", {kRadial}, {}, Needs::Nothing, radial_k1,
        "radial distortion error: r = δk1·|xy|²·(fu·x, fv·y)",
        "", "",
        "|x|^2 * f * x, point-absorbed part removed [px]",
-       ""},
+       "", 3 * kDistortionPrior},
       // With the camera, R_CB is known and the gyro scale is one number: on rates −ω̄_gyro, on the residual −B·R_CB·Θ.
       {"gyro_scale", gyro_columns(), {kGyroScale}, Needs::BodyRates, gyro_scale,
        "gyro scale error: r = −s·B(x,y)·R_CB·∫ω dt over the track",
        "gyro scale error, from rates: ω_vis − ω̄_gyro = −s·ω̄_gyro − b",
        kAbsorbedFallback,
        "fitted gyro_scale effect [px]",
-       "-w_gyro through the images' estimator, bias removed, / SE [rad/s]"},
+       "-w_gyro through the images' estimator, bias removed, / SE [rad/s]", 3 * kImuPriorPct},
       // Contains gyro_scale: selected only when the axes differ beyond one common scale.
       {"gyro_scale_axes", {kGyroScale, kGyroAxY, kGyroAxZ}, {}, Needs::Rates, gyro_axes,
        "per-axis gyro scale error (rates only)",
        "per-axis gyro scale error, from rates: ω_vis − ω̄_gyro = −diag(s)·ω̄_gyro − b (body axes)",
-       "", "", "fitted gyro_scale_axes effect, / SE"},
+       "", "", "fitted gyro_scale_axes effect, / SE", 3 * kImuPriorPct},
       // The antisymmetric part of the gyro's linear error: on rates a camera-body rotation and a gyro axis rotation
       // are the same thing (only the accelerometer could tell them apart); it is named as the extrinsic.
       {"extrinsic_rotation", span(kExtRot0, 3), {}, Needs::Rates, extrinsic_rotation,
        "camera-IMU rotation error (rates only)",
        "camera-IMU rotation error, from rates: ω_vis − ω̄_gyro = ω̄_gyro × φ − b (R_BC true = Exp(φ)·R_BC)",
-       "", "", "fitted extrinsic_rotation effect, / SE"},
+       "", "", "fitted extrinsic_rotation effect, / SE", 3 * kExtRotPriorDeg},
       // The symmetric part of the gyro's off-diagonal errors (axes not orthogonal): unlike the antisymmetric part it
       // cannot be a camera-body rotation.
       {"gyro_misalignment", span(kGyroMis0, 3), {}, Needs::Rates, gyro_misalignment,
        "gyro axis misalignment (rates only)",
        "gyro axis misalignment, from rates: ω_vis − ω̄_gyro = −M·ω̄_gyro − b, M symmetric with a zero diagonal",
-       "", "", "fitted gyro_misalignment effect, / SE"},
+       "", "", "fitted gyro_misalignment effect, / SE", 3 * kImuPriorMrad},
       // The accelerometer's scale: no image shows it. Against gravity through the filter's attitude and velocity
       // when the calibration log carries them; otherwise the filter's accelerometer bias follows it (accel_design.h).
       {"accel_scale", {kAccScale}, {}, Needs::AccelBias, accel_scale,
        "accelerometer scale error (needs the calibration log and --dataset): against gravity, Δv = ∫R·a dt/(1 + s) − "
        "∫R dt·b + g·T over 0.5-s windows of the filter's states, the trajectory's own scale free; from logs without "
        "the IMU state, the filter's accelerometer bias b̂_a,j = s·f_j + c_j",
-       "", "", "specific force along the row's axis, bin means removed [m/s^2]", ""},
+       "", "", "specific force along the row's axis, bin means removed [m/s^2]", "", 3 * kImuPriorPct},
       // Contains accel_scale: selected only when the axes differ beyond one common scale.
       {"accel_scale_axes", {kAccScale, kAccAxY, kAccAxZ}, {}, Needs::AccelBias, accel_axes,
        "per-axis accelerometer scale error (body axes), as accel_scale with s_j per axis",
-       "", "", "fitted accel_scale_axes effect", ""},
+       "", "", "fitted accel_scale_axes effect", "", 3 * kImuPriorPct},
       {"extrinsic_translation", span(kExtTrans0, 3), {}, Needs::Nothing, extrinsic_translation,
        "camera-IMU translation error: r = −f·J_π(x)·δp_C/z (what the rotation along a track leaves of it)",
        "", "",
        "fitted extrinsic_translation effect [px]",
-       ""},
+       "", 3 * kExtPosPriorMm},
       // Contains td_drift (and td_const): selected only when the offset varies beyond one slope. Against td_const
       // its added columns test whether the offset varies at all over the log. As a sibling of the drift (8 bins, no
       // slope) it took the drift's place on a pure 1 ms/s drift: the bins also fit the rates' per-bin floor.
@@ -285,7 +292,7 @@ const std::vector<CandidateDef> &candidate_table() {
        "time bin",
        kOffsetFallback,
        "fitted td_piecewise effect [px]",
-       "fitted alpha * dt_b, bias removed, / SE"},
+       "fitted alpha * dt_b, bias removed, / SE", 3 * kTdPriorMs},
   };
   // clang-format on
   return table;

@@ -81,6 +81,11 @@ struct CandidateDef {
   std::string fallback_note;    ///< rate-capable candidates: what a test on the residual is worth
   std::string xlabel;           ///< the plot's x axis on the residual
   std::string rate_xlabel;      ///< the plot's x axis on rates
+  /// The largest error a rig's calibration is plausibly off by, in the unit of its first estimate: three times the
+  /// prior σ of the filter's matching calibration option (ov_msckf_ton/core/vio_options.h). A log whose smallest
+  /// nameable size (the bar against F with its independent clusters, times the estimate's SE) is larger cannot tell
+  /// a calibrated rig from a miscalibrated one: not testable on it. 0: no such size.
+  double testable_size = 0;
 
   bool rate_capable() const { return !rate_description.empty(); }
   const std::vector<int> &columns(bool have_camera) const {

@@ -175,6 +175,17 @@ double wald_to_sigma(double W, int k, double df) {
   return 0.5 * (lo + hi);
 }
 
+double wald_at_sigma(double sigma, int k, double df) {
+  double lo = 0, hi = 1;
+  while (wald_to_sigma(hi, k, df) < sigma && hi < 1e12)
+    hi *= 2;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (wald_to_sigma(mid, k, df) < sigma ? lo : hi) = mid;
+  }
+  return hi;
+}
+
 double median(std::vector<double> v) {
   if (v.empty())
     return 0;
@@ -235,12 +246,28 @@ std::vector<size_t> stepwise(const Design &d, const std::vector<StepCandidate> &
         cr.nested = true;
         continue;
       }
-      const Fit f = fit_cols(d, joint, k);
       const Eigen::Index q = static_cast<Eigen::Index>(own.size());
+      const double df = d.wald_df();
+      cr.terms = static_cast<int>(q);
+      // A cluster-robust covariance of q terms from fewer independent clusters is singular. Pooled columns take the
+      // per-row covariance scaled by one ratio (Design::pooled_cols), which has no such limit.
+      const bool pooled = std::all_of(own.begin(), own.end(), [&](int col) {
+        return std::find(d.pooled_cols.begin(), d.pooled_cols.end(), col) != d.pooled_cols.end();
+      });
+      cr.testable = pooled || !(df > 0 && q > df);
+      if (!cr.testable) {
+        cr.sigma = 0, cr.explained_added = 0;
+        cr.note = "not testable on this log: " + std::to_string(q) + " terms against about " +
+                  std::to_string(static_cast<int>(std::lround(df + 1))) + " independent clusters";
+        continue;
+      }
+      if (cr.note.rfind("not testable", 0) == 0) // testable now that selected columns took some of its terms
+        cr.note.clear();
+      const Fit f = fit_cols(d, joint, k);
       const VectorXd bo = f.beta.tail(q);
       const MatrixXd Co = f.cov.bottomRightCorner(q, q);
       const double W = bo.dot(Co.ldlt().solve(bo));
-      cr.sigma = wald_to_sigma(W, static_cast<int>(q), d.wald_df());
+      cr.sigma = wald_to_sigma(W, static_cast<int>(q), df);
       gain[c] = loss_sel - f.loss;
       cr.explained_added = gain[c] / own_loss0[c];
       cr.fit = f;

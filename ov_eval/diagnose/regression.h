@@ -13,7 +13,7 @@
 namespace ovton::eval::diag {
 
 /// Rows to be explained (r) and the columns that may explain them (D), with the clusters the rows' errors are
-/// correlated within (a track for the residual, a second for the rates).
+/// correlated within (a quarter second of updates for the residual and for the rates, a window for the accelerometer).
 struct Design {
   Eigen::MatrixXd D;        ///< n × kNumCols (candidates.h); a column a design does not fill stays zero
   Eigen::VectorXd r;        ///< the data: residual components (u and v rows interleaved) or whitened rate rows
@@ -69,6 +69,9 @@ double f_sf(double x, int k, double df);
 /// Wald statistic with k dof as the two-sided Gaussian σ of the same p-value: against χ²(k), or with df > 0 against
 /// k·F(k, df) (a covariance estimated from df + 1 independent clusters; Design::wald_df).
 double wald_to_sigma(double W, int k, double df = 0);
+/// The Wald statistic with k dof whose Gaussian-equivalent σ (wald_to_sigma) is `sigma`: the bar a candidate of k
+/// terms must reach with a covariance from df + 1 independent clusters.
+double wald_at_sigma(double sigma, int k, double df = 0);
 /// Upper median (the element at n/2 of the sorted values); 0 for none.
 double median(std::vector<double> v);
 
@@ -89,6 +92,10 @@ struct StepResult {
   Fit fit;                ///< the last fit in which it had terms of its own (its estimates come from it)
   std::vector<int> joint; ///< that fit's columns, in the order of fit.beta; empty if never fitted
   bool nested = false;    ///< the last round found no term of its own (no curve is drawn)
+  int terms = 0;          ///< its own terms in that fit
+  /// false: its terms outnumber the design's independent clusters (Design::wald_df), so their cluster-robust
+  /// covariance cannot be estimated: not testable on this design.
+  bool testable = true;
 };
 
 struct StepThresholds {

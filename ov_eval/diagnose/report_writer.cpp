@@ -95,6 +95,11 @@ void plot_td_bins(const DiagnoseReport &rep, const std::string &file) {
   p.save_png(file);
 }
 
+/// A candidate's verdict as shown: `explained` (the selection's), not testable on this log, or not explained.
+std::string verdict(const CandidateResult &c, const char *explained) {
+  return c.explained ? explained : c.testable ? "not explained" : "not testable";
+}
+
 /// The first candidate the selection explains the residual with; null when none.
 const CandidateResult *top_effect(const DiagnoseReport &rep) {
   const auto it = std::find_if(rep.candidates.begin(), rep.candidates.end(), [](auto &c) { return c.explained; });
@@ -148,11 +153,15 @@ std::string markdown_text(const DiagnoseReport &rep, const PlotList &plots) {
      << "\n"
      << "- verdict rule: EXPLAINED when selected by forward stepwise regression: significance >= "
      << ovton::core::format_fixed(o.min_sigma, 1)
-     << " sigma (Wald, track-clustered) and >= " << ovton::core::format_fixed(100 * o.min_explained, 1)
+     << " sigma (Wald against F with the data's independent clusters: the residual's per quarter second of its "
+        "updates, Newey-West over the clone window) and >= "
+     << ovton::core::format_fixed(100 * o.min_explained, 1)
      << " % of the Huber loss of its data (the residual; for time candidates from rates, the rate mismatch) removed "
         "beyond the candidates selected before it\n\n";
   const CandidateResult *first = top_effect(rep);
-  if (!first)
+  if (!rep.not_testable.empty())
+    md << "**Nothing is testable on this log**: " << rep.not_testable << ".\n\n";
+  else if (!first)
     md << "**No candidate explains the residuals** (nothing passes both thresholds).\n\n";
   else
     md << "**Top effect: " << first->key << "** — " << first->description << "; " << estimates_text(*first)
@@ -161,7 +170,7 @@ std::string markdown_text(const DiagnoseReport &rep, const PlotList &plots) {
   md << "| rank | candidate | verdict | explained alone [%] | added [%] | sigma | estimate (± 1 SE) | note |\n"
      << "|---:|---|---|---:|---:|---:|---|---|\n";
   for (const auto &c : rep.candidates)
-    md << "| " << c.rank << " | " << c.key << " | " << (c.explained ? "**explained**" : "not explained") << " | "
+    md << "| " << c.rank << " | " << c.key << " | " << verdict(c, "**explained**") << " | "
        << ovton::core::format_fixed(100 * c.explained_alone, 2) << " | "
        << ovton::core::format_fixed(100 * c.explained_added, 2) << " | " << ovton::core::format_fixed(c.sigma, 1)
        << " | " << estimates_text(c) << " | " << c.note << " |\n";
@@ -205,12 +214,14 @@ std::string json_text(const DiagnoseReport &rep) {
      << ", \"fitted\": " << (rep.intrinsics_fitted ? "true" : "false") << "},\n  \"image_height\": " << rep.image_height
      << ",\n  \"min_sigma\": " << ovton::core::json_number(o.min_sigma)
      << ",\n  \"min_explained\": " << ovton::core::json_number(o.min_explained)
+     << ",\n  \"not_testable\": " << (rep.not_testable.empty() ? "null" : ovton::core::json_string(rep.not_testable))
      << ",\n  \"top\": " << (first ? ovton::core::json_string(first->key) : "null") << ",\n  \"candidates\": [";
   for (size_t c = 0; c < rep.candidates.size(); ++c) {
     const auto &cr = rep.candidates[c];
     js << (c ? "," : "") << "\n    {\"rank\": " << cr.rank << ", \"key\": " << ovton::core::json_string(cr.key)
        << ", \"model\": " << ovton::core::json_string(cr.description)
        << ", \"explained\": " << (cr.explained ? "true" : "false")
+       << ", \"testable\": " << (cr.testable ? "true" : "false")
        << ", \"explained_alone\": " << ovton::core::json_number(cr.explained_alone)
        << ", \"explained_added\": " << ovton::core::json_number(cr.explained_added)
        << ", \"sigma\": " << ovton::core::json_number(cr.sigma) << ", \"note\": " << ovton::core::json_string(cr.note)
@@ -235,7 +246,7 @@ std::string json_text(const DiagnoseReport &rep) {
   for (size_t u = 0; u < rep.unexplained.size(); ++u) {
     const auto &ue = rep.unexplained[u];
     js << (u ? "," : "") << "\n    {\"where\": " << ovton::core::json_string(ue.where)
-       << ", \"flagged\": " << (ue.flagged ? "true" : "false")
+       << ", \"flagged\": " << (ue.flagged ? "true" : "false") << ", \"testable\": " << (ue.testable ? "true" : "false")
        << ", \"explained\": " << ovton::core::json_number(ue.explained)
        << ", \"sigma\": " << ovton::core::json_number(ue.sigma)
        << ", \"largest\": " << ovton::core::json_string(ue.largest) << "}";
@@ -248,20 +259,24 @@ std::string json_text(const DiagnoseReport &rep) {
 
 std::string format_ranking(const DiagnoseReport &rep) {
   std::ostringstream os;
+  if (!rep.not_testable.empty())
+    os << "nothing testable on this log: " << rep.not_testable << "\n\n";
   os << "rank  candidate              verdict        alone[%]  added[%]   sigma  estimate\n";
   for (const auto &c : rep.candidates) {
-    os << std::left << std::setw(6) << c.rank << std::setw(23) << c.key << std::setw(15)
-       << (c.explained ? "EXPLAINED" : "not explained") << std::right << std::setw(8)
-       << ovton::core::format_fixed(100 * c.explained_alone, 2) << std::setw(10)
+    os << std::left << std::setw(6) << c.rank << std::setw(23) << c.key << std::setw(15) << verdict(c, "EXPLAINED")
+       << std::right << std::setw(8) << ovton::core::format_fixed(100 * c.explained_alone, 2) << std::setw(10)
        << ovton::core::format_fixed(100 * c.explained_added, 2) << std::setw(8) << ovton::core::format_fixed(c.sigma, 1)
        << "  " << estimates_text(c) << (c.note.empty() ? "" : "  [" + c.note + "]") << "\n";
   }
   // Structure no candidate explains: the verdict UNEXPLAINED, with its size and where it shows.
   for (const auto &u : rep.unexplained)
     os << "      " << std::left << std::setw(23) << ("by " + u.where) << std::setw(15)
-       << (u.flagged ? "UNEXPLAINED" : "noise") << std::right << std::setw(8)
-       << ovton::core::format_fixed(100 * u.explained, 2) << std::setw(10) << "" << std::setw(8)
-       << ovton::core::format_fixed(u.sigma, 1) << "  leftover's bin means; largest " << u.largest << "\n";
+       << (u.flagged    ? "UNEXPLAINED"
+           : u.testable ? "noise"
+                        : "not testable")
+       << std::right << std::setw(8) << ovton::core::format_fixed(100 * u.explained, 2) << std::setw(10) << ""
+       << std::setw(8) << ovton::core::format_fixed(u.sigma, 1) << "  leftover's bin means; largest " << u.largest
+       << "\n";
   return os.str();
 }
 

@@ -43,6 +43,15 @@ Eigen::Vector2d lagrange_derivative(double t0, double t1, double t2, const Eigen
   return l0 * x0 + l1 * x1 + l2 * x2;
 }
 
+/// The residual rows' clusters [s] and the Newey-West lags over them. The residuals of every track an update
+/// processes share that update's clone poses, and consecutive updates share most of their clones (the shipped
+/// configs' window: 20 clones, a second at 20 Hz), so the rows' errors correlate across tracks and over the window.
+/// Clustered per track, the scores would be taken as independent between tracks, which they are not: a short real
+/// flight then names a camera-IMU translation its images cannot resolve (docs/diagnose_undeclared.md, "Real data and
+/// short flights"). A track belongs to the cluster of its update's time; the lags span the window.
+constexpr double kResidualClusterS = 0.25;
+constexpr int kResidualHacLags = 4;
+
 } // namespace
 
 Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, DiagnoseReport &rep) {
@@ -59,7 +68,7 @@ Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, D
   d.t_s.resize(n);
   d.region.assign(n, -1);
   d.motion.assign(n, 0.0);
-  d.n_clusters = static_cast<int>(data.tracks.size());
+  std::vector<int> track_of(n); // the point projection's groups: one track each
   d.have_velocity = data.use_velocity;
   d.t_mid = 0.5 * rep.duration_s;
   MatrixXd J_point(n, 3); // per track: the point Jacobian (pixels per metre, in the track's first camera frame)
@@ -108,6 +117,8 @@ Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, D
     }
     Eigen::Vector3d theta = Eigen::Vector3d::Zero(), w_prev = Eigen::Vector3d::Zero();
     int64_t t_prev = tr.front()->t_cam_ns;
+    // The track's update: its newest observation's time (the update processes a track when it ends).
+    const int cluster = static_cast<int>(1e-9 * double(tr.back()->t_cam_ns - t_first) / kResidualClusterS);
     for (size_t j = 0; j < m; ++j) {
       const ResidualLogRow *r = tr[j];
       const double t = ts[j];
@@ -129,7 +140,8 @@ Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, D
       for (int a = 0; a < 2; ++a, ++i) {
         const double fa = a == 0 ? rep.fu : rep.fv;
         d.r(i) = a == 0 ? r->res_u_px : r->res_v_px;
-        d.cluster[i] = g;
+        d.cluster[i] = cluster;
+        track_of[i] = g;
         d.t_s[i] = t;
         {
           // The predicted pixel's cell of a 3 × 3 grid (width ≈ 2·cu), for the test of unexplained structure.
@@ -179,11 +191,13 @@ Design build_residual_design(const UsedData &data, const DiagnoseOptions &opt, D
     for (size_t c = 0; c < cols.size(); ++c)
       X.col(c) = d.D.col(cols[c]);
     X.col(cols.size()) = d.r;
-    project_out_points(J_point, d.cluster, X);
+    project_out_points(J_point, track_of, X);
     for (size_t c = 0; c < cols.size(); ++c)
       d.D.col(cols[c]) = X.col(c);
     d.r = X.col(cols.size());
   }
+  d.n_clusters = 1 + *std::max_element(d.cluster.begin(), d.cluster.end());
+  d.hac_lags = kResidualHacLags;
   d.have_rate = rate_rows >= 0.5 * n_obs;
   {
     std::vector<double> absr(n);

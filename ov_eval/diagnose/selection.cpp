@@ -4,10 +4,29 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace ovton::eval::diag {
 
 namespace {
+
+/// A candidate the log cannot resolve at the size a calibration is plausibly off by (CandidateDef::testable_size):
+/// the smallest size it could name — its first estimate's SE times the bar's Wald statistic, against F with the
+/// design's independent clusters — is larger. Reported as not testable, not as "no effect".
+void mark_weak(const CandidateDef &def, int terms, double df, double min_sigma, CandidateResult &cr) {
+  const EffectEstimate &e = cr.estimates.front();
+  const double smallest = std::sqrt(wald_at_sigma(min_sigma, terms, df)) * e.stderr_;
+  if (!(smallest > def.testable_size))
+    return;
+  cr.testable = false;
+  char buf[200];
+  const std::string unit = e.unit.empty() ? "" : " " + e.unit;
+  std::snprintf(buf, sizeof(buf),
+                "not testable on this log: the smallest %s it could name is %.3g%s (%.3g%s: 3 prior "
+                "sigma of the filter's calibration)",
+                e.name.c_str(), smallest, unit.c_str(), def.testable_size, unit.c_str());
+  cr.note = buf + (cr.note.empty() ? std::string() : "; " + cr.note);
+}
 
 /// Runs the stepwise selection on one family (indices into the table) and writes its verdicts into res.
 std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &family, bool on_rates, bool on_bias,
@@ -43,6 +62,9 @@ std::vector<size_t> test_family(const Design &d, const std::vector<size_t> &fami
       cr.note = s.note;
     if (!s.joint.empty())
       cr.estimates = candidate_estimates(def, cands[i].cols, s.fit, s.joint, rep, d);
+    cr.testable = s.testable;
+    if (!s.selected && s.testable && s.terms > 0 && def.testable_size > 0 && !cr.estimates.empty())
+      mark_weak(def, s.terms, d.wald_df(), opt.min_sigma, cr);
     if (!s.joint.empty() && !s.nested) {
       cr.curve = binned_curve(cands[i].cols, d, s.fit, s.joint, opt.plot_bins);
       cr.curve.xlabel = def.xlabel;
@@ -119,6 +141,8 @@ std::vector<CandidateResult> rank_candidates(std::vector<CandidateResult> res, c
     if (std::find(order.begin(), order.end(), c) == order.end())
       rest.push_back(c);
   std::stable_sort(rest.begin(), rest.end(), [&](size_t a, size_t b) {
+    if (res[a].testable != res[b].testable) // what the log can resolve before what it cannot
+      return res[a].testable;
     if ((res[a].sigma > 0) != (res[b].sigma > 0))
       return res[a].sigma > 0;
     if (res[a].explained_added != res[b].explained_added)

@@ -20,7 +20,8 @@ std::vector<CandidateResult> test_candidates(const Design &d, const Design *rate
                                              std::vector<size_t> &selected);
 
 /// The selected candidates by the share they explain of their own data — those on the filter's accelerometer bias
-/// after the others, whose error that bias also absorbs — then the rest (tested before untested, then by share); sets
+/// after the others, whose error that bias also absorbs — then the rest (testable before not testable, tested before
+/// untested, then by share); sets
 /// each rank.
 std::vector<CandidateResult> rank_candidates(std::vector<CandidateResult> res, const std::vector<size_t> &selected);
 

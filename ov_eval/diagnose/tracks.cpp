@@ -45,12 +45,10 @@ UsedData select_data(const ResidualLog &log, const DiagnoseOptions &opt, Diagnos
     it = it->second.size() < min_track ? tracks.erase(it) : std::next(it);
   for (auto &kv : tracks)
     data.observations += static_cast<long>(kv.second.size());
-  if (data.observations < 50)
-    throw ovton::core::DataError(log.file,
-                                 "only " + std::to_string(data.observations) +
-                                     " usable observations (accepted or gated, in tracks of 3+): too few to diagnose");
   rep.rows_used = data.observations;
   rep.tracks_used = static_cast<long>(tracks.size());
+  if (tracks.empty())
+    return data;
   data.t_first = std::numeric_limits<int64_t>::max(), data.t_last = std::numeric_limits<int64_t>::min();
   for (auto &kv : tracks) {
     for (auto *r : kv.second)

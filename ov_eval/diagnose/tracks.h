@@ -10,6 +10,9 @@
 
 namespace ovton::eval::diag {
 
+/// Observations (rows in tracks of 3+) below which a log is not diagnosed.
+constexpr long kMinObservations = 50;
+
 /// One feature in one update, its rows in time order.
 using Track = std::vector<const ResidualLogRow *>;
 using TrackMap = std::map<std::pair<uint64_t, uint64_t>, Track>; ///< keyed by (update_id, feature_id)
@@ -23,7 +26,7 @@ struct UsedData {
 };
 
 /// Rows with a residual (status 0 or 1) in tracks of 3+; fills rep's row counts, tracks_used and duration_s.
-/// Throws DataError when fewer than 50 observations are left.
+/// Below kMinObservations of them nothing is testable (diagnose() says so).
 UsedData select_data(const ResidualLog &log, const DiagnoseOptions &opt, DiagnoseReport &rep);
 
 /// The intrinsics (the dataset's camera, given, or fitted from the log's u ≈ cu + fu·x) and the image height, into

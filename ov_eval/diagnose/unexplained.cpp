@@ -85,6 +85,16 @@ std::vector<UnexplainedStructure> find_unexplained(const Design &d, const std::v
         used.push_back(c);
     if (used.empty())
       continue;
+    const double df = left.wald_df();
+    if (df > 0 && static_cast<double>(used.size()) > df) { // more bin means than independent clusters to test them
+      UnexplainedStructure u;
+      u.where = g.where;
+      u.testable = false;
+      u.largest = "not testable on this log: " + std::to_string(used.size()) + " bin means against about " +
+                  std::to_string(static_cast<int>(std::lround(df + 1))) + " independent clusters";
+      out.push_back(u);
+      continue;
+    }
     Eigen::MatrixXd Xu(n, used.size());
     for (size_t c = 0; c < used.size(); ++c)
       Xu.col(c) = X.col(used[c]);
@@ -93,7 +103,7 @@ std::vector<UnexplainedStructure> find_unexplained(const Design &d, const std::v
     UnexplainedStructure u;
     u.where = g.where;
     u.explained = f0.loss > 0 ? (f0.loss - f.loss) / f0.loss : 0.0;
-    u.sigma = wald_to_sigma(f.beta.dot(f.cov.ldlt().solve(f.beta)), static_cast<int>(used.size()), left.wald_df());
+    u.sigma = wald_to_sigma(f.beta.dot(f.cov.ldlt().solve(f.beta)), static_cast<int>(used.size()), df);
     u.flagged = u.sigma >= opt.min_sigma && u.explained >= opt.min_explained;
     Eigen::Index big = 0;
     f.beta.cwiseAbs().maxCoeff(&big);

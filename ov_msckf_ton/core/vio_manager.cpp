@@ -1,11 +1,8 @@
 #include "ov_msckf_ton/core/vio_manager.h"
 #include "ov_core/math/so3.h"
-#include "ov_core/track/track_pipeline.h"
 #include "ov_core/types/errors.h"
 #include "ov_core/types/state_interpolation.h"
 #include "ov_msckf_ton/state/state_helper.h"
-
-#include "ov_core/io/image_store.h"
 
 #include <algorithm>
 #include <chrono>
@@ -31,30 +28,6 @@ ImuNoise noise_from(const ovton::core::ImuCalib &imu, const VioOptions &opt) {
   return n;
 }
 
-UpdaterMSCKFOptions updater_options(const VioOptions &o) {
-  UpdaterMSCKFOptions u;
-  u.sigma_px = o.update.sigma_px;
-  u.chi2_multiplier = o.update.chi2_multiplier;
-  u.min_observations = o.update.min_track_length;
-  u.min_parallax_deg = o.update.min_parallax_deg;
-  u.max_features = o.update.max_features;
-  u.track_correlation = o.update.track_correlation;
-  u.covariance_track_correlation = o.update.covariance_track_correlation;
-  u.td_velocity_debias = o.td.velocity_debias;
-  u.readout_state_velocity = o.calibration.readout_state_velocity;
-  return u;
-}
-
-UpdaterSlamOptions slam_options(const VioOptions &o) {
-  UpdaterSlamOptions u;
-  u.sigma_px = o.slam.sigma_px > 0 ? o.slam.sigma_px : o.update.sigma_px;
-  u.chi2_multiplier = o.slam.chi2_multiplier;
-  u.track_correlation = o.slam.track_correlation;
-  u.covariance_sigma_px = o.slam.covariance_sigma_px;
-  u.state_velocity = o.slam.state_velocity;
-  return u;
-}
-
 TdObservation td_observation(TdMode m) {
   if (uses_state_relevant(m))
     return TdObservation::StateRelevant;
@@ -63,56 +36,21 @@ TdObservation td_observation(TdMode m) {
   return TdObservation::None;
 }
 
-FvonProviderOptions fvon_options(const TonOptions &o, bool stencils) {
-  FvonProviderOptions f;
-  f.stencils = stencils;
-  f.max_labels = o.fvon_max_labels;
-  f.min_f2f_labels = o.fvon_min_f2f_labels;
-  f.gate_px_s = o.fvon_gate_px_s;
-  f.its.train.max_epochs = o.its_epochs;
-  f.its.train.plateau_epochs = f.f2f.train.plateau_epochs = o.plateau_epochs;
-  f.its.train.plateau_rel = f.f2f.train.plateau_rel = o.plateau_rel;
-  f.its.train.warmup_calls = f.f2f.train.warmup_calls = o.fvon_warmup_trainings;
-  f.its.train.maintenance_epochs = f.f2f.train.maintenance_epochs = o.fvon_maintenance_epochs;
-  f.its.residual = o.its_residual;
-  f.f2f.train.max_epochs = o.f2f_epochs;
-  f.f2f.inverse_depth_input = o.f2f_inverse_depth;
-  return f;
-}
-
-InertialInitOptions inertial_init_options(const VioOptions &o) {
-  const InitOptions &i = o.init;
-  InertialInitOptions r;
-  r.allow_static = i.mode != InitMode::Dynamic;
-  r.allow_dynamic = i.mode == InitMode::Auto || i.mode == InitMode::Dynamic;
-  r.static_window_s = i.window_s;
-  r.max_accel_std = i.max_accel_std;
-  r.max_gyro_std = i.max_gyro_std;
-  r.still_window_s = i.still_window_s;
-  r.still_max_disparity_px = i.still_max_disparity_px;
-  r.sigma_yaw = i.sigma_yaw;
-  r.sigma_pos = i.sigma_pos;
-  DynamicInitOptions &d = r.dynamic;
-  d.window_s = i.dyn_window_s;
-  d.min_features = i.dyn_min_features;
-  d.max_features = i.dyn_max_features;
-  d.min_observations = i.dyn_min_observations;
-  d.min_disparity_px = i.dyn_min_disparity_px;
-  d.sigma_px = o.update.sigma_px;
-  d.max_rms_px = i.dyn_max_rms_px;
-  d.max_sigma_rollpitch_deg = i.dyn_max_sigma_rollpitch_deg;
-  d.max_sigma_vel = i.dyn_max_sigma_vel;
-  d.sigma_inflation = i.dyn_sigma_inflation;
-  return r;
-}
-
 } // namespace
 
-VioManager::VioManager(const VioOptions &opt, const ovton::core::CameraCalib &cam, const ovton::core::ImuCalib &imu)
-    : opt_(opt), camera_(cam), tracker_(camera_, opt.track), propagator_(noise_from(imu, opt), opt.imu.gravity_mag),
-      updater_(cam, updater_options(opt)), slam_(cam, slam_options(opt), updater_),
-      state_(std::make_unique<State>(estimates_td(opt.td.mode))), health_(opt) {
+VioManager::VioManager(const VioOptions &opt, const ovton::core::CameraCalib &cam, const ovton::core::ImuCalib &imu,
+                       FilterAids aids, StateCallback on_state, std::vector<std::shared_ptr<FilterObserver>> observers)
+    : opt_(opt), camera_(cam), propagator_(noise_from(imu, opt), opt.imu.gravity_mag), updater_(cam, opt.update.msckf),
+      slam_(cam, opt.slam.updater, updater_), state_(std::make_unique<State>(estimates_td(opt.td.mode))),
+      aids_(std::move(aids)), on_state_(std::move(on_state)), observers_(std::move(observers)), health_(opt) {
   validate_vio_options(opt_);
+  for (const auto &o : observers_) {
+    if (!o)
+      throw ovton::core::UsageError("VioManager: a null observer");
+    want_velocities_ = want_velocities_ || o->wants_velocities();
+  }
+  // Residual records feed the residual log and each image's feature fates.
+  want_records_ = want_frames_ = !observers_.empty();
   state_->td = opt.td.init_s;
   // The calibration as the filter holds it; a variable (and a column in the updates) only where it is estimated.
   CalibState &c = state_->calib;
@@ -121,28 +59,23 @@ VioManager::VioManager(const VioOptions &opt, const ovton::core::CameraCalib &ca
   c.intrinsics << cam.intrinsics, cam.dist_coeffs;
   c.readout_s = opt.calibration.readout_s;
   if (opt.init.mode != InitMode::GroundTruth)
-    inertial_init_ = std::make_unique<InertialInitializer>(
-        inertial_init_options(opt), cam.T_BC, 0.5 * (cam.intrinsics(0) + cam.intrinsics(1)), opt.imu.gravity_mag);
-  if (uses_fvon(opt.td.mode))
-    fvon_ = std::make_unique<FvonVelocityProvider>(cam, fvon_options(opt.ton, opt.td.velocity_debias != 0.0));
-  td_model_ = make_td_model(opt_, [this](int64_t t_cam_ns) {
-    if (!td_oracle_)
-      throw ovton::core::UsageError("td mode 'oracle' needs the dataset's td_truth/data.csv");
-    return td_oracle_(t_cam_ns);
-  });
+    inertial_init_ =
+        std::make_unique<InertialInitializer>(opt.init, opt.update.msckf.sigma_px, cam.T_BC,
+                                              0.5 * (cam.intrinsics(0) + cam.intrinsics(1)), opt.imu.gravity_mag);
+  if (uses_fvon(opt.td.mode)) {
+    fvon_ = std::make_unique<FvonVelocityProvider>(cam, opt.ton.fvon, opt.update.msckf.td_velocity_debias != 0.0);
+    fvon_->set_evaluate_both(want_velocities_);
+  }
+  if (opt.init.mode == InitMode::GroundTruth && aids_.groundtruth.empty())
+    throw ovton::core::UsageError("ground-truth initialisation needs the recording's ground truth");
+  td_model_ = make_td_model(opt_, aids_.td_truth);
 }
 
 const TpnDriver *VioManager::tpn() const {
   return tpn_driver_of(*td_model_);
 }
 
-void VioManager::set_velocity_log(ovton::core::VelocityLogWriter *log) {
-  velocity_log_ = log;
-  if (fvon_)
-    fvon_->set_evaluate_both(log != nullptr);
-}
-
-void VioManager::log_velocities(const std::vector<const ovton::core::Feature *> &feats, const VelocityProvider &used) {
+void VioManager::show_velocities(const std::vector<const ovton::core::Feature *> &feats, const VelocityProvider &used) {
   const double focal = 0.5 * (camera_.calib().intrinsics(0) + camera_.calib().intrinsics(1));
   std::vector<ovton::core::VelocityLogRow> rows;
   for (const auto *f : feats) {
@@ -185,7 +118,9 @@ void VioManager::log_velocities(const std::vector<const ovton::core::Feature *> 
       rows.push_back(r);
     }
   }
-  velocity_log_->write(rows);
+  for (const auto &o : observers_)
+    if (o->wants_velocities())
+      o->on_velocities(rows);
 }
 
 double VioManager::td_for_image_s(int64_t t_cam_ns) const {
@@ -198,36 +133,11 @@ void VioManager::on_imu(const ovton::core::ImuData &m) {
   propagator_.feed_imu(m);
   if (!initialized_) {
     init_imu_.push_back(m);
-    while (init_imu_.size() > 2 && init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns >
-                                       ovton::core::s_to_ns(std::max(opt_.init.window_s, opt_.init.dyn_window_s) + 1.0))
+    while (init_imu_.size() > 2 &&
+           init_imu_.back().t_imu_ns - init_imu_.front().t_imu_ns >
+               ovton::core::s_to_ns(std::max(opt_.init.window_s, opt_.init.dynamic.window_s) + 1.0))
       init_imu_.pop_front();
   }
-}
-
-void VioManager::on_image(const ovton::core::ImageEntry &e) {
-  if (e.features) {
-    process_features(e.t_cam_ns, *e.features);
-    return;
-  }
-  const auto t0 = Clock::now();
-  if (frame_source_) {
-    const ovton::core::TrackedFrame f = frame_source_(e); // may wait for the tracking thread; rethrows its error
-    if (f.on_caller_thread) {
-      times_.image_load += f.wait_image_ms;
-      times_.tracking += f.track_ms;
-    } else {
-      times_.image_load += ms_since(t0);
-      times_.tracking_thread += f.track_ms;
-    }
-    db_.add_frame(e.t_cam_ns, f.features);
-    process_frame(e.t_cam_ns, t0);
-    return;
-  }
-  cv::Mat gray = image_source_ ? image_source_(e) : ovton::core::load_image(e);
-  if (gray.empty())
-    throw ovton::core::DataError(e.path, "unreadable image (listed for stamp " + std::to_string(e.t_cam_ns) + ")");
-  times_.image_load += ms_since(t0);
-  process_image(e.t_cam_ns, gray);
 }
 
 InitFrame VioManager::init_frame(int64_t t_cam_ns, int64_t t_imu_ns) const {
@@ -249,7 +159,7 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
   std::optional<Eigen::Matrix<double, ImuState::kSize, ImuState::kSize>> P_imu; // a dynamic initialisation's own
   if (io.mode == InitMode::GroundTruth) {
     ovton::core::StateSample g;
-    if (!ovton::core::interpolate_state(gt_, t_imu, g)) {
+    if (!ovton::core::interpolate_state(aids_.groundtruth, t_imu, g)) {
       init_msg_ = "no ground truth at the first image";
       return false;
     }
@@ -291,7 +201,7 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
   }
   add_calibration_variables();
   // A track-error model for the reported covariance: from here on P_report follows P's gains (State::P_report).
-  if (opt_.update.covariance_track_correlation > 0 || opt_.slam.covariance_sigma_px > 0)
+  if (opt_.update.msckf.covariance_track_correlation > 0 || opt_.slam.updater.covariance_sigma_px > 0)
     s.start_report();
   initialized_ = true;
   init_imu_.clear();
@@ -321,23 +231,10 @@ void VioManager::add_calibration_variables() {
     s.calib.imu_intrinsics_index = add(Eigen::VectorXd::Constant(12, o.sigma_imu_intrinsics));
 }
 
-void VioManager::process_image(int64_t t_cam_ns, const cv::Mat &gray) {
-  const auto t0 = Clock::now();
-  const auto &tracked = tracker_.track(t_cam_ns, gray);
-  db_.add_frame(t_cam_ns, tracked);
-  times_.tracking += ms_since(t0);
-  process_frame(t_cam_ns, t0);
-}
-
-void VioManager::process_features(int64_t t_cam_ns, const std::vector<ovton::core::PointObservation> &obs) {
-  const auto t0 = Clock::now();
-  for (const auto &o : obs)
-    db_.add_observation(o.id, t_cam_ns, o.uv, camera_.undistort(o.uv));
-  times_.tracking += ms_since(t0);
-  process_frame(t_cam_ns, t0);
-}
-
-void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time_point t_start) {
+void VioManager::process_frame(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features) {
+  const auto t_start = Clock::now();
+  db_.add_frame(t_cam_ns, features);
+  fate_.clear();
   ++counters_.images;
   auto t0 = Clock::now();
 
@@ -363,21 +260,20 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
     finish_image(t_cam_ns);
     ++times_.frames;
     times_.total += ms_since(t_start);
-    if (on_state_)
-      on_state_(snapshot());
+    hand_out(t_cam_ns, features);
     return;
   }
   // The clone's t_d Jacobian needs the body rate AT the image time (interpolated reading), not the mean over the
   // last IMU interval, and not a stale value: the first clone after initialisation has no interval behind it.
   ovton::core::ImuData at_image;
-  const bool have_reading = propagator_.reading_at(s.t_imu_ns, at_image);
+  const bool have_reading = propagator_.imu().interpolate(s.t_imu_ns, at_image);
   // The clone's error from a t_d error follows the TRUE body rate; a vibrating gyro's reading at one instant is not
   // it, and on a flight whose rate barely changes the filter takes the vibration for information about t_d
   // (docs/robustness.md, "Weak excitation"). A centred mean over the window removes the vibration without lag; the
   // replay hands over its second half before the image (imu_lookahead_ns).
   const int64_t half = imu_lookahead_ns();
   Eigen::Vector3d w_B, w_mean;
-  if (half > 0 && propagator_.mean_gyro(s.t_imu_ns - half, s.t_imu_ns + half, w_mean))
+  if (half > 0 && propagator_.imu().mean_gyro_readings(s.t_imu_ns - half, s.t_imu_ns + half, w_mean))
     w_B = w_mean - s.imu.bg;
   else
     w_B = have_reading ? Eigen::Vector3d(at_image.wm - s.imu.bg) : propagator_.last_w_B();
@@ -395,8 +291,28 @@ void VioManager::process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time
 
   ++times_.frames;
   times_.total += ms_since(t_start);
+  hand_out(t_cam_ns, features);
+}
+
+void VioManager::hand_out(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features) {
+  const ovton::core::StateSample state = snapshot(); // checks the filter's health first
+  if (want_frames_) {
+    FrameFeatures f;
+    f.t_cam_ns = t_cam_ns;
+    f.t_imu_ns = state.t_ns;
+    for (const auto &tf : features) {
+      f.ids.push_back(tf.id);
+      f.uv.push_back(tf.uv);
+      const auto it = fate_.find(tf.id);
+      f.fate.push_back(it == fate_.end() ? FrameFeatures::Tracked : it->second);
+    }
+    for (const auto &o : observers_)
+      o->on_frame(f);
+  }
+  for (const auto &o : observers_)
+    o->on_filter(*this);
   if (on_state_)
-    on_state_(snapshot());
+    on_state_(state);
 }
 
 void VioManager::propagate_to_image(int64_t t_cam_ns) {
@@ -508,11 +424,12 @@ void VioManager::msckf_update(const std::vector<const ovton::core::Feature *> &f
                               const VelocityProvider &velocities) {
   State &s = *state_;
   std::vector<ResidualRecord> records;
-  if (velocity_log_)
-    log_velocities(feats, velocities);
+  if (want_velocities_)
+    show_velocities(feats, velocities);
   UpdateStats st;
-  td_tracked_update(
-      [&] { st = updater_.update(s, feats, td_observation(opt_.td.mode), velocities, log_ ? &records : nullptr); });
+  td_tracked_update([&] {
+    st = updater_.update(s, feats, td_observation(opt_.td.mode), velocities, want_records_ ? &records : nullptr);
+  });
   ++counters_.updates;
   health_.on_update(s.t_imu_ns, st);
   counters_.features_used += st.features_used;
@@ -523,8 +440,12 @@ void VioManager::msckf_update(const std::vector<const ovton::core::Feature *> &f
     counters_.td_rows_by_source[k] += st.td_obs_used[k];
   }
   counters_.td_features += st.td_features_used;
-  if (log_)
-    log_->write(records, s);
+  if (want_records_) {
+    for (const auto &o : observers_)
+      o->on_residuals(records, s);
+    for (const auto &r : records)
+      fate_[r.feature_id] = r.status == ResidualStatus::Accepted ? FrameFeatures::Used : FrameFeatures::Gated;
+  }
   // A feature used in an update must not be used again: its information is in the state now.
   std::vector<size_t> ids;
   ids.reserve(feats.size());

@@ -1,12 +1,13 @@
 #pragma once
-// VioManager: takes IMU readings and images in clock order (it is a ReplayConsumer), and runs front end,
-// propagation, cloning, MSCKF update and the time-offset strategy. It owns no files: output goes to callbacks.
+// VioManager: the filter. It takes IMU readings and images' tracked features in clock order — the estimator facade
+// (estimator/estimator.h) decides which readings come before which image — and runs propagation, cloning, the MSCKF
+// and SLAM updates and the time-offset model. It owns no threads and no files: states go to a callback, everything
+// else it shows to its observers.
 #include "ov_core/cam/camera_model.h"
-#include "ov_core/io/replay.h"
-#include "ov_core/io/velocity_log.h"
 #include "ov_core/track/feature_database.h"
 #include "ov_core/track/track_klt.h"
 #include "ov_msckf_ton/core/filter_health.h"
+#include "ov_msckf_ton/core/filter_observer.h"
 #include "ov_msckf_ton/core/vio_options.h"
 #include "ov_msckf_ton/init/inertial_init.h"
 #include "ov_msckf_ton/state/propagator.h"
@@ -26,19 +27,15 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <unordered_map>
 #include <vector>
-
-namespace ovton::core {
-struct TrackedFrame; // ov_core/track/track_pipeline.h
-}
 
 namespace ovton::msckf {
 
 /// Per-frame cost of each stage [ms], accumulated; the benchmark prints means. `networks` is FVON and TPN
-/// (training, prediction and FVON's triangulation); it is not part of `update`. With a frame source that tracks on
-/// a thread of its own, `image_load` is the filter's wait for a tracked image and `tracking` stays 0; the tracking
-/// thread's own time is `tracking_thread`, which `total` does not contain. Images whose tracks were given (the coarse
-/// t_d search's) cost neither.
+/// (training, prediction and FVON's triangulation); it is not part of `update`. `image_load` is what the caller spent
+/// decoding images; `tracking` the tracker's time on the filter's thread and `tracking_thread` on a thread of its own
+/// (the estimator's tracking stage), which `total` does not contain.
 struct StageTimes {
   long frames = 0;
   double image_load = 0, tracking = 0, propagation = 0, update = 0, networks = 0, total = 0;
@@ -57,44 +54,33 @@ struct VioCounters {
   long slam_initialised = 0, slam_updates = 0, slam_gated = 0; ///< SLAM landmarks initialised, observations used
 };
 
-class VioManager : public ovton::core::ReplayConsumer {
+/// What a run may know besides its measurements: simulations give the true state (for init.mode groundtruth) and
+/// the true offset (for mode oracle).
+struct FilterAids {
+  std::vector<ovton::core::StateSample> groundtruth; ///< IMU clock, time-ordered
+  std::function<double(int64_t t_cam_ns)> td_truth;
+};
+
+class VioManager {
 public:
   using StateCallback = std::function<void(const ovton::core::StateSample &)>;
 
-  VioManager(const VioOptions &opt, const ovton::core::CameraCalib &cam, const ovton::core::ImuCalib &imu);
+  /// `on_state` receives every state the filter hands out (after its health check); `observers` see the updates'
+  /// residuals, velocities and each image's features.
+  VioManager(const VioOptions &opt, const ovton::core::CameraCalib &cam, const ovton::core::ImuCalib &imu,
+             FilterAids aids = {}, StateCallback on_state = {},
+             std::vector<std::shared_ptr<FilterObserver>> observers = {});
 
-  /// Oracle mode: the true offset at a camera stamp (needed before the first image).
-  void set_td_oracle(std::function<double(int64_t t_cam_ns)> f) { td_oracle_ = std::move(f); }
-  /// Ground-truth initialisation: the true state at an IMU-clock time.
-  void set_groundtruth(std::vector<ovton::core::StateSample> gt) { gt_ = std::move(gt); }
-  void set_state_callback(StateCallback cb) { on_state_ = std::move(cb); }
-  void set_residual_log(ResidualLogWriter *log) { log_ = log; }
-  /// Per observation of every feature an update uses, each rule's and network's image velocity (for
-  /// `ovton velocities`). In modes fvon/ton it makes FVON predict with both networks (on a copy; same trajectory).
-  void set_velocity_log(ovton::core::VelocityLogWriter *log);
-  /// Where on_image gets its decoded image (e.g. an ovton::core::ImagePrefetcher); default ovton::core::load_image (the
-  /// file, or the bag message). An empty image is reported as unreadable, naming the file.
-  using ImageSource = std::function<cv::Mat(const ovton::core::ImageEntry &)>;
-  void set_image_source(ImageSource src) { image_source_ = std::move(src); }
-  /// The raw gyro for the tracker's LK starting points (tracker.gyro_prior), when this manager tracks the images.
-  void set_rotation_prior(std::shared_ptr<const ovton::core::GyroRotationPrior> prior) {
-    tracker_.set_rotation_prior(std::move(prior));
-  }
-  /// Where on_image gets an image's tracked features when they are tracked elsewhere (an ovton::core::TrackPipeline
-  /// with this manager's tracker options and camera): set, it replaces the image source and the manager's own tracker.
-  using FrameSource = std::function<ovton::core::TrackedFrame(const ovton::core::ImageEntry &)>;
-  void set_frame_source(FrameSource src) { frame_source_ = std::move(src); }
-
-  void on_imu(const ovton::core::ImuData &m) override;
-  /// Loads the image named in the entry (grayscale, from the image source), then processes it.
-  void on_image(const ovton::core::ImageEntry &e) override;
-  double td_for_image_s(int64_t t_cam_ns) const override;
-  int64_t imu_lookahead_ns() const override { return ovton::core::s_to_ns(0.5 * opt_.td.jacobian_rate_window_s); }
-
-  /// Processes an already decoded image (benchmarks, tests, prefetching callers).
-  void process_image(int64_t t_cam_ns, const cv::Mat &gray);
-  /// Processes one frame of a feature-level dataset (no tracker: the observations are given).
-  void process_features(int64_t t_cam_ns, const std::vector<ovton::core::PointObservation> &obs);
+  /// IMU readings, in time order, up to (and one past) each image's IMU-clock time before the image.
+  void on_imu(const ovton::core::ImuData &m);
+  /// One image's features (tracker output, or a feature-level dataset's points with their undistorted coordinates).
+  void process_frame(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features);
+  /// t_d for an image at t_cam_ns as the next propagation will use it (t_imu = t_cam + t_d): the IMU must reach
+  /// t_cam + this + imu_lookahead_ns() before the image.
+  double td_for_image_s(int64_t t_cam_ns) const;
+  /// How far past an image's IMU-clock time the readings are wanted before it: a centred mean of the body rate at the
+  /// image needs half its window (time_offset.jacobian_rate_window_s); a live system pays it as latency.
+  int64_t imu_lookahead_ns() const { return ovton::core::s_to_ns(0.5 * opt_.td.jacobian_rate_window_s); }
 
   bool initialized() const { return initialized_; }
   const State &state() const { return *state_; }
@@ -112,7 +98,6 @@ public:
   const FilterHealth &health() const { return health_; }
 
 private:
-  void process_frame(int64_t t_cam_ns, std::chrono::steady_clock::time_point t_start);
   bool try_initialize(int64_t t_cam_ns);
   /// The calibration variables the options ask for, with their priors (at initialisation, before any clone).
   void add_calibration_variables();
@@ -139,7 +124,6 @@ private:
 
   VioOptions opt_;
   ovton::core::CameraModel camera_;
-  ovton::core::TrackKLT tracker_;
   ovton::core::FeatureDatabase db_;
   Propagator propagator_;
   UpdaterMSCKF updater_;
@@ -148,15 +132,15 @@ private:
   std::deque<ovton::core::ImuData> init_imu_;
   std::unique_ptr<InertialInitializer> inertial_init_; ///< every initialisation but ground truth
 
-  std::function<double(int64_t)> td_oracle_;
-  std::vector<ovton::core::StateSample> gt_;
+  FilterAids aids_;
   StateCallback on_state_;
-  ResidualLogWriter *log_ = nullptr;
-  ovton::core::VelocityLogWriter *velocity_log_ = nullptr;
-  /// Rows of the velocity log for the update's features, with the velocities `used` gives them.
-  void log_velocities(const std::vector<const ovton::core::Feature *> &feats, const VelocityProvider &used);
-  ImageSource image_source_;
-  FrameSource frame_source_;
+  std::vector<std::shared_ptr<FilterObserver>> observers_;
+  bool want_records_ = false, want_velocities_ = false, want_frames_ = false;
+  /// Rows for the observers' velocities of the update's features, with the velocities `used` gives them.
+  void show_velocities(const std::vector<const ovton::core::Feature *> &feats, const VelocityProvider &used);
+  /// After an image: its state (health-checked) to the callback, its features with their fate to the observers.
+  void hand_out(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features);
+  std::unordered_map<size_t, FrameFeatures::Fate> fate_; ///< this image's updates' verdicts, by feature id
 
   bool initialized_ = false;
   std::string init_msg_;

@@ -49,6 +49,19 @@ template <typename T> Field field(const char *section, const char *key, T &ref) 
           }};
 }
 
+/// One key that sets the same option of several components (e.g. the plateau stop of every network): read into the
+/// first, copied to the others; printed from the first.
+template <typename T> Field shared_field(const char *section, const char *key, std::vector<T *> refs) {
+  Field f = field(section, key, *refs.front());
+  const auto read_first = f.read;
+  f.read = [read_first, refs](const YAML::Node &n, const std::string &file) {
+    read_first(n, file);
+    for (T *r : refs)
+      *r = *refs.front();
+  };
+  return f;
+}
+
 /// An enum read from its name; `parse` throws ovton::core::UsageError for unknown names.
 template <typename E>
 Field enum_field(const char *section, const char *key, E &ref, std::function<E(const std::string &)> parse,
@@ -105,6 +118,7 @@ std::vector<Field> fields(VioOptions &o) {
   const char *T = "time_offset", *N = "ton", *U = "update", *L = "slam", *C = "calibration", *Z = "zupt",
              *K = "tracker", *I = "imu", *S = "init";
   auto &cal = o.calibration;
+  auto &its_train = ton.fvon.its.train, &f2f_train = ton.fvon.f2f.train, &tpn_train = ton.tpn.tpn.train;
   return {
       enum_field<TdMode>(T, "mode", td.mode, parse_td_mode, [](TdMode m) { return to_string(m); }),
       enum_field<TdProcess>(T, "process", td.process, parse_td_process, [](TdProcess p) { return to_string(p); }),
@@ -114,49 +128,50 @@ std::vector<Field> fields(VioOptions &o) {
       field(T, "random_walk_tpn", td.random_walk_tpn),
       field(T, "rate_sigma_init", td.rate_sigma_init),
       field(T, "rate_random_walk", td.rate_random_walk),
-      field(T, "rate_max", td.rate_max),
+      field(T, "rate_max", ton.tpn.td_rate_max),
       field(T, "adaptive_noise", td.adaptive_noise),
       field(T, "adaptive_block_s", td.adaptive_block_s),
       field(T, "jacobian_rate_window_s", td.jacobian_rate_window_s),
       enum_field<SirVelocity>(T, "sir_velocity", td.sir_velocity, parser(kSirVelocity), namer(kSirVelocity)),
       enum_field<FirstVelocity>(T, "first_velocity", td.first_velocity, parser(kFirstVelocity), namer(kFirstVelocity)),
-      field(T, "velocity_debias", td.velocity_debias),
+      field(T, "velocity_debias", up.msckf.td_velocity_debias),
       field(T, "clone_trend", td.clone_trend),
       field(T, "clone_trend_tau_s", td.clone_trend_tau_s),
-      field(T, "search", td.search),
-      field(T, "search_range_s", td.search_range_s),
-      field(N, "fvon_max_labels", ton.fvon_max_labels),
-      field(N, "fvon_min_f2f_labels", ton.fvon_min_f2f_labels),
-      field(N, "fvon_gate_px_s", ton.fvon_gate_px_s),
-      field(N, "its_epochs", ton.its_epochs),
-      field(N, "f2f_epochs", ton.f2f_epochs),
-      field(N, "tpn_epochs", ton.tpn_epochs),
-      field(N, "tpn_min_labels", ton.tpn_min_labels),
+      field(T, "search", td.search.enabled),
+      field(T, "search_range_s", td.search.range_s),
+      field(N, "fvon_max_labels", ton.fvon.max_labels),
+      field(N, "fvon_min_f2f_labels", ton.fvon.min_f2f_labels),
+      field(N, "fvon_gate_px_s", ton.fvon.gate_px_s),
+      field(N, "its_epochs", ton.fvon.its.train.max_epochs),
+      field(N, "f2f_epochs", ton.fvon.f2f.train.max_epochs),
+      field(N, "tpn_epochs", ton.tpn.tpn.train.max_epochs),
+      field(N, "tpn_min_labels", ton.tpn.min_labels),
       field(N, "tpn_start_sigma_s", ton.tpn_start_sigma_s),
       field(N, "tpn_label_images", ton.tpn_label_images),
-      field(N, "its_residual", ton.its_residual),
-      field(N, "tpn_residual", ton.tpn_residual),
-      field(N, "f2f_inverse_depth", ton.f2f_inverse_depth),
-      field(N, "plateau_epochs", ton.plateau_epochs),
-      field(N, "plateau_rel", ton.plateau_rel),
-      field(N, "fvon_warmup_trainings", ton.fvon_warmup_trainings),
-      field(N, "fvon_maintenance_epochs", ton.fvon_maintenance_epochs),
+      field(N, "its_residual", ton.fvon.its.residual),
+      field(N, "tpn_residual", ton.tpn.tpn.residual),
+      field(N, "f2f_inverse_depth", ton.fvon.f2f.inverse_depth_input),
+      shared_field<int>(N, "plateau_epochs",
+                        {&its_train.plateau_epochs, &f2f_train.plateau_epochs, &tpn_train.plateau_epochs}),
+      shared_field<double>(N, "plateau_rel", {&its_train.plateau_rel, &f2f_train.plateau_rel, &tpn_train.plateau_rel}),
+      shared_field<int>(N, "fvon_warmup_trainings", {&its_train.warmup_calls, &f2f_train.warmup_calls}),
+      shared_field<int>(N, "fvon_maintenance_epochs", {&its_train.maintenance_epochs, &f2f_train.maintenance_epochs}),
       field(U, "measurement_fej", up.measurement_fej),
       field(U, "max_clones", up.max_clones),
-      field(U, "min_track_length", up.min_track_length),
-      field(U, "min_parallax_deg", up.min_parallax_deg),
-      field(U, "sigma_px", up.sigma_px),
-      field(U, "chi2_multiplier", up.chi2_multiplier),
-      field(U, "max_features", up.max_features),
-      field(U, "track_correlation", up.track_correlation),
-      field(U, "covariance_track_correlation", up.covariance_track_correlation),
+      field(U, "min_track_length", up.msckf.min_observations),
+      field(U, "min_parallax_deg", up.msckf.min_parallax_deg),
+      field(U, "sigma_px", up.msckf.sigma_px),
+      field(U, "chi2_multiplier", up.msckf.chi2_multiplier),
+      field(U, "max_features", up.msckf.max_features),
+      field(U, "track_correlation", up.msckf.track_correlation),
+      field(U, "covariance_track_correlation", up.msckf.covariance_track_correlation),
       field(L, "max_features", o.slam.max_features),
       field(L, "max_init_per_frame", o.slam.max_init_per_frame),
-      field(L, "chi2_multiplier", o.slam.chi2_multiplier),
-      field(L, "sigma_px", o.slam.sigma_px),
-      field(L, "track_correlation", o.slam.track_correlation),
-      field(L, "covariance_sigma_px", o.slam.covariance_sigma_px),
-      field(L, "state_velocity", o.slam.state_velocity),
+      field(L, "chi2_multiplier", o.slam.updater.chi2_multiplier),
+      field(L, "sigma_px", o.slam.updater.sigma_px),
+      field(L, "track_correlation", o.slam.updater.track_correlation),
+      field(L, "covariance_sigma_px", o.slam.updater.covariance_sigma_px),
+      field(L, "state_velocity", o.slam.updater.state_velocity),
       field(C, "extrinsics", cal.extrinsics),
       field(C, "sigma_ext_rot", cal.sigma_ext_rot),
       field(C, "sigma_ext_pos", cal.sigma_ext_pos),
@@ -167,7 +182,7 @@ std::vector<Field> fields(VioOptions &o) {
       field(C, "readout", cal.readout),
       field(C, "readout_s", cal.readout_s),
       field(C, "sigma_readout_s", cal.sigma_readout_s),
-      field(C, "readout_state_velocity", cal.readout_state_velocity),
+      field(C, "readout_state_velocity", up.msckf.readout_state_velocity),
       field(C, "imu_intrinsics", cal.imu_intrinsics),
       field(C, "sigma_imu_intrinsics", cal.sigma_imu_intrinsics),
       field(Z, "enabled", o.zupt.enabled),
@@ -206,15 +221,15 @@ std::vector<Field> fields(VioOptions &o) {
       field("health", "enabled", o.health.enabled),
       field(S, "still_window_s", in.still_window_s),
       field(S, "still_max_disparity_px", in.still_max_disparity_px),
-      field(S, "dyn_window_s", in.dyn_window_s),
-      field(S, "dyn_min_features", in.dyn_min_features),
-      field(S, "dyn_max_features", in.dyn_max_features),
-      field(S, "dyn_min_observations", in.dyn_min_observations),
-      field(S, "dyn_min_disparity_px", in.dyn_min_disparity_px),
-      field(S, "dyn_max_rms_px", in.dyn_max_rms_px),
-      field(S, "dyn_max_sigma_rollpitch_deg", in.dyn_max_sigma_rollpitch_deg),
-      field(S, "dyn_max_sigma_vel", in.dyn_max_sigma_vel),
-      field(S, "dyn_sigma_inflation", in.dyn_sigma_inflation),
+      field(S, "dyn_window_s", in.dynamic.window_s),
+      field(S, "dyn_min_features", in.dynamic.min_features),
+      field(S, "dyn_max_features", in.dynamic.max_features),
+      field(S, "dyn_min_observations", in.dynamic.min_observations),
+      field(S, "dyn_min_disparity_px", in.dynamic.min_disparity_px),
+      field(S, "dyn_max_rms_px", in.dynamic.max_rms_px),
+      field(S, "dyn_max_sigma_rollpitch_deg", in.dynamic.max_sigma_rollpitch_deg),
+      field(S, "dyn_max_sigma_vel", in.dynamic.max_sigma_vel),
+      field(S, "dyn_sigma_inflation", in.dynamic.sigma_inflation),
   };
 }
 
@@ -255,42 +270,44 @@ void validate_vio_options(const VioOptions &o) {
   require(td.random_walk >= 0 && td.random_walk_tpn >= 0 && td.rate_random_walk >= 0,
           "time_offset random walks must be >= 0");
   require(td.rate_sigma_init > 0, "time_offset.rate_sigma_init must be > 0");
-  require(td.rate_max >= 0, "time_offset.rate_max must be >= 0");
+  require(o.ton.tpn.td_rate_max >= 0, "time_offset.rate_max must be >= 0");
   require(td.adaptive_block_s >= 0 && td.adaptive_block_s <= 60, "time_offset.adaptive_block_s must lie in [0, 60] s");
   require(td.jacobian_rate_window_s >= 0 && td.jacobian_rate_window_s <= 1.0,
           "time_offset.jacobian_rate_window_s must lie in [0, 1] s");
-  require(td.velocity_debias >= 0 && td.velocity_debias <= 10, "time_offset.velocity_debias must lie in [0, 10]");
+  const auto &u = o.update.msckf;
+  const auto &sl = o.slam.updater;
+  require(u.td_velocity_debias >= 0 && u.td_velocity_debias <= 10, "time_offset.velocity_debias must lie in [0, 10]");
   require(td.clone_trend_tau_s >= 0 && td.clone_trend_tau_s <= 600,
           "time_offset.clone_trend_tau_s must lie in [0, 600] s");
-  require(td.velocity_debias == 0 || (o.update.track_correlation == 0 && o.slam.track_correlation == 0),
+  require(u.td_velocity_debias == 0 || (u.track_correlation == 0 && sl.track_correlation == 0),
           "time_offset.velocity_debias assumes independent pixel errors: it needs update.track_correlation and "
           "slam.track_correlation 0");
   const auto &n = o.ton;
-  require(n.fvon_max_labels >= 1 && n.fvon_min_f2f_labels >= 1, "ton.fvon_max_labels and fvon_min_f2f_labels >= 1");
-  require(n.its_epochs >= 0 && n.f2f_epochs >= 0 && n.tpn_epochs >= 0, "ton epochs must be >= 0");
-  require(n.tpn_min_labels >= 2, "ton.tpn_min_labels must be >= 2");
+  require(n.fvon.max_labels >= 1 && n.fvon.min_f2f_labels >= 1, "ton.fvon_max_labels and fvon_min_f2f_labels >= 1");
+  for (const auto *t : {&n.fvon.its.train, &n.fvon.f2f.train, &n.tpn.tpn.train}) {
+    require(t->max_epochs >= 0, "ton epochs must be >= 0");
+    require(t->plateau_epochs >= 0 && t->plateau_rel >= 0, "ton.plateau_epochs and ton.plateau_rel must be >= 0");
+    require(t->warmup_calls >= 0 && t->maintenance_epochs >= 0,
+            "ton.fvon_warmup_trainings and ton.fvon_maintenance_epochs must be >= 0");
+  }
+  require(n.tpn.min_labels >= 2, "ton.tpn_min_labels must be >= 2");
   require(n.tpn_label_images >= 1 && n.tpn_label_images <= 200, "ton.tpn_label_images must lie in [1, 200]");
-  require(n.fvon_gate_px_s >= 0, "ton.fvon_gate_px_s must be >= 0");
-  require(n.plateau_epochs >= 0 && n.plateau_rel >= 0, "ton.plateau_epochs and ton.plateau_rel must be >= 0");
-  require(n.fvon_warmup_trainings >= 0 && n.fvon_maintenance_epochs >= 0,
-          "ton.fvon_warmup_trainings and ton.fvon_maintenance_epochs must be >= 0");
-  const auto &u = o.update;
-  require(u.max_clones >= 3, "update.max_clones must be >= 3");
-  require(u.min_track_length >= 2, "update.min_track_length must be >= 2");
+  require(n.fvon.gate_px_s >= 0, "ton.fvon_gate_px_s must be >= 0");
+  require(o.update.max_clones >= 3, "update.max_clones must be >= 3");
+  require(u.min_observations >= 2, "update.min_track_length must be >= 2");
   require(u.min_parallax_deg >= 0, "update.min_parallax_deg must be >= 0");
   require(u.sigma_px > 0, "update.sigma_px must be > 0");
   require(u.chi2_multiplier > 0, "update.chi2_multiplier must be > 0");
   require(u.max_features >= 0, "update.max_features must be >= 0 (0 = no limit)");
   require(u.covariance_track_correlation >= 0 && u.covariance_track_correlation < 1,
           "update.covariance_track_correlation must lie in [0, 1)");
-  require((u.covariance_track_correlation == 0 && o.slam.covariance_sigma_px == 0) ||
-              (u.track_correlation == 0 && o.slam.track_correlation == 0),
+  require((u.covariance_track_correlation == 0 && sl.covariance_sigma_px == 0) ||
+              (u.track_correlation == 0 && sl.track_correlation == 0),
           "update.covariance_track_correlation and slam.covariance_sigma_px are for the independent weights: they "
           "need update.track_correlation and slam.track_correlation 0");
-  require(o.slam.covariance_sigma_px == 0 ||
-              o.slam.covariance_sigma_px >= (o.slam.sigma_px > 0 ? o.slam.sigma_px : u.sigma_px),
+  require(sl.covariance_sigma_px == 0 || sl.covariance_sigma_px >= (sl.sigma_px > 0 ? sl.sigma_px : u.sigma_px),
           "slam.covariance_sigma_px must be 0 (off) or at least the landmarks' sigma_px");
-  require(o.slam.max_features >= 0 && o.slam.max_init_per_frame >= 0 && o.slam.chi2_multiplier > 0,
+  require(o.slam.max_features >= 0 && o.slam.max_init_per_frame >= 0 && sl.chi2_multiplier > 0,
           "slam.max_features and slam.max_init_per_frame >= 0, slam.chi2_multiplier > 0");
   const auto &c = o.calibration;
   require(c.sigma_ext_rot > 0 && c.sigma_ext_pos > 0 && c.sigma_focal_px > 0 && c.sigma_center_px > 0 &&
@@ -307,7 +324,7 @@ void validate_vio_options(const VioOptions &o) {
   require(o.imu.gravity_mag > 0, "imu.gravity_mag must be > 0");
   require(o.imu.gravity_mag <= 100, "imu.gravity_mag must be <= 100 m/s^2");
   require(std::abs(td.init_s) <= 10, "time_offset.init_s must be within +-10 s");
-  require(td.search_range_s > 0 && td.search_range_s <= 1, "time_offset.search_range_s must be in (0, 1]");
+  require(td.search.range_s > 0 && td.search.range_s <= 1, "time_offset.search_range_s must be in (0, 1]");
   const auto &i = o.init;
   require(i.window_s > 0, "init.window_s must be > 0");
   require(i.window_s <= 60, "init.window_s must be <= 60 s");
@@ -315,12 +332,13 @@ void validate_vio_options(const VioOptions &o) {
   require(i.sigma_rollpitch > 0 && i.sigma_yaw > 0 && i.sigma_pos > 0 && i.sigma_vel > 0 && i.sigma_bg > 0 &&
               i.sigma_ba > 0,
           "init sigmas must be > 0");
-  require(i.still_window_s > 0 && i.still_max_disparity_px > 0 && i.dyn_window_s > 0,
+  const auto &dy = i.dynamic;
+  require(i.still_window_s > 0 && i.still_max_disparity_px > 0 && dy.window_s > 0,
           "init.still_window_s, still_max_disparity_px and dyn_window_s must be > 0");
-  require(i.dyn_min_features >= 3 && i.dyn_max_features >= i.dyn_min_features && i.dyn_min_observations >= 2,
+  require(dy.min_features >= 3 && dy.max_features >= dy.min_features && dy.min_observations >= 2,
           "init.dyn_min_features >= 3, dyn_max_features >= dyn_min_features, dyn_min_observations >= 2");
-  require(i.dyn_min_disparity_px >= 0 && i.dyn_max_rms_px > 0 && i.dyn_max_sigma_rollpitch_deg > 0 &&
-              i.dyn_max_sigma_vel > 0 && i.dyn_sigma_inflation > 0,
+  require(dy.min_disparity_px >= 0 && dy.max_rms_px > 0 && dy.max_sigma_rollpitch_deg > 0 && dy.max_sigma_vel > 0 &&
+              dy.sigma_inflation > 0,
           "init.dyn_* thresholds must be > 0");
   const auto &t = o.track;
   require(t.num_features > 0 && t.grid_x > 0 && t.grid_y > 0, "tracker.num_features, grid_x and grid_y must be > 0");

@@ -361,7 +361,7 @@ bool preintegrate(const std::deque<ImuData> &imu, int64_t t0_ns, const std::vect
 
 DynamicInitResult dynamic_initialize(const std::vector<InitFrame> &frames, const std::deque<ImuData> &imu,
                                      const Eigen::Matrix4d &T_BC, double focal_px, double gravity_mag, double sigma_yaw,
-                                     double sigma_pos, const DynamicInitOptions &opt) {
+                                     double sigma_pos, double sigma_px, const DynamicInitOptions &opt) {
   DynamicInitResult res;
   const auto fail = [&](std::string why) {
     res.ok = false;
@@ -406,7 +406,7 @@ DynamicInitResult dynamic_initialize(const std::vector<InitFrame> &frames, const
              R_BC.transpose(),
              -R_BC.transpose() * T_BC.block<3, 1>(0, 3),
              gravity_mag,
-             focal_px / opt.sigma_px};
+             focal_px / sigma_px};
   for (const auto &f : frames) {
     pb.t_ns.push_back(f.t_imu_ns);
     pb.t.push_back(1e-9 * static_cast<double>(f.t_imu_ns - frames.front().t_imu_ns));
@@ -425,7 +425,7 @@ DynamicInitResult dynamic_initialize(const std::vector<InitFrame> &frames, const
     return fail("degenerate linear system");
 
   // Levenberg-Marquardt on the Huber-weighted reprojection errors with the bias priors.
-  const double k = opt.huber_px / opt.sigma_px;
+  const double k = opt.huber_px / sigma_px;
   Eigen::VectorXd r;
   pb.residuals(x, pre, r);
   double cost = total_cost(pb, r, x, k, opt.sigma_bg_prior, opt.sigma_ba_prior), lambda = 1e-3;

@@ -10,6 +10,7 @@
 // Gauss-Newton / Levenberg-Marquardt refinement of the reprojection errors then estimates everything, biases
 // included. Scale is not a separate unknown: Δp is metric. The refinement's information matrix gives the covariance.
 #include "ov_core/types/sensor_data.h"
+#include "ov_msckf_ton/init/init_options.h"
 
 #include <Eigen/Core>
 #include <deque>
@@ -24,25 +25,6 @@ struct InitFrame {
   int64_t t_cam_ns = 0;
   int64_t t_imu_ns = 0;
   std::vector<std::pair<size_t, Eigen::Vector2d>> obs;
-};
-
-struct DynamicInitOptions {
-  double window_s = 1.0;         ///< frames used: the newest and those up to this much older
-  int min_features = 15;         ///< features tracked through enough of the window
-  int max_features = 60;         ///< the longest tracks are used
-  int min_observations = 5;      ///< of a feature within the window
-  double min_disparity_px = 8.0; ///< median track displacement over the window: less is too little motion
-  double sigma_px = 1.0;         ///< pixel noise of a tracked observation
-  double huber_px = 2.0;         ///< robust loss: residuals beyond this count linearly
-  double sigma_bg_prior = 0.1;   ///< rad/s, prior of the gyro bias around zero (weak: the data decide)
-  double sigma_ba_prior = 0.2;   ///< m/s^2, prior of the accelerometer bias around zero
-  double max_rms_px = 1.5;       ///< reprojection RMS after the refinement (inliers)
-  /// Accept only a well-determined solution: gravity direction and velocity sigmas from the refinement's covariance,
-  /// with the accelerometer bias held (what the window determines; the marginals add the b_a prior's share).
-  double max_sigma_rollpitch_deg = 0.5;
-  double max_sigma_vel = 0.04;
-  double sigma_inflation = 2.0; ///< the covariance handed to the filter is this factor (on sigmas) above the fit's
-  int max_iterations = 30;
 };
 
 struct DynamicInitResult {
@@ -64,7 +46,7 @@ struct DynamicInitResult {
 /// converts normalised residuals to pixels. sigma_yaw and sigma_pos are added to the unobservable directions.
 DynamicInitResult dynamic_initialize(const std::vector<InitFrame> &frames, const std::deque<ovton::core::ImuData> &imu,
                                      const Eigen::Matrix4d &T_BC, double focal_px, double gravity_mag, double sigma_yaw,
-                                     double sigma_pos, const DynamicInitOptions &opt);
+                                     double sigma_pos, double sigma_px, const DynamicInitOptions &opt);
 
 /// Pre-integrated IMU from t0 to each time in `t_ns` (sorted, all ≥ t0) with biases removed: orientation of the body
 /// at t relative to t0, and velocity / position change in the t0 body frame without gravity. Readings are

@@ -6,12 +6,14 @@
 
 namespace ovton::msckf {
 
-InertialInitializer::InertialInitializer(const InertialInitOptions &opt, const Eigen::Matrix4d &T_BC, double focal_px,
-                                         double gravity_mag)
-    : opt_(opt), T_BC_(T_BC), focal_px_(focal_px), gravity_mag_(gravity_mag) {}
+InertialInitializer::InertialInitializer(const InitOptions &opt, double sigma_px, const Eigen::Matrix4d &T_BC,
+                                         double focal_px, double gravity_mag)
+    : opt_(opt), allow_static_(opt.mode != InitMode::Dynamic),
+      allow_dynamic_(opt.mode == InitMode::Auto || opt.mode == InitMode::Dynamic), T_BC_(T_BC), sigma_px_(sigma_px),
+      focal_px_(focal_px), gravity_mag_(gravity_mag) {}
 
 double InertialInitializer::imu_window_s() const {
-  return std::max(opt_.static_window_s, opt_.dynamic.window_s);
+  return std::max(opt_.window_s, opt_.dynamic.window_s);
 }
 
 std::optional<double> InertialInitializer::disparity_px(double span_s) const {
@@ -46,9 +48,8 @@ std::optional<InitSolution> InertialInitializer::try_initialize(InitFrame frame,
   // Still: the images say so (a calm IMU alone is no proof), then the IMU gives gravity and the gyro bias.
   const std::optional<double> still_px = disparity_px(opt_.still_window_s);
   const bool images_still = still_px && *still_px < opt_.still_max_disparity_px;
-  if (opt_.allow_static && (images_still || !opt_.allow_dynamic)) {
-    const StaticInitResult r =
-        static_initialize(imu, t_imu, opt_.static_window_s, opt_.max_accel_std, opt_.max_gyro_std);
+  if (allow_static_ && (images_still || !allow_dynamic_)) {
+    const StaticInitResult r = static_initialize(imu, t_imu, opt_.window_s, opt_.max_accel_std, opt_.max_gyro_std);
     if (r.ok) {
       InitSolution s;
       s.R_WB = r.R_WB;
@@ -61,11 +62,11 @@ std::optional<InitSolution> InertialInitializer::try_initialize(InitFrame frame,
     why_ = r.why;
     return std::nullopt;
   }
-  if (!opt_.allow_dynamic) {
+  if (!allow_dynamic_) {
     why_ = "images are not still yet";
     return std::nullopt;
   }
-  if (!still_px && opt_.allow_static) {
+  if (!still_px && allow_static_) {
     why_ = "waiting for " + std::to_string(opt_.still_window_s) + " s of images to tell still from moving";
     return std::nullopt;
   }
@@ -78,8 +79,8 @@ std::optional<InitSolution> InertialInitializer::try_initialize(InitFrame frame,
     why_ = "moving: collecting " + std::to_string(opt_.dynamic.window_s) + " s of images for a dynamic initialisation";
     return std::nullopt;
   }
-  const DynamicInitResult r =
-      dynamic_initialize(window, imu, T_BC_, focal_px_, gravity_mag_, opt_.sigma_yaw, opt_.sigma_pos, opt_.dynamic);
+  const DynamicInitResult r = dynamic_initialize(window, imu, T_BC_, focal_px_, gravity_mag_, opt_.sigma_yaw,
+                                                 opt_.sigma_pos, sigma_px_, opt_.dynamic);
   if (!r.ok) {
     why_ = "dynamic initialisation: " + r.why;
     return std::nullopt;

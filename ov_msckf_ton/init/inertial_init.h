@@ -3,23 +3,13 @@
 // specific force, zero velocity), dynamic when it moves (dynamic_init.h). `auto` tells them apart by the images: a
 // flying MAV or a walking hand-held rig can show an IMU as calm as one standing on the ground, but not still images.
 #include "ov_msckf_ton/init/dynamic_init.h"
+#include "ov_msckf_ton/init/init_options.h"
 
 #include <deque>
 #include <optional>
 #include <string>
 
 namespace ovton::msckf {
-
-struct InertialInitOptions {
-  bool allow_static = true;                                              ///< false: dynamic only (init mode dynamic)
-  bool allow_dynamic = true;                                             ///< false: static only
-  double static_window_s = 1.0, max_accel_std = 1.0, max_gyro_std = 0.1; ///< static_init.h
-  /// Still when the median feature displacement over the last still_window_s of images is below this.
-  double still_window_s = 0.3;
-  double still_max_disparity_px = 2.0;
-  double sigma_yaw = 1e-4, sigma_pos = 1e-4; ///< the unobservable directions' prior (dynamic)
-  DynamicInitOptions dynamic;
-};
 
 /// What an initialisation found: the IMU state at t_imu_ns, and for a dynamic one its covariance ([δθ δp δv δb_g
 /// δb_a], state.h); a static one leaves P to the configured sigmas.
@@ -33,7 +23,10 @@ struct InitSolution {
 
 class InertialInitializer {
 public:
-  InertialInitializer(const InertialInitOptions &opt, const Eigen::Matrix4d &T_BC, double focal_px, double gravity_mag);
+  /// `opt.mode` decides what is tried: static only, dynamic only, or both (auto). sigma_px: the pixel noise of a
+  /// tracked observation (update.sigma_px), for the dynamic initialisation's weights.
+  InertialInitializer(const InitOptions &opt, double sigma_px, const Eigen::Matrix4d &T_BC, double focal_px,
+                      double gravity_mag);
 
   /// Called with every image before initialisation (its IMU-clock time and the features seen in it); returns the
   /// solution once one is accepted. `why()` says what is missing until then.
@@ -47,9 +40,10 @@ private:
   /// of it; nullopt when the images do not span that long yet or share fewer than 10 features.
   std::optional<double> disparity_px(double span_s) const;
 
-  InertialInitOptions opt_;
+  InitOptions opt_;
+  bool allow_static_, allow_dynamic_;
   Eigen::Matrix4d T_BC_;
-  double focal_px_, gravity_mag_;
+  double sigma_px_, focal_px_, gravity_mag_;
   std::deque<InitFrame> frames_;
   std::string why_ = "no image yet";
 };

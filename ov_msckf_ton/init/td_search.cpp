@@ -2,9 +2,6 @@
 #include "ov_core/cam/camera_model.h"
 #include "ov_core/io/image_io.h"
 #include "ov_core/math/so3.h"
-#include "ov_core/track/track_pipeline.h"
-
-#include <Eigen/SVD>
 
 #include <algorithm>
 #include <chrono>
@@ -17,269 +14,14 @@ namespace ovton::msckf {
 
 namespace {
 
-/// The gyro as a function of time: linear between readings, with its exact running integral so that the mean rate
-/// over any interval costs two lookups (every candidate t_d needs every pair's mean).
-class GyroIntegral {
-public:
-  GyroIntegral(const std::vector<ovton::core::ImuData> &imu, int64_t t0_ns) {
-    t_.reserve(imu.size());
-    for (const auto &m : imu) {
-      t_.push_back(ovton::core::ns_to_s(m.t_imu_ns - t0_ns));
-      w_.push_back(m.wm);
-    }
-    c_.assign(t_.size(), Eigen::Vector3d::Zero());
-    for (size_t i = 1; i < t_.size(); ++i)
-      c_[i] = c_[i - 1] + 0.5 * (t_[i] - t_[i - 1]) * (w_[i] + w_[i - 1]);
-  }
-  double begin() const { return t_.empty() ? 0.0 : t_.front(); }
-  double end() const { return t_.empty() ? 0.0 : t_.back(); }
-  /// Mean rate over [a, b] (a < b, both inside the log).
-  Eigen::Vector3d mean(double a, double b) const { return (integral(b) - integral(a)) / (b - a); }
+/// The fit's filters look this far past the window's last image (the gyro's box filter over an image interval, the
+/// refinement around a best candidate at the range's edge), so the IMU must reach it before the window is judged.
+constexpr double kImuMarginS = 0.1;
+/// IMU before the first image (IMU clock) the search keeps.
+constexpr double kImuHistoryS = 60.0;
 
-private:
-  Eigen::Vector3d integral(double t) const {
-    const size_t i = std::min<size_t>(t_.size() - 2, std::upper_bound(t_.begin(), t_.end(), t) - t_.begin() - 1);
-    const double h = t_[i + 1] - t_[i], u = t - t_[i];
-    return c_[i] + u * w_[i] + 0.5 * u * u / h * (w_[i + 1] - w_[i]);
-  }
-  std::vector<double> t_;
-  std::vector<Eigen::Vector3d> w_, c_;
-};
-
-/// One pair of consecutive images: the body rate the images saw between them.
-struct PairRate {
-  double t0, t1;     ///< camera-clock seconds after the first image
-  Eigen::Vector3d w; ///< body frame [rad/s]
-};
-
-/// Rotation R with a_i ≈ R·c_i for unit bearings, by Kabsch with Huber weights (threshold `huber` in radians): far
-/// features follow the rotation alone, near ones add parallax, which the weights keep from pulling the fit. (Fitting
-/// the translation direction as well, by Gauss-Newton on the epipolar angles, was tried: over 50 ms the lateral
-/// translation it should separate looks like rotation through the field of view, and the search's error grew, e.g.
-/// from 0.8-1.0 to 1.4-1.6 ms on a rendered V1_02 flight.)
-Eigen::Matrix3d fit_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &c,
-                             double huber) {
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  std::vector<double> w(a.size(), 1.0);
-  for (int iter = 0; iter < 5; ++iter) {
-    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-    for (size_t i = 0; i < a.size(); ++i)
-      H += w[i] * c[i] * a[i].transpose();
-    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
-    D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
-    R = svd.matrixV() * D * svd.matrixU().transpose();
-    for (size_t i = 0; i < a.size(); ++i) {
-      const double e = (a[i] - R * c[i]).norm();
-      w[i] = e <= huber ? 1.0 : huber / e;
-    }
-  }
-  return R;
-}
-
-/// For each pair, the pairs whose interval middles lie within ±half_s of its own: the stretch whose mean is taken away.
-std::vector<std::pair<size_t, size_t>> neighbourhoods(const std::vector<PairRate> &pairs, double half_s) {
-  std::vector<std::pair<size_t, size_t>> out(pairs.size());
-  size_t b = 0, e = 0;
-  const auto mid = [&](size_t k) { return 0.5 * (pairs[k].t0 + pairs[k].t1); };
-  for (size_t k = 0; k < pairs.size(); ++k) {
-    while (mid(b) < mid(k) - half_s)
-      ++b;
-    while (e < pairs.size() && mid(e) <= mid(k) + half_s)
-      ++e;
-    out[k] = {b, e};
-  }
-  return out;
-}
-
-/// The rows of one candidate's cost: mean gyro rate over each image interval shifted by t_d, minus the images' rate,
-/// high-passed by taking away its mean over the neighbourhood. What the high-pass removes is the gyro bias and the
-/// translational flow a rotation fit cannot tell from rotation (lateral motion looks like a turn through a limited
-/// field of view: measured 0.15-0.2 rad/s on rendered flights, varying with the velocity, i.e. slowly), while the
-/// faster changes of the turn rate, which fix the time, stay.
-struct CostEval {
-  double cost = 0.0;       ///< Σ w·|h|² with the weights w
-  double huber_loss = 0.0; ///< Σ ρ(|h|), ρ Huber with scale c
-  std::vector<double> w;
-  std::vector<double> norms; ///< |h| per row
-};
-
-CostEval evaluate(const std::vector<PairRate> &pairs, const std::vector<std::pair<size_t, size_t>> &hood,
-                  const GyroIntegral &gyro, double td, double c, const std::vector<double> *fixed_w = nullptr) {
-  const size_t n = pairs.size();
-  std::vector<Eigen::Vector3d> r(n), prefix(n + 1, Eigen::Vector3d::Zero());
-  for (size_t k = 0; k < n; ++k) {
-    r[k] = gyro.mean(pairs[k].t0 + td, pairs[k].t1 + td) - pairs[k].w;
-    prefix[k + 1] = prefix[k] + r[k];
-  }
-  CostEval out;
-  out.w.assign(n, 1.0);
-  out.norms.resize(n);
-  for (size_t k = 0; k < n; ++k) {
-    const auto [b, e] = hood[k];
-    const double h = out.norms[k] = (r[k] - (prefix[e] - prefix[b]) / static_cast<double>(e - b)).norm();
-    out.w[k] = fixed_w ? (*fixed_w)[k] : (h <= c ? 1.0 : c / h);
-    out.cost += out.w[k] * h * h;
-    out.huber_loss += h <= c ? 0.5 * h * h : c * (h - 0.5 * c);
-  }
-  return out;
-}
-
-/// The standard error of the best candidate when the rows' errors are correlated (sandwich, Bartlett-weighted over
-/// `lags` rows): t̂_d − t_d ≈ −J'/J'' with J' = Σ g_k, g_k the derivative of row k's weighted cost, and Var(J') taken
-/// from the products of the g_k up to `lags` apart. The curvature alone (2s²/J'') assumes independent rows; but
-/// consecutive pairs share an image, the high-pass subtracts a mean over the neighbourhood, and translational flow
-/// that a rotation fit takes for rotation varies smoothly. On the built-in agile flight (a 6 m room, walls 1 m away,
-/// the attitude oscillating at 3-3.7 rad/s so that the translational flow turns with it) the curvature said
-/// −9.6 ± 3.5 ms for a true 10 ms (30-s flight, seed 1); with the correlation ± 7.7 ms, too uncertain to be used
-/// (test TdSearchBuiltin.AgileFlightInASmallRoomIsNotConfidentlyWrong; docs/robustness.md, "The coarse search's
-/// sigma").
-double correlated_sigma(const std::vector<PairRate> &pairs, const std::vector<std::pair<size_t, size_t>> &hood,
-                        const GyroIntegral &gyro, double td, double c, const std::vector<double> &w, double curvature,
-                        int lags) {
-  if (!(curvature > 0))
-    return std::numeric_limits<double>::infinity();
-  const double dh = 1e-4;
-  const CostEval ep = evaluate(pairs, hood, gyro, td + dh, c, &w), em = evaluate(pairs, hood, gyro, td - dh, c, &w);
-  std::vector<double> g(pairs.size());
-  for (size_t k = 0; k < g.size(); ++k)
-    g[k] = w[k] * (ep.norms[k] * ep.norms[k] - em.norms[k] * em.norms[k]) / (2 * dh);
-  double V = 0;
-  for (int l = 0; l <= lags; ++l) {
-    double acc = 0;
-    for (size_t k = static_cast<size_t>(l); k < g.size(); ++k)
-      acc += g[k] * g[k - static_cast<size_t>(l)];
-    V += (l == 0 ? 1.0 : 2.0 * (1.0 - static_cast<double>(l) / (lags + 1))) * acc;
-  }
-  return V > 0 ? std::sqrt(V) / curvature : 0.0;
-}
-
-/// The gyro averaged over a window of one image interval (the median of the pairs'), centred on each reading.
-std::vector<ovton::core::ImuData> box_filtered(const std::vector<ovton::core::ImuData> &imu,
-                                               const std::vector<PairRate> &pairs) {
-  std::vector<double> spans;
-  for (const auto &p : pairs)
-    spans.push_back(p.t1 - p.t0);
-  std::nth_element(spans.begin(), spans.begin() + spans.size() / 2, spans.end());
-  const int64_t half_ns = ovton::core::s_to_ns(0.5 * spans[spans.size() / 2]);
-  std::vector<ovton::core::ImuData> out = imu;
-  size_t a = 0, b = 0;
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (size_t i = 0; i < imu.size(); ++i) {
-    while (b < imu.size() && imu[b].t_imu_ns <= imu[i].t_imu_ns + half_ns)
-      sum += imu[b++].wm;
-    while (imu[a].t_imu_ns < imu[i].t_imu_ns - half_ns)
-      sum -= imu[a++].wm;
-    out[i].wm = sum / static_cast<double>(b - a);
-  }
-  return out;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty())
-    return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
-
-/// RMS angular acceleration of images [b, e) from the gyro's mean rate per image interval at t_d = prior.
-double rms_alpha(const std::vector<double> &t_img, size_t b, size_t e, const GyroIntegral &gyro, double prior) {
-  double sum = 0;
-  int n = 0;
-  for (size_t k = b + 2; k < e; ++k) {
-    const double a0 = t_img[k - 2] + prior, a1 = t_img[k - 1] + prior, a2 = t_img[k] + prior;
-    if (a0 < gyro.begin() || a2 > gyro.end())
-      continue;
-    const Eigen::Vector3d alpha = (gyro.mean(a1, a2) - gyro.mean(a0, a1)) / (0.5 * (a2 - a0));
-    sum += alpha.squaredNorm();
-    ++n;
-  }
-  return n > 0 ? std::sqrt(sum / n) : 0.0;
-}
-
-/// Images [b, e) of the search and their gyro's RMS angular acceleration.
-struct Window {
-  size_t b = 0, e = 0;
-  double rms_alpha = -1;
-};
-
-/// The first window (starts 1 s apart, within max_start_s) whose rotation changes enough to fix the time, else the one
-/// that changes most.
-Window choose_window(const std::vector<double> &t_img, const GyroIntegral &gyro, double prior,
-                     const TdSearchOptions &opt) {
-  Window best;
-  for (double start = 0; start <= opt.max_start_s && start <= t_img.back(); start += 1.0) {
-    Window w;
-    w.b = std::lower_bound(t_img.begin(), t_img.end(), start) - t_img.begin();
-    w.e = std::lower_bound(t_img.begin(), t_img.end(), start + opt.window_s) - t_img.begin();
-    w.rms_alpha = rms_alpha(t_img, w.b, w.e, gyro, prior);
-    if (w.rms_alpha > best.rms_alpha)
-      best = w;
-    if (w.rms_alpha >= opt.min_rms_alpha || w.e >= t_img.size())
-      break;
-  }
-  return best;
-}
-
-/// The images' rotation rate between consecutive frames of the window, in the body frame: KLT tracks (or a
-/// feature-level dataset's observations), a rotation-only fit per pair with 10 or more common features.
-std::vector<PairRate> image_pair_rates(const std::vector<ovton::core::ImageEntry> &images, const Window &win,
-                                       const std::vector<double> &t_img, const ovton::core::CameraCalib &cam,
-                                       const TdSearchOptions &opt, const TdSearchImageLoader &load,
-                                       ovton::core::TrackedStart *tracked) {
-  const ovton::core::CameraModel camera(cam);
-  // A window from the first image is tracked as the filter will track it, so that the filter can take these tracks
-  // instead of tracking the images again; a later window is tracked with fewer features, for this search alone.
-  const bool as_filter = win.b == 0;
-  ovton::core::TrackKLTOptions track = opt.track;
-  if (!as_filter)
-    track.num_features = std::min(track.num_features, opt.max_features);
-  auto tracker = std::make_unique<ovton::core::TrackKLT>(camera, track);
-  tracker->set_rotation_prior(opt.rotation_prior);
-  ovton::core::TrackedStart start;
-  const Eigen::Matrix3d R_BC = cam.T_BC.block<3, 3>(0, 0);
-  const double huber_rad = 2.0 / std::max(camera.fu(), camera.fv());
-  std::unordered_map<size_t, Eigen::Vector3d> prev, curr;
-  std::vector<PairRate> pairs;
-  std::vector<Eigen::Vector3d> bear0, bear1;
-  for (size_t i = win.b; i < win.e; ++i) {
-    const auto &e = images[i];
-    curr.clear();
-    if (e.features) {
-      for (const auto &o : *e.features)
-        curr[o.id] = camera.undistort(o.uv).homogeneous().normalized();
-    } else {
-      const cv::Mat img = load ? load(e) : ovton::core::load_gray_image(e, cam.width, cam.height);
-      const auto &feats = tracker->track(e.t_cam_ns, img);
-      for (const auto &f : feats)
-        curr[f.id] = f.xy.homogeneous().normalized();
-      if (as_filter && tracked)
-        start.frames.push_back(feats);
-    }
-    if (i > win.b) {
-      bear0.clear();
-      bear1.clear();
-      for (const auto &[id, b1] : curr)
-        if (auto it = prev.find(id); it != prev.end()) {
-          bear0.push_back(it->second);
-          bear1.push_back(b1);
-        }
-      const double dt = t_img[i] - t_img[i - 1];
-      if (bear0.size() >= 10 && dt > 0) {
-        // bear0 ≈ R_{C_{k-1} C_k}·bear1; the body rotation over the interval is R_BC·R·R_CB, so its rate is
-        // R_BC·log(R)/dt.
-        const Eigen::Matrix3d R = fit_rotation(bear0, bear1, huber_rad);
-        pairs.push_back({t_img[i - 1], t_img[i], R_BC * ovton::core::so3_log(R) / dt});
-      }
-    }
-    std::swap(prev, curr);
-  }
-  // Only a start the filter's tracker would have made from the first image on, every image of it tracked.
-  if (tracked && as_filter && start.frames.size() == win.e) {
-    start.tracker = std::move(tracker);
-    *tracked = std::move(start);
-  }
-  return pairs;
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 } // namespace
@@ -297,157 +39,195 @@ std::string TdSearchResult::summary() const {
   return buf;
 }
 
-TdSearchResult search_td(const std::vector<ovton::core::ImageEntry> &images,
-                         const std::vector<ovton::core::ImuData> &imu, const ovton::core::CameraCalib &cam,
-                         double prior_td_s, const TdSearchOptions &opt, const TdSearchImageLoader &load,
-                         ovton::core::TrackedStart *tracked) {
-  const auto wall0 = std::chrono::steady_clock::now();
-  TdSearchResult res;
-  res.prior_s = res.td_s = prior_td_s;
-  res.range_s = opt.range_s;
-  const auto finish = [&](const std::string &why) {
-    res.why = why;
-    res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-    return res;
+TdSearch::TdSearch(const ovton::core::CameraCalib &cam, double prior_td_s, const TdSearchOptions &opt)
+    : cam_(cam), prior_s_(prior_td_s), opt_(opt) {
+  res_.prior_s = res_.td_s = prior_td_s;
+  res_.range_s = opt.range_s;
+}
+
+void TdSearch::add_imu(const ovton::core::ImuData &m) {
+  if (done_)
+    return;
+  imu_.push(m);
+}
+
+void TdSearch::add_frame(int64_t t_cam_ns, Bearings bearings) {
+  if (done_)
+    return;
+  if (frames_seen_++ == 0)
+    t0_ns_ = t_cam_ns;
+  frames_.push_back({t_cam_ns, std::move(bearings)});
+}
+
+std::pair<size_t, size_t> TdSearch::window(double start_s) const {
+  const auto at_or_after = [&](double s) {
+    return static_cast<size_t>(
+        std::find_if(frames_.begin(), frames_.end(), [&](const Frame &f) { return rel_s(f.t_cam_ns) >= s; }) -
+        frames_.begin());
   };
-  if (images.size() < 3 || imu.size() < 3)
-    return finish("too few images or IMU readings");
+  return {at_or_after(start_s), at_or_after(start_s + opt_.window_s)};
+}
 
-  const int64_t t0 = images.front().t_cam_ns;
-  const GyroIntegral gyro(imu, t0);
-  std::vector<double> t_img(images.size());
-  for (size_t i = 0; i < images.size(); ++i)
-    t_img[i] = ovton::core::ns_to_s(images[i].t_cam_ns - t0);
+bool TdSearch::must_decide_before(int64_t t_cam_ns) const {
+  return !done_ && frames_seen_ > 0 && rel_s(t_cam_ns) >= start_s_ + opt_.window_s;
+}
 
-  const Window win = choose_window(t_img, gyro, prior_td_s, opt);
-  res.rms_alpha = std::max(0.0, win.rms_alpha);
-  if (win.e <= win.b + 2)
-    return finish("no stretch of images within the IMU log");
-  res.window_begin_s = t_img[win.b];
-  res.window_end_s = t_img[win.e - 1];
-  if (win.rms_alpha < opt.min_rms_alpha) {
-    res.weak_excitation = true;
+int64_t TdSearch::imu_needed_ns() const {
+  const int64_t last = frames_.empty() ? t0_ns_ : frames_.back().t_cam_ns;
+  return ovton::core::saturating_add_ns(last, ovton::core::s_to_ns(prior_s_ + opt_.range_s + kImuMarginS));
+}
+
+bool TdSearch::decide(bool end_of_stream) {
+  if (done_)
+    return true;
+  const auto t_start = std::chrono::steady_clock::now();
+  // What the IMU said a minute before the first image is of no use (the judged time is what the readings' running
+  // integral starts from, so the same readings are kept whenever they were handed over).
+  if (frames_seen_ > 0)
+    imu_.drop_before(ovton::core::saturating_add_ns(t0_ns_, ovton::core::s_to_ns(prior_s_ - kImuHistoryS)));
+  if (end_of_stream && (frames_seen_ < 3 || imu_.size() < 3)) {
+    res_.why = "too few images or IMU readings";
+    done_ = true;
+  } else if (frames_seen_ > 0) {
+    const auto [b, e] = window(start_s_);
+    std::vector<double> t_img(frames_.size());
+    for (size_t i = 0; i < frames_.size(); ++i)
+      t_img[i] = rel_s(frames_[i].t_cam_ns);
+    const double rms = rms_alpha(t_img, b, e, ovton::core::GyroIntegral(imu_, t0_ns_), prior_s_);
+    if (rms > best_rms_) {
+      best_rms_ = rms;
+      best_images_ = e - b;
+      best_begin_s_ = b < e ? t_img[b] : 0.0;
+      best_end_s_ = b < e ? t_img[e - 1] : 0.0;
+    }
+    if (rms >= opt_.min_rms_alpha) {
+      conclude(end_of_stream);
+    } else if (end_of_stream || start_s_ + 1.0 > opt_.max_start_s) {
+      conclude(end_of_stream); // the window that changed most is all there is
+    } else {
+      // The next window starts a second later: the images before it are of no further use.
+      start_s_ += 1.0;
+      while (!frames_.empty() && rel_s(frames_.front().t_cam_ns) < start_s_)
+        frames_.pop_front();
+    }
+  } else if (end_of_stream) {
+    res_.why = "too few images or IMU readings";
+    done_ = true;
+  }
+  compute_s_ += seconds_since(t_start);
+  res_.seconds = compute_s_;
+  if (done_) {
+    frames_.clear();
+    imu_ = ovton::core::ImuBuffer();
+  }
+  return done_;
+}
+
+void TdSearch::conclude(bool end_of_stream) {
+  (void)end_of_stream;
+  done_ = true;
+  res_.rms_alpha = std::max(0.0, best_rms_);
+  if (best_images_ <= 2) {
+    res_.why = "no stretch of images within the IMU log";
+    return;
+  }
+  res_.window_begin_s = best_begin_s_;
+  res_.window_end_s = best_end_s_;
+  if (best_rms_ < opt_.min_rms_alpha) {
+    res_.weak_excitation = true;
     char why[160];
     std::snprintf(why, sizeof why, "too little rotation change (RMS angular acceleration %.2f rad/s^2 < %.2f)",
-                  win.rms_alpha, opt.min_rms_alpha);
-    return finish(why);
+                  best_rms_, opt_.min_rms_alpha);
+    res_.why = why;
+    return;
   }
+  // A window that qualifies is the current one: its images are the kept ones.
+  const auto [b, e] = window(start_s_);
+  fit_offset(pair_rates(b, e), imu_, t0_ns_, prior_s_, opt_, res_);
+}
 
-  std::vector<PairRate> pairs = image_pair_rates(images, win, t_img, cam, opt, load, tracked);
-  // Every candidate must see the same pairs: keep those the gyro covers over the whole search range.
-  pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
-                             [&](const PairRate &p) {
-                               return p.t0 + prior_td_s - opt.range_s < gyro.begin() ||
-                                      p.t1 + prior_td_s + opt.range_s > gyro.end();
-                             }),
-              pairs.end());
-  res.pairs = static_cast<int>(pairs.size());
-  if (res.pairs < opt.min_pairs)
-    return finish("only " + std::to_string(res.pairs) + " image pairs with a rotation fit inside the IMU log");
-
-  const auto hood = neighbourhoods(pairs, 0.5 * opt.highpass_s);
-  double mean_hood = 0;
-  for (const auto &[b, e] : hood)
-    mean_hood += static_cast<double>(e - b) / static_cast<double>(hood.size());
-
-  // Pass 1, least squares on the grid (c = inf); its residuals set the Huber scale of pass 2.
-  const int n_steps = static_cast<int>(std::round(opt.range_s / opt.step_s));
-  const double inf = std::numeric_limits<double>::infinity();
-  const auto grid_best = [&](double c, std::vector<double> *profile) {
-    double best = inf, best_td = prior_td_s;
-    for (int s = -n_steps; s <= n_steps; ++s) {
-      const double td = prior_td_s + s * opt.step_s;
-      const double J = evaluate(pairs, hood, gyro, td, c).huber_loss;
-      if (profile)
-        profile->push_back(J);
-      if (J < best) {
-        best = J;
-        best_td = td;
+std::vector<PairRate> TdSearch::pair_rates(size_t b, size_t e) const {
+  const Eigen::Matrix3d R_BC = cam_.T_BC.block<3, 3>(0, 0);
+  const double huber_rad = 2.0 / std::max(cam_.intrinsics(0), cam_.intrinsics(1));
+  // Bearings matched by id through hash maps filled in the tracker's order, as consecutive images are compared.
+  std::unordered_map<size_t, Eigen::Vector3d> prev, curr;
+  std::vector<PairRate> pairs;
+  std::vector<Eigen::Vector3d> bear0, bear1;
+  for (size_t i = b; i < e; ++i) {
+    curr.clear();
+    for (const auto &[id, bearing] : frames_[i].bearings)
+      curr[id] = bearing;
+    if (i > b) {
+      bear0.clear();
+      bear1.clear();
+      for (const auto &[id, b1] : curr)
+        if (auto it = prev.find(id); it != prev.end()) {
+          bear0.push_back(it->second);
+          bear1.push_back(b1);
+        }
+      const double t0 = rel_s(frames_[i - 1].t_cam_ns), t1 = rel_s(frames_[i].t_cam_ns), dt = t1 - t0;
+      if (bear0.size() >= 10 && dt > 0) {
+        // bear0 ≈ R_{C_{k-1} C_k}·bear1; the body rotation over the interval is R_BC·R·R_CB, so its rate is
+        // R_BC·log(R)/dt.
+        const Eigen::Matrix3d R = fit_rotation(bear0, bear1, huber_rad);
+        pairs.push_back({t0, t1, R_BC * ovton::core::so3_log(R) / dt});
       }
     }
-    return best_td;
+    std::swap(prev, curr);
+  }
+  return pairs;
+}
+
+TdSearch::Bearings bearings_of(const std::vector<ovton::core::TrackedFeature> &features) {
+  TdSearch::Bearings out;
+  out.reserve(features.size());
+  for (const auto &f : features)
+    out.emplace_back(f.id, f.xy.homogeneous().normalized());
+  return out;
+}
+
+TdSearchResult search_td(const std::vector<ovton::core::ImageEntry> &images,
+                         const std::vector<ovton::core::ImuData> &imu, const ovton::core::CameraCalib &cam,
+                         double prior_td_s, const TdSearchOptions &opt, const ovton::core::TrackKLTOptions &track,
+                         std::shared_ptr<const ovton::core::GyroRotationPrior> rotation_prior,
+                         const TdSearchImageLoader &load) {
+  const auto t_start = std::chrono::steady_clock::now();
+  TdSearch search(cam, prior_td_s, opt);
+  size_t k = 0; // IMU readings handed over
+  const auto imu_past = [&](int64_t t_imu_ns) {
+    while (k < imu.size() && (k == 0 || imu[k - 1].t_imu_ns <= t_imu_ns))
+      search.add_imu(imu[k++]);
   };
-  const double td1 = grid_best(inf, nullptr);
-  // Scale of the rows at the least-squares optimum (MAD of their norms), for the Huber threshold.
-  const double scale = std::max(1e-3, 1.4826 * median(evaluate(pairs, hood, gyro, td1, inf).norms));
-  const double c = 2.0 * scale;
-  std::vector<double> profile;
-  double td2 = grid_best(c, &profile);
-  // Refine: 0.1 ms steps around the best grid point.
-  {
-    double best = inf;
-    const double centre = td2;
-    for (int s = -20; s <= 20; ++s) {
-      const double td = centre + s * 1e-4;
-      const double J = evaluate(pairs, hood, gyro, td, c).huber_loss;
-      if (J < best) {
-        best = J;
-        td2 = td;
-      }
+  const ovton::core::CameraModel camera(cam);
+  std::unique_ptr<ovton::core::TrackKLT> tracker;
+  for (const auto &e : images) {
+    while (search.must_decide_before(e.t_cam_ns)) {
+      imu_past(search.imu_needed_ns());
+      if (search.decide(false))
+        break;
     }
+    if (search.done())
+      break;
+    TdSearch::Bearings bearings;
+    if (e.features) {
+      for (const auto &o : *e.features)
+        bearings.emplace_back(o.id, camera.undistort(o.uv).homogeneous().normalized());
+    } else {
+      if (!tracker) {
+        tracker = std::make_unique<ovton::core::TrackKLT>(camera, track);
+        tracker->set_rotation_prior(rotation_prior);
+      }
+      const cv::Mat img = load ? load(e) : ovton::core::load_gray_image(e, cam.width, cam.height);
+      bearings = bearings_of(tracker->track(e.t_cam_ns, img));
+    }
+    search.add_frame(e.t_cam_ns, std::move(bearings));
   }
-  res.td_s = td2;
-
-  // Standard error from the curvature of the weighted least-squares cost at the minimum (weights fixed there):
-  // σ² = 2·s²/J'', s² the residual variance per row; or, where larger, from the rows' correlated scores
-  // (correlated_sigma). Both again with the gyro averaged over one image interval: the images cannot follow faster
-  // rotation, and the gyro's vibration (10-40 Hz on the EuRoC IMU) sharpens the cost's curvature around its minimum
-  // without saying where the images' rates line up (docs/robustness.md, "The coarse search's sigma").
-  const int lags = static_cast<int>(std::ceil(mean_hood));
-  struct Sigmas {
-    double curvature, correlated, s2, huber_loss;
-  };
-  const auto sigmas_with = [&](const GyroIntegral &g) {
-    const CostEval at = evaluate(pairs, hood, g, td2, c);
-    const double h = 0.002;
-    const double Jp = evaluate(pairs, hood, g, td2 + h, c, &at.w).cost,
-                 Jm = evaluate(pairs, hood, g, td2 - h, c, &at.w).cost;
-    const double curvature = (Jp - 2 * at.cost + Jm) / (h * h);
-    double sw = 0;
-    for (double w : at.w)
-      sw += w;
-    // Per row and axis; the high-pass takes away 1/m of white noise's variance (m rows per neighbourhood).
-    const double s2_g = at.cost / std::max(1.0, 3 * sw * (1 - 1 / mean_hood) - 1);
-    return Sigmas{curvature > 0 ? std::sqrt(2 * s2_g / curvature) : inf,
-                  correlated_sigma(pairs, hood, g, td2, c, at.w, curvature, lags), s2_g, at.huber_loss};
-  };
-  const Sigmas raw = sigmas_with(gyro), slow = sigmas_with(GyroIntegral(box_filtered(imu, pairs), t0));
-  res.sigma_s = std::max({raw.curvature, raw.correlated, slow.curvature, slow.correlated});
-  const double s2 = raw.s2;
-  res.residual_sigma = std::sqrt(s2);
-  res.cost_profile = profile;
-
-  // A second valley anywhere else in the range that the data cannot tell from the best one makes the answer a guess:
-  // the lowest local minimum of the profile farther from the best than its own valley plausibly reaches.
-  const double sep = std::max(0.01, 4 * res.sigma_s);
-  double rival = inf;
-  for (int i = 0; i < static_cast<int>(profile.size()); ++i) {
-    const bool local_min = (i == 0 || profile[i - 1] >= profile[i]) &&
-                           (i + 1 == static_cast<int>(profile.size()) || profile[i + 1] >= profile[i]);
-    if (local_min && std::abs(prior_td_s + (i - n_steps) * opt.step_s - td2) > sep)
-      rival = std::min(rival, profile[i]);
+  imu_past(std::numeric_limits<int64_t>::max());
+  while (!search.decide(true)) {
   }
-  const double best_loss = raw.huber_loss;
-  res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  char why[200];
-  if (std::abs(td2 - prior_td_s) > opt.range_s - 2 * opt.step_s) {
-    std::snprintf(why, sizeof why, "best candidate %.1f ms at the edge of the range: the offset may lie beyond it",
-                  td2 * 1e3);
-    return finish(why);
-  }
-  if (!(res.sigma_s <= opt.max_sigma_s)) {
-    std::snprintf(why, sizeof why, "best candidate %.1f ms too uncertain (sigma %.1f ms)", td2 * 1e3,
-                  res.sigma_s * 1e3);
-    return finish(why);
-  }
-  // Twice the loss difference over the residual variance is a chi-square-like statistic (the Huber loss is half the
-  // squared residual inside c): under 25 (5 sigma) the rival valley cannot be excluded.
-  if (2 * (rival - best_loss) / s2 < 25) {
-    std::snprintf(why, sizeof why, "ambiguous: another minimum fits almost as well as %.1f ms", td2 * 1e3);
-    return finish(why);
-  }
-  res.found = true;
-  return res;
+  TdSearchResult r = search.result();
+  r.seconds = seconds_since(t_start);
+  return r;
 }
 
 } // namespace ovton::msckf

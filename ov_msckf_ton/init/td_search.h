@@ -6,42 +6,19 @@
 // interval shifted by each candidate t_d, and the best candidate seeds the filter.
 #include "ov_core/cam/camera_calib.h"
 #include "ov_core/track/track_klt.h"
+#include "ov_core/types/imu_buffer.h"
 #include "ov_core/types/sensor_data.h"
+#include "ov_msckf_ton/init/init_options.h"
+#include "ov_msckf_ton/init/td_search_fit.h"
 
+#include <deque>
 #include <functional>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
-namespace ovton::core {
-struct TrackedStart; // ov_core/track/track_pipeline.h
-}
-
 namespace ovton::msckf {
-
-struct TdSearchOptions {
-  double range_s = 0.2;    ///< candidates t_d ∈ prior ± range_s
-  double step_s = 0.001;   ///< grid step of the first pass (refined to 0.1 ms around the best)
-  double window_s = 8.0;   ///< seconds of images used
-  double max_start_s = 60; ///< how far into the recording a window with enough rotation is looked for
-  /// RMS angular acceleration [rad/s^2] a window needs: the cost's curvature in t_d grows with it, and a still start
-  /// (EuRoC's first seconds) or a constant turn leaves t_d undetermined.
-  double min_rms_alpha = 0.5;
-  double max_sigma_s = 0.004; ///< a result with a larger standard error is reported but not used
-  /// Rate differences are compared after taking away their mean over this long a stretch (gyro bias and the slowly
-  /// varying translational flow a rotation fit takes up).
-  double highpass_s = 0.5;
-  int min_pairs = 40; ///< consecutive image pairs with a rotation fit
-  ovton::core::TrackKLTOptions track;
-  /// The raw gyro for the tracker's LK starting points (track.gyro_prior); none: LK starts where a point was.
-  std::shared_ptr<const ovton::core::GyroRotationPrior> rotation_prior;
-  /// A window that does not start at the first image is tracked with at most this many features (track.num_features
-  /// if fewer): a rotation fit of bearings needs few, and that tracking is for the search alone. Measured at 100
-  /// against 200: the same t_d within 0.3 ms and σ within 0.05 ms on the real cut and renders of V1_03 and MH_03, the
-  /// same APE and TPE. A window from the first image is tracked with `track` as it is, as the filter tracks it, so
-  /// that the filter can take over its tracks (search_td's `tracked`).
-  int max_features = 100;
-};
 
 struct TdSearchResult {
   bool found = false;   ///< true when td_s is trustworthy enough to seed the filter
@@ -64,16 +41,86 @@ struct TdSearchResult {
   std::string summary() const;
 };
 
+/// The search on a stream: IMU readings and images' features arrive in time order, and the search decides once a
+/// window of images whose rotation changes enough is complete — the first of the windows that start 0, 1, 2, ... s
+/// after the first image (at most opt.max_start_s in), or the best of them when none does — or when the stream ends.
+/// Which window qualifies depends on the gyro alone, so a window is judged as soon as its last image has passed and
+/// the IMU covers it; its images' features were kept meanwhile. A driver (the estimator's tracking stage, or
+/// search_td below) asks before handing on each image whether the search must decide first:
+///
+///     while (!s.done() && s.must_decide_before(t_cam_ns)) { wait until s.imu_needed_ns() is covered; s.decide(false);
+///     } if (!s.done()) s.add_frame(t_cam_ns, bearings);
+///
+/// and calls decide(true) at the end of the stream until done().
+class TdSearch {
+public:
+  /// A unit bearing of a feature in the camera frame, by feature id.
+  using Bearings = std::vector<std::pair<size_t, Eigen::Vector3d>>;
+
+  TdSearch(const ovton::core::CameraCalib &cam, double prior_td_s, const TdSearchOptions &opt);
+
+  /// IMU readings in time order. What lies more than a minute before the first image (IMU clock) is dropped.
+  void add_imu(const ovton::core::ImuData &m);
+  /// The features of the next image (camera clock, after every image added so far); ignored once done().
+  void add_frame(int64_t t_cam_ns, Bearings bearings);
+
+  /// Whether the current window must be judged before an image at t_cam_ns is added (it lies past the window's end).
+  bool must_decide_before(int64_t t_cam_ns) const;
+  /// The IMU-clock time the readings must pass before decide(false): the window's last image, shifted by the largest
+  /// candidate offset, plus the margin the fit's filters look beyond it.
+  int64_t imu_needed_ns() const;
+  /// Judges the current window; `end_of_stream`: no image follows. Returns done().
+  bool decide(bool end_of_stream);
+
+  bool done() const { return done_; }
+  /// The outcome; meaningful once done().
+  const TdSearchResult &result() const { return res_; }
+
+private:
+  struct Frame {
+    int64_t t_cam_ns;
+    Bearings bearings;
+  };
+  /// Camera seconds after the first image.
+  double rel_s(int64_t t_cam_ns) const { return ovton::core::ns_to_s(t_cam_ns - t0_ns_); }
+  /// Kept frames [b, e) of the window starting start_s after the first image (e: the first at or after its end).
+  std::pair<size_t, size_t> window(double start_s) const;
+  /// The images' rotation rates between consecutive kept frames [b, e).
+  std::vector<PairRate> pair_rates(size_t b, size_t e) const;
+  void conclude(bool end_of_stream);
+
+  ovton::core::CameraCalib cam_;
+  double prior_s_;
+  TdSearchOptions opt_;
+  ovton::core::ImuBuffer imu_;
+  int64_t t0_ns_ = 0;        ///< the first image's stamp
+  size_t frames_seen_ = 0;   ///< images added in all
+  std::deque<Frame> frames_; ///< from the current window's start on
+  double start_s_ = 0;       ///< the current candidate window's start
+  /// The window whose rotation changed most so far: its rms angular acceleration, first and last image [s], images.
+  double best_rms_ = -1, best_begin_s_ = 0, best_end_s_ = 0;
+  size_t best_images_ = 0;
+  double compute_s_ = 0; ///< time spent judging
+  bool done_ = false;
+  TdSearchResult res_;
+};
+
 /// Decodes an image for the search (default: ovton::core::load_gray_image with the camera's size).
 using TdSearchImageLoader = std::function<cv::Mat(const ovton::core::ImageEntry &)>;
 
-/// Searches t_d over prior_td_s ± opt.range_s. Feature-level entries (ImageEntry::features) are used as given; others
-/// are decoded and tracked. Never throws for weak data: `found` is false and `why` says what was missing. Throws
-/// DataError (from the loader) for an unreadable image. When the window starts at the first image and all of it was
-/// tracked, `tracked` (if given) receives those tracks and the tracker, for a filter with opt.track to go on from.
+/// The search over a whole recording (`ovton info --td-search`, tests): the images are tracked from the first with
+/// `track` (LK starting points from `rotation_prior` when given and track.gyro_prior) until the search decides, as the
+/// estimator's tracking stage tracks them; feature-level entries (ImageEntry::features) are used as given. Never throws
+/// for weak data: `found` is false and `why` says what was missing. Throws DataError (from the loader) for an
+/// unreadable image.
 TdSearchResult search_td(const std::vector<ovton::core::ImageEntry> &images,
                          const std::vector<ovton::core::ImuData> &imu, const ovton::core::CameraCalib &cam,
-                         double prior_td_s, const TdSearchOptions &opt = {}, const TdSearchImageLoader &load = {},
-                         ovton::core::TrackedStart *tracked = nullptr);
+                         double prior_td_s, const TdSearchOptions &opt = {},
+                         const ovton::core::TrackKLTOptions &track = {},
+                         std::shared_ptr<const ovton::core::GyroRotationPrior> rotation_prior = nullptr,
+                         const TdSearchImageLoader &load = {});
+
+/// A tracked image's features as the search's bearings.
+TdSearch::Bearings bearings_of(const std::vector<ovton::core::TrackedFeature> &features);
 
 } // namespace ovton::msckf

@@ -72,9 +72,9 @@ void imu_step_impl(const ImuState &x, const ImuIntrinsics *D, const Eigen::Vecto
     *Phi = F;
   if (Q) {
     // Sample noise enters the pose and velocity exactly where the bias errors do (n_g like δb_g, n_a like δb_a),
-    // but it is not a change of the bias: the bias rows of those columns (F's identity) must not carry it. They did
-    // until session 2, which let the accelerometer bias wander ~10⁴× faster than its random walk, so the filter
-    // could not take the metric scale from the accelerometer (trajectories 3–9 % too large, position NEES 10–150).
+    // but it is not a change of the bias: the bias rows of those columns (F's identity) must not carry it, or the
+    // accelerometer bias wanders ~10⁴× faster than its random walk and the filter cannot take the metric scale from
+    // the accelerometer (test_propagation.cpp).
     Eigen::Matrix<double, 15, 6> Gn;
     Gn.leftCols<3>() = F.block<15, 3>(0, G);
     Gn.rightCols<3>() = F.block<15, 3>(0, A);
@@ -105,67 +105,9 @@ void imu_step_calibrated(const ImuState &x, const ImuIntrinsics &D, const Eigen:
 Propagator::Propagator(const ImuNoise &noise, double gravity_mag) : noise_(noise), gravity_(0, 0, -gravity_mag) {}
 
 void Propagator::feed_imu(const ovton::core::ImuData &m) {
-  if (!buf_.empty() && m.t_imu_ns <= buf_.back().t_imu_ns)
-    throw ovton::core::UsageError("IMU readings must arrive in increasing time order");
-  buf_.push_back(m);
-  // Keep a bounded history: 5 s is far more than any window of clones needs for interpolation.
-  while (buf_.size() > 2 && buf_.back().t_imu_ns - buf_[1].t_imu_ns > 5000000000LL)
-    buf_.pop_front();
-}
-
-bool Propagator::reading_at(int64_t t_ns, ovton::core::ImuData &out) const {
-  if (buf_.empty() || t_ns < buf_.front().t_imu_ns || t_ns > buf_.back().t_imu_ns)
-    return false;
-  auto it = std::lower_bound(buf_.begin(), buf_.end(), t_ns,
-                             [](const ovton::core::ImuData &m, int64_t t) { return m.t_imu_ns < t; });
-  if (it->t_imu_ns == t_ns) {
-    out = *it;
-    return true;
-  }
-  const auto &b = *it, &a = *(it - 1);
-  const double u = static_cast<double>(t_ns - a.t_imu_ns) / static_cast<double>(b.t_imu_ns - a.t_imu_ns);
-  out.t_imu_ns = t_ns;
-  out.wm = (1 - u) * a.wm + u * b.wm;
-  out.am = (1 - u) * a.am + u * b.am;
-  return true;
-}
-
-bool Propagator::mean_gyro(int64_t t_from_ns, int64_t t_to_ns, Eigen::Vector3d &w) const {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  int n = 0;
-  // Per image on the filter's path: start at the window (binary search) instead of walking the 5 s history.
-  auto it = std::lower_bound(buf_.begin(), buf_.end(), t_from_ns,
-                             [](const ovton::core::ImuData &m, int64_t t) { return m.t_imu_ns < t; });
-  for (; it != buf_.end() && it->t_imu_ns <= t_to_ns; ++it)
-    sum += it->wm, ++n;
-  if (n == 0)
-    return false;
-  w = sum / n;
-  return true;
-}
-
-template <typename StepFn> bool Propagator::integrate(int64_t t_from, int64_t t_to, StepFn &&step) const {
-  if (t_to <= t_from)
-    return t_to == t_from;
-  ovton::core::ImuData prev;
-  if (!reading_at(t_from, prev) || buf_.back().t_imu_ns < t_to)
-    return false;
-  auto it = std::upper_bound(buf_.begin(), buf_.end(), t_from,
-                             [](int64_t t, const ovton::core::ImuData &m) { return t < m.t_imu_ns; });
-  while (true) {
-    ovton::core::ImuData next;
-    if (it != buf_.end() && it->t_imu_ns < t_to) {
-      next = *it++;
-    } else {
-      reading_at(t_to, next);
-    }
-    const double dt = ovton::core::ns_to_s(next.t_imu_ns - prev.t_imu_ns);
-    if (dt > 0)
-      step(0.5 * (prev.wm + next.wm), 0.5 * (prev.am + next.am), dt);
-    prev = next;
-    if (next.t_imu_ns >= t_to)
-      return true;
-  }
+  imu_.push(m);
+  // A bounded history: 5 s is far more than any window of clones needs for interpolation.
+  imu_.keep_span(5000000000LL);
 }
 
 bool Propagator::propagate(State &s, int64_t t_to_ns) {
@@ -182,24 +124,25 @@ bool Propagator::propagate(State &s, int64_t t_to_ns) {
   // FEJ: the first step starts from the state an update may have moved; its Jacobian uses the first estimates.
   // The following steps start from states no update has touched, where first and current estimates agree.
   bool first = true;
-  const bool ok = integrate(s.t_imu_ns, t_to_ns, [&](const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt) {
-    Mat15 Phi, Q;
-    ImuState next;
-    if (cal) {
-      Mat15x12 G;
-      imu_step_calibrated(x, D, wm, am, dt, gravity_, noise_, next, &Phi, &Q, &G, first && use_fej_);
-      G_total = Phi * G_total + G;
-      w_last = D.D_w * (wm - x.bg);
-    } else {
-      imu_step(x, wm, am, dt, gravity_, noise_, next, &Phi, &Q, first && use_fej_);
-      w_last = wm - x.bg;
-    }
-    first = false;
-    next.set_fej();
-    Phi_total = Phi * Phi_total;
-    Q_total = Phi * Q_total * Phi.transpose() + Q;
-    x = next;
-  });
+  const bool ok =
+      imu_.for_each_piece(s.t_imu_ns, t_to_ns, [&](const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt) {
+        Mat15 Phi, Q;
+        ImuState next;
+        if (cal) {
+          Mat15x12 G;
+          imu_step_calibrated(x, D, wm, am, dt, gravity_, noise_, next, &Phi, &Q, &G, first && use_fej_);
+          G_total = Phi * G_total + G;
+          w_last = D.D_w * (wm - x.bg);
+        } else {
+          imu_step(x, wm, am, dt, gravity_, noise_, next, &Phi, &Q, first && use_fej_);
+          w_last = wm - x.bg;
+        }
+        first = false;
+        next.set_fej();
+        Phi_total = Phi * Phi_total;
+        Q_total = Phi * Q_total * Phi.transpose() + Q;
+        x = next;
+      });
   if (!ok)
     return false;
   if (cal)
@@ -218,14 +161,15 @@ bool Propagator::predict_mean(const State &s, int64_t t_to_ns, ImuState &out) co
   D.D_w = s.calib.D_w;
   D.D_a = s.calib.D_a;
   const bool cal = s.calib.imu_intrinsics_index >= 0;
-  const bool ok = integrate(s.t_imu_ns, t_to_ns, [&](const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt) {
-    ImuState next;
-    if (cal)
-      imu_step_calibrated(x, D, wm, am, dt, gravity_, noise_, next, nullptr, nullptr, nullptr);
-    else
-      imu_step(x, wm, am, dt, gravity_, noise_, next, nullptr, nullptr);
-    x = next;
-  });
+  const bool ok =
+      imu_.for_each_piece(s.t_imu_ns, t_to_ns, [&](const Eigen::Vector3d &wm, const Eigen::Vector3d &am, double dt) {
+        ImuState next;
+        if (cal)
+          imu_step_calibrated(x, D, wm, am, dt, gravity_, noise_, next, nullptr, nullptr, nullptr);
+        else
+          imu_step(x, wm, am, dt, gravity_, noise_, next, nullptr, nullptr);
+        x = next;
+      });
   if (ok)
     out = x;
   return ok;

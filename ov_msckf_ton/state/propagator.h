@@ -1,9 +1,8 @@
 #pragma once
 // IMU propagation of the mean and the error-state covariance between IMU-clock times.
+#include "ov_core/types/imu_buffer.h"
 #include "ov_core/types/sensor_data.h"
 #include "ov_msckf_ton/state/state.h"
-
-#include <deque>
 
 namespace ovton::msckf {
 
@@ -60,18 +59,13 @@ public:
   const Eigen::Vector3d &last_w_B() const { return last_w_B_; }
   const Eigen::Vector3d &gravity() const { return gravity_; }
   const ImuNoise &noise() const { return noise_; }
-  /// Interpolated reading at t (IMU clock); false when t is outside the buffer.
-  bool reading_at(int64_t t_ns, ovton::core::ImuData &out) const;
-  /// Mean gyro reading over [t_from_ns, t_to_ns] (the readings the buffer holds there); false when it holds none.
-  bool mean_gyro(int64_t t_from_ns, int64_t t_to_ns, Eigen::Vector3d &w) const;
-  const std::deque<ovton::core::ImuData> &buffer() const { return buf_; }
+  /// The readings fed so far (the last 5 s of them).
+  const ovton::core::ImuBuffer &imu() const { return imu_; }
 
 private:
-  template <typename StepFn> bool integrate(int64_t t_from, int64_t t_to, StepFn &&step) const;
-
   ImuNoise noise_;
   Eigen::Vector3d gravity_;
-  std::deque<ovton::core::ImuData> buf_;
+  ovton::core::ImuBuffer imu_;
   Eigen::Vector3d last_w_B_ = Eigen::Vector3d::Zero();
   bool use_fej_ = true;
 };

@@ -13,21 +13,10 @@ namespace ovton::msckf {
 
 namespace {
 
-TpnDriverOptions driver_options(const TimeOffsetOptions &o, const TonOptions &ton) {
-  TpnDriverOptions t;
-  t.tpn.train.max_epochs = ton.tpn_epochs;
-  t.tpn.train.plateau_epochs = ton.plateau_epochs;
-  t.tpn.train.plateau_rel = ton.plateau_rel;
-  t.tpn.residual = ton.tpn_residual;
-  t.min_labels = ton.tpn_min_labels;
-  t.td_rate_max = o.rate_max;
-  return t;
-}
-
 class TpnTdModel : public TdModel {
 public:
   TpnTdModel(const TimeOffsetOptions &o, const TonOptions &ton)
-      : driver_(driver_options(o, ton)), q_(o.random_walk_tpn), start_sigma_s_(ton.tpn_start_sigma_s),
+      : driver_(ton.tpn), q_(o.random_walk_tpn), start_sigma_s_(ton.tpn_start_sigma_s),
         label_images_(ton.tpn_label_images), clone_trend_(o.clone_trend), trend_tau_s_(o.clone_trend_tau_s) {
     if (o.adaptive_noise)
       adapter_.emplace(o.random_walk_tpn, o.adaptive_block_s);
@@ -84,7 +73,7 @@ public:
     dt_since_image_ = 0.0;
     // The labels are the filter's own estimates: while t_d is still converging (σ above tpn_start_sigma_s) they
     // trace the convergence transient, not the offset's motion, and a network trained on them extrapolates the
-    // transient (measured: on a constant +10 ms offset, t_d overshot to 14 ms and the trajectory diverged).
+    // transient: on a constant offset t_d then overshoots and the trajectory can diverge (docs/ton.md).
     if (s.td_sigma() > start_sigma_s_) {
       // Converging again: the block labels start over, and t_d is not driven at the last labels' rate meanwhile.
       start_block();

@@ -13,20 +13,6 @@
 namespace ovton::msckf {
 namespace ton {
 
-struct F2fFvonOptions {
-  /// Paper Table I: lr 0.01, 1500 epochs; the paper gives no loss threshold, so early stopping is off by default.
-  TrainOptions train{0.01, 1500, 0.0};
-  unsigned seed = 2;
-  /// Spreads below which a dimension is treated as flat: position [m], velocity [px/s].
-  double min_position_range = 1e-3;
-  double min_velocity_range = 1.0;
-  /// Feed the 3D position as (X/Z, Y/Z, 1/Z) instead of (X, Y, Z): the same point, in coordinates in which the image
-  /// velocity is a low-order polynomial (ω enters through x, y; translation through 1/Z), so that new features —
-  /// detected where no tracked feature is, i.e. outside the labels — are less of an extrapolation. Not the paper's
-  /// input; measured in docs/ton.md. (min_position_range then applies to these coordinates.)
-  bool inverse_depth_input = true;
-};
-
 class F2fFvon {
 public:
   explicit F2fFvon(const F2fFvonOptions &options = F2fFvonOptions());

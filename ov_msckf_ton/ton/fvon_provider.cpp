@@ -29,9 +29,11 @@ bool well_tracked(const ovton::core::Feature &f) {
 
 } // namespace
 
-FvonVelocityProvider::FvonVelocityProvider(const ovton::core::CameraCalib &calib, const FvonProviderOptions &options)
-    : opt_(options), R_BC_(calib.T_BC.topLeftCorner<3, 3>()), p_BC_(calib.T_BC.topRightCorner<3, 1>()),
-      focal_(0.5 * (calib.intrinsics(0) + calib.intrinsics(1))), its_(options.its), f2f_(options.f2f) {
+FvonVelocityProvider::FvonVelocityProvider(const ovton::core::CameraCalib &calib, const FvonProviderOptions &options,
+                                           bool stencils)
+    : opt_(options), stencils_(stencils), R_BC_(calib.T_BC.topLeftCorner<3, 3>()),
+      p_BC_(calib.T_BC.topRightCorner<3, 1>()), focal_(0.5 * (calib.intrinsics(0) + calib.intrinsics(1))),
+      its_(options.its), f2f_(options.f2f) {
   if (!(focal_ > 0))
     throw ovton::core::UsageError("FvonVelocityProvider: focal lengths must be positive");
   if (opt_.max_labels < 1 || opt_.min_f2f_labels < 1 || opt_.its_min_later < 1)
@@ -137,14 +139,14 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
       }
       Prediction p;
       p.t_cam_ns = f->obs.front().t_cam_ns;
-      p.vel_xy = predict_its(*f, opt_.stencils ? &p.stencil : nullptr);
+      p.vel_xy = predict_its(*f, stencils_ ? &p.stencil : nullptr);
       p.source = kVelocityItsFvon;
       ++stats_.its_predictions;
       keep_prediction(*f, p);
       its_done.push_back(f);
     }
   }
-  if (opt_.evaluate_both && its_.trained())
+  if (evaluate_both_ && its_.trained())
     for (const auto *f : f2f_by_rule)
       if (later_velocities(*f) >= 1)
         predict_its(*f);
@@ -164,7 +166,7 @@ void FvonVelocityProvider::prepare(const State &state, const std::vector<const o
           keep_prediction(f, p);
         },
         [&](const ovton::core::Feature &) { ++stats_.no_prediction; });
-  if (opt_.evaluate_both && !its_done.empty()) {
+  if (evaluate_both_ && !its_done.empty()) {
     // On a copy: training F2F on more frames would move the weights the filter's own predictions warm-start from.
     ton::F2fFvon shadow = f2f_;
     f2f_pass(

@@ -20,31 +20,6 @@ namespace ovton::msckf {
 
 class UpdaterMSCKF;
 
-struct FvonProviderOptions {
-  ton::ItsFvonOptions its;
-  ton::F2fFvonOptions f2f;
-  /// Training labels per network call: (V^{k+1} -> V^k) pairs for ITS, (point, velocity) pairs for F2F. Bounds the
-  /// per-frame cost, which grows linearly with it (times the epochs).
-  int max_labels = 40;
-  /// F2F needs at least this many labelled features in the frame: 57 weights fitted to fewer points of a smooth
-  /// velocity field extrapolate arbitrarily, and a wrong velocity biases t_d.
-  int min_f2f_labels = 5;
-  /// Algorithm 1: a new feature "tracked over 3 consecutive frames" gets ITS, otherwise F2F.
-  int its_min_later = 3;
-  /// Sanity check before a prediction enters the update [px/s; 0 = none]: under the constant-speed model the first
-  /// observation's velocity equals the next one's, which the track measures. A network extrapolating outside its
-  /// labels (F2F on a handful of points, ITS on an unusual track) can be off by hundreds of px/s, and every such
-  /// velocity becomes a wrong t_d regressor; a missing velocity only costs the feature its t_d column.
-  double gate_px_s = 80.0;
-  /// For evaluation (`ovton run --velocity-log`): also predict every first observation with the network the rule
-  /// did not pick (ITS where F2F was chosen, and the reverse), on a copy of F2F so the filter's own predictions and
-  /// hence its trajectory are unchanged. Costs one more F2F training per frame.
-  bool evaluate_both = false;
-  /// Give each ITS prediction its stencil (the network's input Jacobian, by central differences: 2 predictions per
-  /// input velocity), for the update's errors-in-variables correction (time_offset.velocity_debias).
-  bool stencils = false;
-};
-
 /// What the networks said about one first observation (for the velocity log). Velocities in normalised units/s.
 struct FvonCandidates {
   bool has_its = false, has_f2f = false;
@@ -65,7 +40,10 @@ struct FvonStats {
 /// the provider to UpdaterMSCKF::update().
 class FvonVelocityProvider : public VelocityProvider {
 public:
-  FvonVelocityProvider(const ovton::core::CameraCalib &calib, const FvonProviderOptions &options = {});
+  /// `stencils`: give each ITS prediction its stencil (the network's input Jacobian, by central differences: 2
+  /// predictions per input velocity), for the update's errors-in-variables correction (time_offset.velocity_debias).
+  FvonVelocityProvider(const ovton::core::CameraCalib &calib, const FvonProviderOptions &options = {},
+                       bool stencils = false);
 
   /// Trains the networks on the update's well-tracked features (warm start) and predicts the velocity of every
   /// first observation of `features` that has none. Points are triangulated with `updater` from the clone
@@ -84,7 +62,10 @@ public:
   void set_tracked(const VelocityProvider *tracked) { tracked_for_update_ = tracked ? tracked : &tracked_; }
 
   const FvonStats &stats() const { return stats_; }
-  void set_evaluate_both(bool on) { opt_.evaluate_both = on; }
+  /// For evaluation (`ovton run --velocity-log`): also predict every first observation with the network the rule
+  /// did not pick (ITS where F2F was chosen, and the reverse), on a copy of F2F so the filter's own predictions and
+  /// hence its trajectory are unchanged. Costs one more F2F training per frame.
+  void set_evaluate_both(bool on) { evaluate_both_ = on; }
   /// Per feature id, the candidates of the last prepare() (first observations only).
   const std::unordered_map<size_t, FvonCandidates> &candidates() const { return candidates_; }
   const ton::ItsFvon &its() const { return its_; }
@@ -116,6 +97,7 @@ private:
                 const std::function<void(const ovton::core::Feature &)> &none);
 
   FvonProviderOptions opt_;
+  bool stencils_ = false, evaluate_both_ = false;
   Eigen::Matrix3d R_BC_;
   Eigen::Vector3d p_BC_;
   /// The networks' normalisers have spreads in px/s; the updater works in normalised coordinates per second, so

@@ -13,18 +13,6 @@
 namespace ovton::msckf {
 namespace ton {
 
-struct ItsFvonOptions {
-  /// Paper Table I: lr 1e-4, up to 1000 epochs or loss < 1e-5.
-  TrainOptions train{1e-4, 1000, 1e-5};
-  unsigned seed = 1;
-  /// Velocity spread [px/s] below which the window is treated as flat by the normaliser.
-  double min_velocity_range = 1.0;
-  /// Learn the change V^k − V^{k+1} instead of V^k (a skip connection around the same LSTM): an untrained or
-  /// mistrained net then predicts ≈ V^{k+1} (the constant-speed rule) instead of an arbitrary velocity. Not the
-  /// paper's output; measured against the truth in docs/ton.md (`ovton velocities`).
-  bool residual = true;
-};
-
 class ItsFvon {
 public:
   explicit ItsFvon(const ItsFvonOptions &options = ItsFvonOptions());

@@ -12,21 +12,6 @@
 namespace ovton::msckf {
 namespace ton {
 
-struct TpnOptions {
-  /// Paper Table I: lr 1e-4, up to 1000 epochs or loss < 1e-8.
-  TrainOptions train{1e-4, 1000, 1e-8};
-  /// Algorithm 1: the label buffer holds the last 30 estimates.
-  int buffer_size = 30;
-  unsigned seed = 3;
-  /// Window spread [s] below which t_d is treated as flat. 10 us shifts a 300 px/s feature by 0.003 px, so a flat
-  /// window is not worth resolving more finely, and this keeps a network error from being amplified by ~1/spread.
-  double min_range_s = 1e-5;
-  /// Learn the step t_d(j+1) − t_d(j) instead of t_d(j+1) (a skip connection around the same LSTM): the net then
-  /// only has to represent the drift rate, and an untrained net predicts "no change" instead of an arbitrary value.
-  /// Not the paper's output; measured in docs/ton.md.
-  bool residual = true;
-};
-
 class Tpn {
 public:
   explicit Tpn(const TpnOptions &options = TpnOptions());

@@ -6,17 +6,6 @@
 
 namespace ovton::msckf {
 
-struct TpnDriverOptions {
-  ton::TpnOptions tpn;
-  /// Below this many labels the rate is 0: a window of a few filter estimates is mostly the filter's convergence
-  /// transient, not the offset's own motion.
-  int min_labels = 5;
-  /// |J_td| bound [s/s]. Real clock drifts are ppm (1e-6 s/s) and the paper's simulated drift 1e-4 s/s; 1e-3 s/s
-  /// still allows 10x that, but keeps a badly trained network from moving t_d by more than 0.05 ms per 20 Hz frame,
-  /// which the update would then have to undo.
-  double td_rate_max = 0.001;
-};
-
 class TpnDriver {
 public:
   explicit TpnDriver(const TpnDriverOptions &options = {});

@@ -2,6 +2,7 @@
 // The online training loop shared by ITS-FVON, F2F-FVON and TPN: full-batch Adam steps on the window's labels,
 // stopped at the paper's epoch limit or loss threshold (Table I).
 #include "ov_msckf_ton/ton/adam.h"
+#include "ov_msckf_ton/ton/ton_options.h"
 
 #include <algorithm>
 #include <chrono>
@@ -9,33 +10,6 @@
 
 namespace ovton::msckf {
 namespace ton {
-
-struct TrainOptions {
-  double learning_rate = 1e-3;
-  /// Upper bound on Adam steps per training call (per frame, in the filter).
-  int max_epochs = 1000;
-  /// Stop as soon as the MSE (in normalised units) falls below this; <= 0 disables early stopping.
-  double loss_threshold = 0.0;
-  /// Plateau stop (beyond Table I, for the per-frame cost): every `plateau_epochs` steps, stop when the loss fell
-  /// by less than `plateau_rel` of itself since the previous check. Warm-started from the previous frame, whose
-  /// window differs by a few labels, the weights are usually near their optimum after a few dozen steps and the
-  /// remaining epochs of the paper's budget buy nothing measurable (docs/ton.md). 0 disables it.
-  int plateau_epochs = 0;
-  double plateau_rel = 1e-3;
-  /// Warm-up, then maintenance (beyond Table I, for the per-frame cost): after `warmup_calls` training calls the cap
-  /// per call is `maintenance_epochs` instead of max_epochs. A network learns its mapping over its first calls; later
-  /// each call only follows a window that differs by a few labels, which a few hundred warm-started steps do
-  /// (docs/ton.md, "Cost"). 0 disables it.
-  int warmup_calls = 0;
-  int maintenance_epochs = 0;
-  /// The options of the `call`-th training call (0-based).
-  TrainOptions for_call(int call) const {
-    TrainOptions o = *this;
-    if (warmup_calls > 0 && call >= warmup_calls)
-      o.max_epochs = std::min(max_epochs, maintenance_epochs);
-    return o;
-  }
-};
 
 struct TrainReport {
   int epochs = 0;           ///< Adam steps taken in this call.

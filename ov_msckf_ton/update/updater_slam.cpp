@@ -12,22 +12,22 @@ namespace ovton::msckf {
 
 UpdaterSLAM::UpdaterSLAM(const ovton::core::CameraCalib &calib, const UpdaterSlamOptions &opt,
                          const UpdaterMSCKF &msckf)
-    : opt_(opt), msckf_(msckf) {
+    : opt_(opt), msckf_(msckf), sigma_px_(opt.sigma_px > 0 ? opt.sigma_px : msckf.options().sigma_px) {
   (void)calib; // the calibration comes from the updater's view of the state (fixed or estimated)
-  if (!(opt_.sigma_px > 0) || !(opt_.chi2_multiplier > 0))
+  if (!(sigma_px_ > 0) || !(opt_.chi2_multiplier > 0))
     throw ovton::core::UsageError("UpdaterSLAM: sigma_px and chi2_multiplier must be positive");
   if (!(opt_.track_correlation >= 0 && opt_.track_correlation < 1))
     throw ovton::core::UsageError("UpdaterSLAM: track_correlation must be in [0, 1)");
   if (msckf_.options().td_velocity_debias != 0 && opt_.track_correlation != 0)
     throw ovton::core::UsageError(
         "UpdaterSLAM: td_velocity_debias assumes independent pixel errors (track_correlation 0)");
-  if (!(opt_.covariance_sigma_px == 0 || opt_.covariance_sigma_px >= opt_.sigma_px))
+  if (!(opt_.covariance_sigma_px == 0 || opt_.covariance_sigma_px >= sigma_px_))
     throw ovton::core::UsageError("UpdaterSLAM: covariance_sigma_px must be 0 (off) or at least sigma_px");
 }
 
 void UpdaterSLAM::initialize(State &state, const std::vector<const ovton::core::Feature *> &features, int64_t t_cam_ns,
                              TdObservation td_obs, const VelocityProvider &velocities, SlamStats &stats) {
-  const double sigma2 = opt_.sigma_px * opt_.sigma_px;
+  const double sigma2 = sigma_px_ * sigma_px_;
   for (const ovton::core::Feature *f : features) {
     if (state.landmarks.count(f->id))
       continue;
@@ -253,7 +253,7 @@ void UpdaterSLAM::update(State &state, const ovton::core::FeatureDatabase &db, i
     return;
   const CloneState &c = clone_it->second;
   const UpdaterMSCKF::CameraView view = msckf_.camera_view(state);
-  const double sigma2 = opt_.sigma_px * opt_.sigma_px;
+  const double sigma2 = sigma_px_ * sigma_px_;
   const double thr = opt_.chi2_multiplier / msckf_.options().chi2_multiplier * msckf_.chi2_threshold(2);
   // Each row pair involves the clone, its landmark, t_d and the calibration; the stacked system is kept over the
   // union of those columns (in state order), never over the whole state.
@@ -327,7 +327,7 @@ void UpdaterSLAM::update(State &state, const ovton::core::FeatureDatabase &db, i
     r.segment<2>(2 * k) = rows_r[k];
   }
   UpdaterMSCKF::compress(H, r);
-  if (state.separate_report() && opt_.covariance_sigma_px > opt_.sigma_px) {
+  if (state.separate_report() && opt_.covariance_sigma_px > sigma_px_) {
     // Independent rows of σ_c² under the σ² gain (the compression keeps a multiple of I as it is).
     const Eigen::MatrixXd dR =
         Eigen::MatrixXd::Identity(r.size(), r.size()) * (opt_.covariance_sigma_px * opt_.covariance_sigma_px - sigma2);

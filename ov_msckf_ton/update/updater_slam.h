@@ -15,24 +15,6 @@
 
 namespace ovton::msckf {
 
-struct UpdaterSlamOptions {
-  double sigma_px = 1.0;
-  double chi2_multiplier = 1.0;
-  double min_depth = 0.1, max_depth = 60.0; ///< [m]: a landmark leaving this range is marginalised
-  /// ρ of the AR(1) model of a landmark's pixel errors between consecutive images: its window rows are whitened at
-  /// initialisation, each later observation differenced against the one before. 0: independent errors.
-  double track_correlation = 0.0;
-  /// Pixel noise [px] under which a landmark's re-observations update the covariance, while the gain keeps sigma_px
-  /// (state_helper::ekf_update's ReportNoise): the long-run σ of a wandering track error that each image's
-  /// observation repeats. 0: sigma_px (off).
-  double covariance_sigma_px = 0.0;
-  /// Image-plane modes: a landmark's row takes the image velocity its state predicts (landmark, camera pose,
-  /// body rate and velocity at the image) instead of the tracked one. A landmark is always updated with its newest
-  /// observation, where the tracked velocity is the backward difference of eq. 2, whose pixel noise is also the
-  /// row's own (errors in variables): with 25 landmarks that bias drove TPN's t_d 5-9 ms ahead of a 0.5 ms/s drift.
-  bool state_velocity = true;
-};
-
 struct SlamStats {
   int initialised = 0, init_rejected = 0; ///< delayed initialisations done / refused (triangulation or chi2)
   int updated = 0, gated = 0;             ///< landmark observations used / refused by the chi2 gate this frame
@@ -123,6 +105,7 @@ private:
 
   UpdaterSlamOptions opt_;
   const UpdaterMSCKF &msckf_;
+  double sigma_px_; ///< opt_.sigma_px, or the MSCKF updater's when that is 0
   FeatureLinearization lin_;
 };
 
