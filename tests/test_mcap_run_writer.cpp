@@ -227,12 +227,15 @@ TEST(RunMcapWriter, DestructorFinishesTheFile) {
     o.image_format = "raw";
     RunMcapWriter w(d / "r.mcap", o);
     w.add_image(10, 11, cv::Mat(8, 8, CV_8UC1, cv::Scalar(3)), {});
+    w.add_image(60, 61, cv::Mat(), {{4, Eigen::Vector2d(1, 2), FeatureStatus::Used}}); // feature-level: no pixels
     StateSample s;
     s.t_ns = 11;
     w.add_state(s);
   }
   const auto ch = read_channels(d / "r.mcap");
   EXPECT_EQ(ch.at("/ovton/image").type, "sensor_msgs/msg/Image");
+  EXPECT_EQ(ch.at("/ovton/image").count, 1u);
+  EXPECT_EQ(ch.at("/ovton/features").count, 2u);
   EXPECT_EQ(ch.at("/ovton/pose").count, 1u);
   EXPECT_EQ(ch.at("/ovton/pose_truth").count, 0u);
   EXPECT_EQ(ch.at("/ovton/td_ms").count, 0u); // the state had no t_d

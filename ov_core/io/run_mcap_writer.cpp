@@ -156,7 +156,9 @@ void RunMcapWriter::add_image(int64_t t_cam_ns, int64_t t_imu_ns, const cv::Mat 
                               const std::vector<RunFeature> &features) {
   Impl &m = *impl_;
   const uint64_t t = log_time(t_imu_ns);
-  if (m.opt.image_format == "jpeg") {
+  if (gray.empty()) {
+    // A feature-level recording has no pixels: its features alone.
+  } else if (m.opt.image_format == "jpeg") {
     std::vector<uchar> bytes;
     if (!encode_image(".jpg", gray, bytes, {jpeg_quality_param(), m.opt.jpeg_quality}))
       throw UsageError("RunMcapWriter: the image at " + std::to_string(t_cam_ns) + " ns cannot be encoded as JPEG");

@@ -62,7 +62,7 @@ public:
   /// the first image or state. Either may be empty.
   void set_truth(std::vector<StateSample> groundtruth, std::vector<TdSample> td_truth);
   /// One image as the filter used it: its camera stamp, its IMU-clock time (t_cam + the filter's t_d), the 8-bit gray
-  /// pixels and its features.
+  /// pixels (empty for a feature-level recording: then its features alone) and its features.
   void add_image(int64_t t_cam_ns, int64_t t_imu_ns, const cv::Mat &gray, const std::vector<RunFeature> &features);
   /// One estimated state (as written to the trajectory CSV: t_ns in the IMU clock, pose, t_d and its sigma).
   void add_state(const StateSample &s);
