@@ -28,7 +28,7 @@ int main(int argc, char **argv) try {
 
   ovton::core::TrajectoryWriter out(argv[3], ovton::core::TrajectoryFormat::Csv);
   estimator.add_state_callback([&](const ovton::core::StateSample &s) {
-    out.write(s); // on the estimator's thread, as each state comes out
+    out.write(s);                    // on the estimator's thread, as each state comes out
     if (s.t_ns / 50000000 % 20 == 0) // about once a second
       std::printf("t %.3f s  p [%.3f %.3f %.3f] m  t_d %.2f +- %.2f ms\n", s.t_ns * 1e-9, s.p.x(), s.p.y(), s.p.z(),
                   s.td_s * 1e3, s.td_sigma_s * 1e3);

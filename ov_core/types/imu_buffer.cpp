@@ -1,5 +1,4 @@
 #include "ov_core/types/imu_buffer.h"
-#include "ov_core/math/so3.h"
 #include "ov_core/types/errors.h"
 
 #include <algorithm>
@@ -50,18 +49,6 @@ bool ImuBuffer::interpolate(int64_t t_ns, ImuData &out) const {
   return true;
 }
 
-Eigen::Vector3d ImuBuffer::gyro_at(double t_ns) const {
-  const auto it = std::lower_bound(buf_.begin(), buf_.end(), t_ns,
-                                   [](const ImuData &m, double t) { return static_cast<double>(m.t_imu_ns) < t; });
-  if (it == buf_.begin())
-    return buf_.front().wm;
-  if (it == buf_.end())
-    return buf_.back().wm;
-  const auto &a = *(it - 1), &b = *it;
-  const double u = (t_ns - static_cast<double>(a.t_imu_ns)) / static_cast<double>(b.t_imu_ns - a.t_imu_ns);
-  return a.wm + u * (b.wm - a.wm);
-}
-
 bool ImuBuffer::mean_gyro_readings(int64_t t_from_ns, int64_t t_to_ns, Eigen::Vector3d &w) const {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   int n = 0;
@@ -73,29 +60,6 @@ bool ImuBuffer::mean_gyro_readings(int64_t t_from_ns, int64_t t_to_ns, Eigen::Ve
     return false;
   w = sum / n;
   return true;
-}
-
-std::optional<Eigen::Matrix3d> ImuBuffer::rotation(int64_t a, int64_t b) const {
-  if (b <= a || buf_.size() < 2 || a < buf_.front().t_imu_ns || b > buf_.back().t_imu_ns)
-    return std::nullopt;
-  size_t k = first_after(a) - 1; // t_k <= a < t_{k+1}
-  const auto rate_at = [&](size_t i, int64_t t) -> Eigen::Vector3d {
-    const double span = static_cast<double>(buf_[i + 1].t_imu_ns - buf_[i].t_imu_ns);
-    const double s = span > 0 ? static_cast<double>(t - buf_[i].t_imu_ns) / span : 0.0;
-    return (1.0 - s) * buf_[i].wm + s * buf_[i + 1].wm;
-  };
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  int64_t t = a;
-  while (t < b && k + 1 < buf_.size()) {
-    const int64_t t_end = std::min(b, buf_[k + 1].t_imu_ns);
-    if (t_end > t) {
-      const Eigen::Vector3d w = 0.5 * (rate_at(k, t) + rate_at(k, t_end));
-      R = R * so3_exp(w * (static_cast<double>(t_end - t) * 1e-9));
-    }
-    t = t_end;
-    ++k;
-  }
-  return R;
 }
 
 GyroIntegral::GyroIntegral(const ImuBuffer &imu, int64_t t0_ns) {
@@ -111,6 +75,12 @@ GyroIntegral::GyroIntegral(const ImuBuffer &imu, int64_t t0_ns) {
 }
 
 Eigen::Vector3d GyroIntegral::integral(double t) const {
+  if (t_.empty())
+    return Eigen::Vector3d::Zero();
+  if (t < t_.front())
+    return c_.front() + (t - t_.front()) * w_.front();
+  if (t > t_.back())
+    return c_.back() + (t - t_.back()) * w_.back();
   const size_t i = std::min<size_t>(t_.size() - 2, std::upper_bound(t_.begin(), t_.end(), t) - t_.begin() - 1);
   const double h = t_[i + 1] - t_[i], u = t - t_[i];
   return c_[i] + u * w_[i] + 0.5 * u * u / h * (w_[i + 1] - w_[i]);

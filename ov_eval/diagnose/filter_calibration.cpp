@@ -1,4 +1,5 @@
 #include "ov_eval/diagnose/filter_calibration.h"
+#include "ov_core/types/imu_buffer.h"
 
 #include "ov_core/math/so3.h"
 
@@ -37,25 +38,25 @@ std::vector<ovton::core::ImuData> imu_through_calibration(const std::vector<ovto
 }
 
 Eigen::Vector3d gyro_at(const std::vector<ovton::core::ImuData> &imu, double t_ns) {
-  const auto it = std::lower_bound(imu.begin(), imu.end(), t_ns,
-                                   [](const ovton::core::ImuData &m, double t) { return double(m.t_imu_ns) < t; });
-  if (it == imu.begin())
-    return imu.front().wm;
-  if (it == imu.end())
-    return imu.back().wm;
-  const auto &a = *(it - 1), &b = *it;
-  const double u = (t_ns - double(a.t_imu_ns)) / double(b.t_imu_ns - a.t_imu_ns);
-  return a.wm + u * (b.wm - a.wm);
+  return ovton::core::imu_gyro_at(imu, t_ns);
 }
 
 Eigen::Matrix3d body_rotation(const std::vector<ovton::core::ImuData> &imu, double t0_ns, double t1_ns,
                               const Eigen::Vector3d &bias) {
-  const double span = 1e-9 * (t1_ns - t0_ns);
-  const int steps = std::max(1, static_cast<int>(std::abs(span) / 1e-3));
-  const double dt = span / steps;
+  if (t1_ns < t0_ns)
+    return body_rotation(imu, t1_ns, t0_ns, bias).transpose();
+  const int64_t a = std::llround(t0_ns), b = std::llround(t1_ns);
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  for (int k = 0; k < steps; ++k)
-    R = R * ovton::core::so3_exp((gyro_at(imu, t0_ns + 1e9 * (k + 0.5) * dt) - bias) * dt);
+  if (imu.empty() || b <= a)
+    return R;
+  // Beyond the readings the rate is held at the end one.
+  const int64_t lo = imu.front().t_imu_ns, hi = imu.back().t_imu_ns;
+  if (a < lo)
+    R = ovton::core::so3_exp((imu.front().wm - bias) * (1e-9 * double(std::min(b, lo) - a)));
+  if (const auto inside = ovton::core::imu_rotation(imu, std::max(a, lo), std::min(b, hi), bias))
+    R = R * *inside;
+  if (b > hi)
+    R = R * ovton::core::so3_exp((imu.back().wm - bias) * (1e-9 * double(b - std::max(a, hi))));
   return R;
 }
 

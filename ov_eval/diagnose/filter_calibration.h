@@ -29,7 +29,8 @@ std::vector<ovton::core::ImuData> imu_through_calibration(const std::vector<ovto
 /// Gyro reading at IMU time t_ns (linear interpolation; clamped at the ends).
 Eigen::Vector3d gyro_at(const std::vector<ovton::core::ImuData> &imu, double t_ns);
 
-/// The body's rotation R_{B0 B1} from IMU time t0_ns to t1_ns: the gyro less `bias`, midpoint rule in ~1 ms steps.
+/// The body's rotation R_{B0 B1} from IMU time t0_ns to t1_ns: the gyro less `bias` (ovton::core::imu_rotation), the
+/// rate held at the end readings beyond them.
 Eigen::Matrix3d body_rotation(const std::vector<ovton::core::ImuData> &imu, double t0_ns, double t1_ns,
                               const Eigen::Vector3d &bias = Eigen::Vector3d::Zero());
 

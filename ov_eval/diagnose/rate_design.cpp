@@ -1,5 +1,6 @@
 #include "ov_eval/diagnose/rate_design.h"
 #include "ov_core/math/so3.h"
+#include "ov_core/types/imu_buffer.h"
 #include "ov_eval/diagnose/candidates.h"
 #include "ov_eval/diagnose/filter_calibration.h"
 #include "ov_eval/diagnose/image_geometry.h"
@@ -317,12 +318,8 @@ private:
 /// noise-free tracks 17.0 ms), now 19.2 ms (noise-free 20.1 ms).
 class GyroSlope {
 public:
-  explicit GyroSlope(const std::vector<ovton::core::ImuData> &imu) : imu_(imu), angle_(imu.size()) {
-    if (!imu.empty())
-      angle_[0].setZero();
-    for (size_t i = 1; i < imu.size(); ++i) // trapezoid, per axis: only differences over ~50 ms are taken
-      angle_[i] = angle_[i - 1] + 0.5e-9 * double(imu[i].t_imu_ns - imu[i - 1].t_imu_ns) * (imu[i].wm + imu[i - 1].wm);
-  }
+  explicit GyroSlope(const std::vector<ovton::core::ImuData> &imu)
+      : t0_ns_(imu.empty() ? 0 : imu.front().t_imu_ns), angle_(imu, t0_ns_) {}
 
   /// α for an image with features `obs` (their windows' IMU times and slope weights), images interval_ns apart.
   Eigen::Vector3d alpha(const std::vector<FlowObs> &obs, double interval_ns) const {
@@ -335,22 +332,10 @@ public:
 
 private:
   /// The gyro's integral up to IMU time t [rad] (the rate held at the ends).
-  Eigen::Vector3d angle_at(double t_ns) const {
-    const auto it = std::lower_bound(imu_.begin(), imu_.end(), t_ns,
-                                     [](const ovton::core::ImuData &m, double t) { return double(m.t_imu_ns) < t; });
-    if (it == imu_.begin())
-      return angle_.front() + 1e-9 * (t_ns - double(imu_.front().t_imu_ns)) * imu_.front().wm;
-    if (it == imu_.end())
-      return angle_.back() + 1e-9 * (t_ns - double(imu_.back().t_imu_ns)) * imu_.back().wm;
-    const size_t i = static_cast<size_t>(it - imu_.begin());
-    const ovton::core::ImuData &a = imu_[i - 1], &b = imu_[i];
-    const double dt = 1e-9 * (t_ns - double(a.t_imu_ns));
-    const Eigen::Vector3d w = a.wm + dt / (1e-9 * double(b.t_imu_ns - a.t_imu_ns)) * (b.wm - a.wm);
-    return angle_[i - 1] + 0.5 * dt * (a.wm + w);
-  }
+  Eigen::Vector3d angle_at(double t_ns) const { return angle_.integral(1e-9 * (t_ns - double(t0_ns_))); }
 
-  const std::vector<ovton::core::ImuData> &imu_;
-  std::vector<Eigen::Vector3d> angle_;
+  int64_t t0_ns_;
+  ovton::core::GyroIntegral angle_;
 };
 
 /// The images' interval: the median step between the camera times of the flow data [ns].

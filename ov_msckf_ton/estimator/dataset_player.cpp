@@ -48,8 +48,8 @@ PlayResult play(const core::Dataset &data, Estimator &est, const PlayOptions &op
                                    data.imu.empty() ? INT64_MAX : data.imu.front().t_imu_ns);
   const auto wait_for = [&](int64_t t_ns) {
     if (opt.pace > 0)
-      std::this_thread::sleep_until(wall0 + std::chrono::nanoseconds(static_cast<int64_t>(
-                                                static_cast<double>(t_ns - t_first) / opt.pace)));
+      std::this_thread::sleep_until(
+          wall0 + std::chrono::nanoseconds(static_cast<int64_t>(static_cast<double>(t_ns - t_first) / opt.pace)));
   };
   size_t k = 0; // next IMU reading
   const auto feed_imu_to = [&](int64_t t_ns) {
