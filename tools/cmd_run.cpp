@@ -115,6 +115,10 @@ int cmd_run(const Args &args) {
     r = run_dataset(data, req);
   } catch (const ovton::core::EstimatorFailure &e) {
     throw ovton::core::EstimatorFailure(e.t_ns(), std::string(e.what()) + "; the rows before it are in " + req.output);
+  } catch (const ovton::core::DataError &e) {
+    if (data.truncated_file.empty() || e.file() != data.truncated_file)
+      throw;
+    throw ovton::core::DataError(e.file(), data.truncated_reason + "; their rows are in " + req.output);
   }
 
   const auto &c = r.report.counters;
