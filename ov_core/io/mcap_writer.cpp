@@ -175,6 +175,9 @@ void McapWriter::flush_chunk() {
   chunk_indexes_.push_back(std::move(ci));
   chunk_.clear();
   chunk_index_.clear();
+  // The chunk and its indexes reach the file whole: a process killed later leaves them readable (no summary then).
+  if (std::fflush(f_) != 0)
+    throw DataError(path_, "writing failed at byte " + std::to_string(offset_) + ": " + std::strerror(errno));
 }
 
 void McapWriter::close() {

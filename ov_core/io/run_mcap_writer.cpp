@@ -105,6 +105,17 @@ struct RunMcapWriter::Impl {
     return id;
   }
 
+  /// The ground truth from the first state on, once at that state's time: Foxglove shows it from the first frame, and
+  /// a file whose run was killed has it.
+  void write_truth_path(int64_t first_ns) {
+    std::vector<Pose> truth;
+    for (const StateSample &g : gt)
+      if (g.t_ns >= first_ns)
+        truth.push_back({g.t_ns, g.p, g.has_orientation ? g.q_WB.normalized() : Eigen::Quaterniond::Identity()});
+    if (!truth.empty())
+      w.write(path_truth, log_time(first_ns), path_message(truth, first_ns));
+  }
+
   RunMcapOptions opt;
   McapWriter w;
   std::map<uint16_t, std::string> topics;
@@ -209,6 +220,8 @@ void RunMcapWriter::add_state(const StateSample &s) {
     m.w.write(m.td_upper, t, float64_message((s.td_s + s.td_sigma_s) * 1e3));
   }
   m.poses.push_back({s.t_ns, s.p, q});
+  if (m.poses.size() == 1)
+    m.write_truth_path(s.t_ns);
   if (m.poses.size() == 1 || ns_to_s(s.t_ns - m.last_path_ns) >= m.opt.path_period_s) {
     m.w.write(m.path, t, path_message(m.poses, s.t_ns));
     m.last_path_ns = s.t_ns;
@@ -221,18 +234,8 @@ void RunMcapWriter::close() {
     return;
   Impl &m = *impl_;
   m.closed = true;
-  if (!m.poses.empty()) {
-    const int64_t first = m.poses.front().t_ns, last = m.poses.back().t_ns;
-    if (m.poses_in_last_path != m.poses.size())
-      m.w.write(m.path, log_time(last), path_message(m.poses, last));
-    // The truth over the run's span, written at its start so that Foxglove shows it from the first frame.
-    std::vector<Pose> truth;
-    for (const StateSample &g : m.gt)
-      if (g.t_ns >= first && g.t_ns <= last)
-        truth.push_back({g.t_ns, g.p, g.has_orientation ? g.q_WB.normalized() : Eigen::Quaterniond::Identity()});
-    if (!truth.empty())
-      m.w.write(m.path_truth, log_time(first), path_message(truth, first));
-  }
+  if (!m.poses.empty() && m.poses_in_last_path != m.poses.size())
+    m.w.write(m.path, log_time(m.poses.back().t_ns), path_message(m.poses, m.poses.back().t_ns));
   m.w.close();
 }
 

@@ -9,7 +9,7 @@
 //   /tf                      tf2_msgs/msg/TFMessage: world -> imu (estimate) and world -> imu_truth
 //   /tf_static               tf2_msgs/msg/TFMessage: imu -> cam, when the writer is given T_BC
 //   /ovton/path              nav_msgs/msg/Path: the estimated path so far (every path_period_s and at the end)
-//   /ovton/path_truth        nav_msgs/msg/Path: the ground truth over the run (once, at the first state's time)
+//   /ovton/path_truth        nav_msgs/msg/Path: the ground truth from the first state on (once, at its time)
 //   /ovton/td_ms, /ovton/td_lower_ms, /ovton/td_upper_ms, /ovton/td_truth_ms
 //                            std_msgs/msg/Float64: t_d, t_d -/+ its sigma, and the true t_d at each image, in ms
 // Every message's log time is the IMU clock (t_imu = t_cam + t_d), so Foxglove's timeline lines them up; an image's
