@@ -6,6 +6,8 @@
 #include "ov_core/io/velocity_log.h"
 #include "ov_msckf_ton/update/residual_log.h"
 
+#include <opencv2/core.hpp>
+
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -23,6 +25,9 @@ struct FrameFeatures {
   /// Used: the feature entered an update at this image (its whole track); Gated: its update refused it (χ² gate,
   /// triangulation); Tracked: still being tracked, or waiting for its update.
   std::vector<Fate> fate;
+  /// The 8-bit gray image itself when an observer wants_images (empty otherwise, and for a feature-level image).
+  /// Shared with the caller's image, not copied: read-only.
+  cv::Mat image;
 };
 
 class FilterObserver {
@@ -38,7 +43,10 @@ public:
   virtual bool wants_velocities() const { return false; }
   /// Per observation of every feature an update uses, each rule's and network's image velocity.
   virtual void on_velocities(const std::vector<ovton::core::VelocityLogRow> &rows) { (void)rows; }
-  /// After each image the filter processed.
+  /// True to receive each image's pixels in on_frame (FrameFeatures::image). The estimator then keeps every image until
+  /// the filter has processed it — while the coarse t_d search holds its window, that window's images too.
+  virtual bool wants_images() const { return false; }
+  /// After each image the filter processed (from its initialisation on), before its state goes to the callbacks.
   virtual void on_frame(const FrameFeatures &frame) { (void)frame; }
   /// After each image, the filter itself, read-only (its state, its networks' statistics): for tests and tools that
   /// look inside. Called on the filter's thread; what it reads is valid only during the call.

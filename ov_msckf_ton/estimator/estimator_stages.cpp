@@ -86,7 +86,7 @@ bool Estimator::Impl::track_step(Lock &lk) {
   cv_.notify_all(); // a caller may wait for room
   lk.unlock();
   const auto t0 = Clock::now();
-  Tracked out{in.t_cam_ns, track(in), in.arrived};
+  Tracked out{in.t_cam_ns, track(in), in.arrived, images_wanted_ ? in.gray : cv::Mat()};
   const double ms = ms_between(t0, Clock::now());
   lk.lock();
   tracking_ms_ += ms;
@@ -201,7 +201,7 @@ bool Estimator::Impl::filter_step(Lock &lk) {
   for (const auto &m : readings)
     vio_->on_imu(m);
   if (covered)
-    vio_->process_frame(frame.t_cam_ns, frame.features);
+    vio_->process_frame(frame.t_cam_ns, frame.features, frame.image);
   lk.lock();
   if (covered)
     ++status_.images_processed;
