@@ -8,7 +8,7 @@
 #include "ov_core/io/image_store.h"
 #include "ov_core/io/mcap_export.h"
 #include "ov_core/io/rosbag_reader.h"
-#include "ov_core/io/run_mcap_writer.h"
+#include "ov_core/io/trajectory_io.h"
 #include "ov_sim/simulator.h"
 #include "test_mcap_util.h"
 
@@ -152,42 +152,34 @@ TEST(McapExternal, ExportReadByFoxgloveReader) {
   EXPECT_NE(jpg.find("\"format\":\"jpeg\""), std::string::npos) << jpg;
 }
 
-// A run's --mcap-out as Foxglove reads it: every channel's schema is one Foxglove or ROS 2 defines, and decodes.
+// A run's --mcap-out as Foxglove reads it: every channel's schema is one Foxglove or ROS 2 defines, every message
+// decodes by it, and the per-image channels hold one message per trajectory row.
 TEST(McapExternal, RunMcapReadByFoxgloveReader) {
   REQUIRE_TOOLS();
   ovtest::TempDir d;
-  {
-    RunMcapWriter w(d / "run.mcap");
-    StateSample g;
-    g.t_ns = 900;
-    w.set_truth({g,
-                 [] {
-                   StateSample s;
-                   s.t_ns = 5000;
-                   return s;
-                 }()},
-                {{0, 0.002}});
-    for (int i = 0; i < 5; ++i) {
-      w.add_image(
-          1000 + 100 * i, 1002 + 100 * i, cv::Mat(48, 64, CV_8UC1, cv::Scalar(40 * i)),
-          {{1, Eigen::Vector2d(10, 20), FeatureStatus::Used}, {2, Eigen::Vector2d(30, 5), FeatureStatus::Gated}});
-      StateSample s;
-      s.t_ns = 1002 + 100 * i;
-      s.has_td = true;
-      s.td_s = 0.002;
-      s.td_sigma_s = 0.001;
-      w.add_state(s);
-    }
-  }
+  const std::string f = ovtest::render_flight(d / "flight", 1.5, 21), err = d / "run.err";
+  const std::string cfg = std::string(OVTON_SOURCE_DIR) + "/config/sim/estimator_config.yaml";
+  ASSERT_EQ(shell(ovtest::ovton_binary() + " run -q -c " + cfg + " --dataset " + f + " -o " + (d / "t.csv") +
+                      " --mcap-out " + (d / "run.mcap"),
+                  err),
+            0)
+      << ovtest::read_text(err);
+  const std::string n = std::to_string(read_trajectory(d / "t.csv").size());
   const std::string j = foxglove_read(d / "run.mcap", d / "run.json");
-  for (const char *piece :
-       {"\"/ovton/image\":{\"schema\":\"sensor_msgs/msg/CompressedImage\"",
-        "\"/ovton/features\":{\"schema\":\"foxglove_msgs/msg/ImageAnnotations\"",
-        "\"/ovton/pose\":{\"schema\":\"geometry_msgs/msg/PoseStamped\"",
-        "\"/ovton/pose_truth\":{\"schema\":\"geometry_msgs/msg/PoseStamped\"",
-        "\"/tf\":{\"schema\":\"tf2_msgs/msg/TFMessage\"", "\"/ovton/path\":{\"schema\":\"nav_msgs/msg/Path\"",
-        "\"/ovton/path_truth\":{\"schema\":\"nav_msgs/msg/Path\"",
-        "\"/ovton/td_ms\":{\"schema\":\"std_msgs/msg/Float64\"", "\"text\":\"used 1  gated 1  tracked 0\"",
-        "\"dataCrc\":\"ok\""})
+  const auto channel = [](const std::string &topic, const std::string &schema, const std::string &count) {
+    return "\"" + topic + "\":{\"schema\":\"" + schema +
+           "\",\"schemaEncoding\":\"ros2msg\",\"messageEncoding\":\"cdr\",\"count\":" + count;
+  };
+  for (const std::string &piece :
+       {channel("/ovton/image", "sensor_msgs/msg/CompressedImage", n),
+        channel("/ovton/features", "foxglove_msgs/msg/ImageAnnotations", n),
+        channel("/ovton/pose", "geometry_msgs/msg/PoseStamped", n),
+        channel("/ovton/pose_truth", "geometry_msgs/msg/PoseStamped", n), channel("/tf", "tf2_msgs/msg/TFMessage", n),
+        channel("/tf_static", "tf2_msgs/msg/TFMessage", "1"), channel("/ovton/path", "nav_msgs/msg/Path", ""),
+        channel("/ovton/path_truth", "nav_msgs/msg/Path", "1"), channel("/ovton/td_ms", "std_msgs/msg/Float64", n),
+        channel("/ovton/td_lower_ms", "std_msgs/msg/Float64", n),
+        channel("/ovton/td_upper_ms", "std_msgs/msg/Float64", n),
+        channel("/ovton/td_truth_ms", "std_msgs/msg/Float64", n), std::string("\"text\":\"used "),
+        std::string("\"format\":\"jpeg\""), std::string("\"dataCrc\":\"ok\"")})
     EXPECT_NE(j.find(piece), std::string::npos) << piece << "\n" << j;
 }
