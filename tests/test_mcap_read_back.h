@@ -74,4 +74,33 @@ inline double read_float64(const std::vector<uint8_t> &b) {
   return r.f64("data");
 }
 
+/// A run's file (RunMcapWriter, JPEG images) holds its 12 channels with their Foxglove / ROS 2 schema names:
+/// `per_image` messages on every channel written per image or state, `paths` on /ovton/path (kAny: not checked), one
+/// /tf_static and one /ovton/path_truth.
+constexpr size_t kAny = static_cast<size_t>(-1);
+inline void expect_run_channels(const std::map<std::string, Channel> &ch, size_t per_image, size_t paths) {
+  const std::map<std::string, std::pair<std::string, size_t>> expected = {
+      {"/ovton/image", {"sensor_msgs/msg/CompressedImage", per_image}},
+      {"/ovton/features", {"foxglove_msgs/msg/ImageAnnotations", per_image}},
+      {"/ovton/pose", {"geometry_msgs/msg/PoseStamped", per_image}},
+      {"/ovton/pose_truth", {"geometry_msgs/msg/PoseStamped", per_image}},
+      {"/tf", {"tf2_msgs/msg/TFMessage", per_image}},
+      {"/tf_static", {"tf2_msgs/msg/TFMessage", 1}},
+      {"/ovton/path", {"nav_msgs/msg/Path", paths}},
+      {"/ovton/path_truth", {"nav_msgs/msg/Path", 1}},
+      {"/ovton/td_ms", {"std_msgs/msg/Float64", per_image}},
+      {"/ovton/td_lower_ms", {"std_msgs/msg/Float64", per_image}},
+      {"/ovton/td_upper_ms", {"std_msgs/msg/Float64", per_image}},
+      {"/ovton/td_truth_ms", {"std_msgs/msg/Float64", per_image}},
+  };
+  ASSERT_EQ(ch.size(), expected.size());
+  for (const auto &[topic, e] : expected) {
+    ASSERT_TRUE(ch.count(topic)) << topic;
+    EXPECT_EQ(ch.at(topic).type, e.first) << topic;
+    if (e.second != kAny) {
+      EXPECT_EQ(ch.at(topic).count, e.second) << topic;
+    }
+  }
+}
+
 } // namespace ovtest::mcap_read_back
