@@ -3,7 +3,8 @@
 # scripts/quickstart.sh runs it), read back by Foxglove's own reader (scripts/mcap_tools/check_mcap.mjs: @mcap/core's
 # indexed reader, every chunk CRC, every message decoded by the schema the file carries). Prints each channel's schema
 # and message count against the trajectory's rows, the file's size, and what the recording costs: the same run without
-# --mcap-out, R rounds of the two interleaved (wall and CPU seconds, medians), trajectories compared byte for byte.
+# --mcap-out, R rounds of the two interleaved (wall and CPU seconds, peak RSS; medians), trajectories compared byte for
+# byte.
 # Writes OUT/summary.md (and keeps OUT/run_sr.mcap to open in Foxglove). Needs node with scripts/mcap_tools' npm
 # packages (npm ci --prefix scripts/mcap_tools). Usage: scripts/experiments/mcap_run_out.sh [OUT] [R]  (~2 min)
 set -euo pipefail
@@ -20,11 +21,11 @@ mkdir -p "$OUT"
 SAMPLE="$SCRATCH/sample"
 nice -n 10 "$BIN" simulate --builtin --duration-s 20 --td0-ms 10 --seed 1 --out "$SAMPLE" -q >/dev/null
 RUN=(run -q -c config/sim/estimator_config.yaml --td-mode sr --dataset "$SAMPLE")
-timed() { # label, args... -> appends "label wall cpu" to times.txt
+timed() { # label, args... -> appends "label wall cpu peak_rss_kb" to times.txt
   local label=$1
   shift
-  /usr/bin/time -f "%e %U %S" -o "$SCRATCH/t" nice -n 10 "$BIN" "$@" >"$SCRATCH/$label.out"
-  echo "$label $(awk '{printf "%s %.2f", $1, $2 + $3}' "$SCRATCH/t")" >>"$SCRATCH/times.txt"
+  /usr/bin/time -f "%e %U %S %M" -o "$SCRATCH/t" nice -n 10 "$BIN" "$@" >"$SCRATCH/$label.out"
+  echo "$label $(awk '{printf "%s %.2f %s", $1, $2 + $3, $4}' "$SCRATCH/t")" >>"$SCRATCH/times.txt"
 }
 : >"$SCRATCH/times.txt"
 for ((i = 1; i <= R; i++)); do
@@ -55,13 +56,13 @@ PY
 import statistics, sys
 t = {}
 for line in open(sys.argv[1]):
-    label, wall, cpu = line.split()
-    t.setdefault(label, []).append((float(wall), float(cpu)))
-m = {k: (statistics.median(w for w, _ in v), statistics.median(c for _, c in v)) for k, v in t.items()}
+    label, wall, cpu, rss = line.split()
+    t.setdefault(label, []).append((float(wall), float(cpu), float(rss) / 1024))
+m = {k: [statistics.median(x[i] for x in v) for i in range(3)] for k, v in t.items()}
 n = len(t["plain"])
 print(f"Cost, medians of {n} interleaved rounds: without --mcap-out {m['plain'][0]:.2f} s wall / {m['plain'][1]:.2f} s CPU, "
       f"with {m['mcap'][0]:.2f} s / {m['mcap'][1]:.2f} s ({m['mcap'][0] / m['plain'][0]:.2f}x / {m['mcap'][1] / m['plain'][1]:.2f}x); "
-      f"trajectories {sys.argv[2]}.")
+      f"peak RSS {m['plain'][2]:.0f} MB / {m['mcap'][2]:.0f} MB; trajectories {sys.argv[2]}.")
 PY
 } >"$OUT/summary.md"
 cat "$OUT/summary.md"
