@@ -163,20 +163,27 @@ void RunMcapWriter::set_truth(std::vector<StateSample> groundtruth, std::vector<
   impl_->td_gt = std::move(td_truth);
 }
 
+std::vector<uint8_t> RunMcapWriter::encode_image(int64_t t_cam_ns, const cv::Mat &gray) const {
+  if (impl_->opt.image_format != "jpeg")
+    return encode_ros2_image(gray, t_cam_ns, "cam");
+  std::vector<uchar> bytes;
+  if (!core::encode_image(".jpg", gray, bytes, {jpeg_quality_param(), impl_->opt.jpeg_quality}))
+    throw UsageError("RunMcapWriter: the image at " + std::to_string(t_cam_ns) + " ns cannot be encoded as JPEG");
+  return encode_ros2_compressed_image(bytes, "jpeg", t_cam_ns, "cam");
+}
+
 void RunMcapWriter::add_image(int64_t t_cam_ns, int64_t t_imu_ns, const cv::Mat &gray,
                               const std::vector<RunFeature> &features) {
+  // A feature-level recording has no pixels: its features alone.
+  add_encoded_image(t_cam_ns, t_imu_ns, gray.empty() ? std::vector<uint8_t>() : encode_image(t_cam_ns, gray), features);
+}
+
+void RunMcapWriter::add_encoded_image(int64_t t_cam_ns, int64_t t_imu_ns, const std::vector<uint8_t> &image_message,
+                                      const std::vector<RunFeature> &features) {
   Impl &m = *impl_;
   const uint64_t t = log_time(t_imu_ns);
-  if (gray.empty()) {
-    // A feature-level recording has no pixels: its features alone.
-  } else if (m.opt.image_format == "jpeg") {
-    std::vector<uchar> bytes;
-    if (!encode_image(".jpg", gray, bytes, {jpeg_quality_param(), m.opt.jpeg_quality}))
-      throw UsageError("RunMcapWriter: the image at " + std::to_string(t_cam_ns) + " ns cannot be encoded as JPEG");
-    m.w.write(m.image, t, encode_ros2_compressed_image(bytes, "jpeg", t_cam_ns, "cam"));
-  } else {
-    m.w.write(m.image, t, encode_ros2_image(gray, t_cam_ns, "cam"));
-  }
+  if (!image_message.empty())
+    m.w.write(m.image, t, image_message);
   m.w.write(m.features, t, annotations_message(t_cam_ns, features));
   if (!m.td_gt.empty())
     m.w.write(m.td_truth, t, float64_message(interpolate_td(m.td_gt, t_cam_ns) * 1e3));

@@ -64,6 +64,13 @@ public:
   /// One image as the filter used it: its camera stamp, its IMU-clock time (t_cam + the filter's t_d), the 8-bit gray
   /// pixels (empty for a feature-level recording: then its features alone) and its features.
   void add_image(int64_t t_cam_ns, int64_t t_imu_ns, const cv::Mat &gray, const std::vector<RunFeature> &features);
+  /// The /ovton/image message of `gray` (JPEG or mono8, as the options say), to be added later with add_encoded_image.
+  /// Touches nothing in the writer: it may run on another thread than the rest (an image encoded when tracked waits for
+  /// the filter as its JPEG, not its pixels).
+  std::vector<uint8_t> encode_image(int64_t t_cam_ns, const cv::Mat &gray) const;
+  /// add_image with the image's message from encode_image (empty: no pixels).
+  void add_encoded_image(int64_t t_cam_ns, int64_t t_imu_ns, const std::vector<uint8_t> &image_message,
+                         const std::vector<RunFeature> &features);
   /// One estimated state (as written to the trajectory CSV: t_ns in the IMU clock, pose, t_d and its sigma).
   void add_state(const StateSample &s);
   /// Writes the last path and the file's summary. Throws DataError when the file cannot be written.

@@ -231,8 +231,7 @@ void VioManager::add_calibration_variables() {
     s.calib.imu_intrinsics_index = add(Eigen::VectorXd::Constant(12, o.sigma_imu_intrinsics));
 }
 
-void VioManager::process_frame(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features,
-                               const cv::Mat &image) {
+void VioManager::process_frame(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features) {
   const auto t_start = Clock::now();
   db_.add_frame(t_cam_ns, features);
   fate_.clear();
@@ -261,7 +260,7 @@ void VioManager::process_frame(int64_t t_cam_ns, const std::vector<ovton::core::
     finish_image(t_cam_ns);
     ++times_.frames;
     times_.total += ms_since(t_start);
-    hand_out(t_cam_ns, features, image);
+    hand_out(t_cam_ns, features);
     return;
   }
   // The clone's t_d Jacobian needs the body rate AT the image time (interpolated reading), not the mean over the
@@ -292,17 +291,15 @@ void VioManager::process_frame(int64_t t_cam_ns, const std::vector<ovton::core::
 
   ++times_.frames;
   times_.total += ms_since(t_start);
-  hand_out(t_cam_ns, features, image);
+  hand_out(t_cam_ns, features);
 }
 
-void VioManager::hand_out(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features,
-                          const cv::Mat &image) {
+void VioManager::hand_out(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features) {
   const ovton::core::StateSample state = snapshot(); // checks the filter's health first
   if (want_frames_) {
     FrameFeatures f;
     f.t_cam_ns = t_cam_ns;
     f.t_imu_ns = state.t_ns;
-    f.image = image;
     for (const auto &tf : features) {
       f.ids.push_back(tf.id);
       f.uv.push_back(tf.uv);

@@ -73,10 +73,8 @@ public:
 
   /// IMU readings, in time order, up to (and one past) each image's IMU-clock time before the image.
   void on_imu(const ovton::core::ImuData &m);
-  /// One image's features (tracker output, or a feature-level dataset's points with their undistorted coordinates);
-  /// `image`, when given, goes to the observers with them (FilterObserver::wants_images).
-  void process_frame(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features,
-                     const cv::Mat &image = cv::Mat());
+  /// One image's features (tracker output, or a feature-level dataset's points with their undistorted coordinates).
+  void process_frame(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features);
   /// t_d for an image at t_cam_ns as the next propagation will use it (t_imu = t_cam + t_d): the IMU must reach
   /// t_cam + this + imu_lookahead_ns() before the image.
   double td_for_image_s(int64_t t_cam_ns) const;
@@ -141,7 +139,7 @@ private:
   /// Rows for the observers' velocities of the update's features, with the velocities `used` gives them.
   void show_velocities(const std::vector<const ovton::core::Feature *> &feats, const VelocityProvider &used);
   /// After an image: its state (health-checked) to the callback, its features with their fate to the observers.
-  void hand_out(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features, const cv::Mat &image);
+  void hand_out(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features);
   std::unordered_map<size_t, FrameFeatures::Fate> fate_; ///< this image's updates' verdicts, by feature id
 
   bool initialized_ = false;

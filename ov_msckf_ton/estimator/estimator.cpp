@@ -67,7 +67,6 @@ void Estimator::Impl::add_observer(std::shared_ptr<msckf::FilterObserver> observ
     throw core::UsageError("Estimator: observers are added before the first feed");
   if (!observer)
     throw core::UsageError("Estimator: a null observer");
-  images_wanted_ = images_wanted_ || observer->wants_images();
   observers_.push_back(std::move(observer));
 }
 

@@ -48,7 +48,6 @@ private:
     int64_t t_cam_ns;
     std::vector<core::TrackedFeature> features;
     Clock::time_point arrived;
-    cv::Mat image; ///< the image itself, for observers that want it (images_wanted_); else empty
   };
 
   // --- the stages; each is called with the lock held, returns whether it did anything, and may release the lock
@@ -81,7 +80,6 @@ private:
   core::CameraModel camera_;
   std::vector<StateCallback> callbacks_;
   std::vector<std::shared_ptr<msckf::FilterObserver>> observers_;
-  bool images_wanted_ = false; ///< an observer wants the pixels: each image travels with its features to the filter
 
   mutable std::mutex m_;
   std::condition_variable cv_;

@@ -86,8 +86,11 @@ bool Estimator::Impl::track_step(Lock &lk) {
   cv_.notify_all(); // a caller may wait for room
   lk.unlock();
   const auto t0 = Clock::now();
-  Tracked out{in.t_cam_ns, track(in), in.arrived, images_wanted_ ? in.gray : cv::Mat()};
+  Tracked out{in.t_cam_ns, track(in), in.arrived};
   const double ms = ms_between(t0, Clock::now());
+  if (!in.feature_level)
+    for (const auto &o : observers_)
+      o->on_image(in.t_cam_ns, in.gray);
   lk.lock();
   tracking_ms_ += ms;
   // The next image's rotation starts at this one, at an offset the search may still move by its range.
@@ -201,7 +204,7 @@ bool Estimator::Impl::filter_step(Lock &lk) {
   for (const auto &m : readings)
     vio_->on_imu(m);
   if (covered)
-    vio_->process_frame(frame.t_cam_ns, frame.features, frame.image);
+    vio_->process_frame(frame.t_cam_ns, frame.features);
   lk.lock();
   if (covered)
     ++status_.images_processed;

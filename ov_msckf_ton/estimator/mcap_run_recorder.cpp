@@ -32,11 +32,28 @@ void McapRunRecorder::set_truth(std::vector<core::StateSample> groundtruth, std:
   writer_.set_truth(std::move(groundtruth), std::move(td_truth));
 }
 
+void McapRunRecorder::on_image(int64_t t_cam_ns, const cv::Mat &gray) {
+  std::vector<uint8_t> message = writer_.encode_image(t_cam_ns, gray);
+  const std::lock_guard<std::mutex> lk(pending_m_);
+  pending_[t_cam_ns] = std::move(message);
+}
+
 void McapRunRecorder::on_frame(const msckf::FrameFeatures &frame) {
+  std::vector<uint8_t> image; // stays empty for a feature-level image
+  {
+    const std::lock_guard<std::mutex> lk(pending_m_);
+    // Images before this one that the filter did not process (before its initialisation, beyond the IMU) are dropped.
+    pending_.erase(pending_.begin(), pending_.lower_bound(frame.t_cam_ns));
+    const auto it = pending_.find(frame.t_cam_ns);
+    if (it != pending_.end()) {
+      image = std::move(it->second);
+      pending_.erase(it);
+    }
+  }
   features_.resize(frame.ids.size());
   for (size_t i = 0; i < frame.ids.size(); ++i)
     features_[i] = {frame.ids[i], frame.uv[i], status_of(frame.fate[i])};
-  writer_.add_image(frame.t_cam_ns, frame.t_imu_ns, frame.image, features_);
+  writer_.add_encoded_image(frame.t_cam_ns, frame.t_imu_ns, image, features_);
 }
 
 void McapRunRecorder::on_state(const core::StateSample &s) {
@@ -45,6 +62,8 @@ void McapRunRecorder::on_state(const core::StateSample &s) {
 
 void McapRunRecorder::close() {
   writer_.close();
+  const std::lock_guard<std::mutex> lk(pending_m_);
+  pending_.clear();
 }
 
 } // namespace ovton

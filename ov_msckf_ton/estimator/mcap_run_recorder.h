@@ -1,8 +1,8 @@
 #pragma once
 // A run written as Foxglove shows it (core::RunMcapWriter: the image with its features' fate, the estimated and true
-// pose, tf, the paths, t_d ± σ) from what the estimator hands out — each image with its features (an observer that
-// wants the pixels) and each state (a callback). `ovton run --mcap-out` attaches one; a program that embeds the
-// Estimator does the same:
+// pose, tf, the paths, t_d ± σ) from what the estimator hands out — each image as tracked (encoded there, so that only
+// its JPEG waits for the filter), its features' fate after the filter (an observer) and each state (a callback).
+// `ovton run --mcap-out` attaches one; a program that embeds the Estimator does the same:
 //   auto rec = ovton::McapRunRecorder::attach(est, "run.mcap");   // before the first feed
 //   ... feed ..., est.finish();
 //   rec->close();                                                  // the summary: Foxglove's index
@@ -13,7 +13,9 @@
 #include "ov_msckf_ton/core/filter_observer.h"
 #include "ov_msckf_ton/estimator/estimator.h"
 
+#include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 
 namespace ovton {
@@ -28,7 +30,9 @@ public:
 
   /// Ground truth and the true t_d (RunMcapWriter::set_truth), before the first feed.
   void set_truth(std::vector<core::StateSample> groundtruth, std::vector<core::TdSample> td_truth);
-  bool wants_images() const override { return true; }
+  /// On the tracking thread: the image's message, kept until its on_frame.
+  void on_image(int64_t t_cam_ns, const cv::Mat &gray) override;
+  /// On the filter thread: the image's message (dropping those of images the filter never processed) and its features.
   void on_frame(const msckf::FrameFeatures &frame) override;
   void on_state(const core::StateSample &s);
   /// After the estimator's finish() or stop(): the last path and the summary. Throws DataError when the file cannot
@@ -38,7 +42,9 @@ public:
 
 private:
   core::RunMcapWriter writer_;
-  std::vector<core::RunFeature> features_; ///< reused from image to image
+  std::mutex pending_m_;
+  std::map<int64_t, std::vector<uint8_t>> pending_; ///< encoded images by camera stamp, waiting for the filter
+  std::vector<core::RunFeature> features_;          ///< reused from image to image
 };
 
 } // namespace ovton
