@@ -390,6 +390,15 @@ KalibrImu load_kalibr_imu(const std::string &imu_file) {
 double Dataset::td_truth_at(int64_t t_cam_ns) const {
   if (td_truth.empty())
     throw UsageError("dataset " + root + " has no td_truth/data.csv");
+  return interpolate_td(td_truth, t_cam_ns);
+}
+
+void check_not_truncated(const Dataset &d) {
+  if (!d.truncated_file.empty())
+    throw DataError(d.truncated_file, d.truncated_reason);
+}
+
+double interpolate_td(const std::vector<TdSample> &td_truth, int64_t t_cam_ns) {
   if (t_cam_ns <= td_truth.front().t_cam_ns)
     return td_truth.front().td_s;
   if (t_cam_ns >= td_truth.back().t_cam_ns)

@@ -10,7 +10,7 @@ namespace ovton::core {
 
 struct Dataset {
   std::string root;               ///< folder the user named
-  std::string kind;               ///< "euroc", "scube" or "rosbag"
+  std::string kind;               ///< "euroc", "scube", "rosbag", "mcap" or "ros2bag"
   std::string notes;              ///< what the reader chose on its own (a bag's topics, calibration), for `info`
   std::vector<ImageEntry> images; ///< cam0, time-ordered, camera clock
   std::vector<ImuData> imu;       ///< time-ordered, IMU clock
@@ -19,12 +19,22 @@ struct Dataset {
   std::vector<StateSample> groundtruth; ///< empty when absent; may be position-only (SCube RTK)
   std::vector<TdSample> td_truth;       ///< empty when absent
   double td_prior_s = 0.0;              ///< offset from calibration (Kalibr timeshift_cam_imu), 0 for EuRoC
+  /// Set when the recording ends in a cut (a recorder that crashed): the file and what is wrong there. The images and
+  /// readings before the cut are listed; a player calls check_not_truncated after the last of them, so that a run
+  /// writes its rows up to the cut and then reports it.
+  std::string truncated_file, truncated_reason;
 
   bool has_groundtruth() const { return !groundtruth.empty(); }
   bool has_td_truth() const { return !td_truth.empty(); }
   /// True offset at a camera stamp, linearly interpolated (clamped at the ends). Throws when there is no truth.
   double td_truth_at(int64_t t_cam_ns) const;
 };
+
+/// Throws DataError(d.truncated_file, d.truncated_reason) when `d` ends in a cut (Dataset::truncated_file).
+void check_not_truncated(const Dataset &d);
+
+/// A true offset at a camera stamp from a non-empty td_truth list: linear between samples, clamped at the ends.
+double interpolate_td(const std::vector<TdSample> &td_truth, int64_t t_cam_ns);
 
 struct LoadOptions {
   bool check_images_exist = true; ///< stat every listed image (cheap; reading them is the front end's job)

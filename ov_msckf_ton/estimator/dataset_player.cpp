@@ -84,6 +84,10 @@ PlayResult play(const core::Dataset &data, Estimator &est, const PlayOptions &op
     feed_imu_to(n_feed < n && n_feed > 0 ? data.images[n_feed - 1].t_cam_ns + core::s_to_ns(12.0)
                                          : std::numeric_limits<int64_t>::max());
     est.finish();
+    // A recording cut short: the states up to the cut are out; now the cut is an error (naming the file and byte).
+    // With max_images short of the recording the cut was never reached.
+    if (n_feed == n)
+      core::check_not_truncated(data);
   }
   res.imu_fed = k;
   res.wall_s = std::chrono::duration<double>(Clock::now() - wall0).count();

@@ -88,6 +88,9 @@ bool Estimator::Impl::track_step(Lock &lk) {
   const auto t0 = Clock::now();
   Tracked out{in.t_cam_ns, track(in), in.arrived};
   const double ms = ms_between(t0, Clock::now());
+  if (!in.feature_level)
+    for (const auto &o : observers_)
+      o->on_image(in.t_cam_ns, in.gray);
   lk.lock();
   tracking_ms_ += ms;
   // The next image's rotation starts at this one, at an offset the search may still move by its range.
