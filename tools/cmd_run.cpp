@@ -27,7 +27,7 @@ namespace ovton::cli {
 
 int cmd_run(const Args &args) {
   po::options_description desc("ovton run: replay a dataset folder through the MSCKF and write its trajectory");
-  std::string config, dataset, mode, format = "csv", init, nees_log, td_search, health, mcap_images = "jpeg";
+  std::string config, dataset, mode, format = "csv", init, nees_log, td_search, health, mcap_images = "jpeg", cameras;
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
   bool quiet = false, no_prefetch = false;
   int opencv_threads = -1;
@@ -38,9 +38,12 @@ int cmd_run(const Args &args) {
        "dataset folder (EuRoC or SCube), ROS 1 bag, MCAP file or rosbag2 folder") //
       ("td-mode,m", po::value(&mode),
        "off|sr|sir|fvon|tpn|ton|oracle|drift, optionally +PROCESS (constant|random_walk|drift|tpn), e.g. "
-       "sr+random_walk (overrides the config)")                                                           //
-      ("output,o", po::value(&req.output)->required(), "trajectory file to write")                        //
-      ("format", po::value(&format), "csv (default) or tum")                                              //
+       "sr+random_walk (overrides the config)")                                    //
+      ("output,o", po::value(&req.output)->required(), "trajectory file to write") //
+      ("format", po::value(&format), "csv (default) or tum")                       //
+      ("cameras", po::value(&cameras),
+       "the rig's cameras to use, e.g. 0 or 0,1 (the first is the primary; default: every camera the recording has, "
+       "up to rig.max_cameras)")                                                                          //
       ("residual-log", po::value(&req.residual_log), "write every feature residual of every update here") //
       ("velocity-log", po::value(&req.velocity_log),
        "write each observation's image velocity by every rule and network here (for `ovton velocities`)") //
@@ -114,7 +117,9 @@ int cmd_run(const Args &args) {
         throw ovton::core::UsageError("two outputs are the same file: " + outputs[i]);
   }
 
-  const ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
+  ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
+  if (!cameras.empty())
+    ovton::core::select_cameras(data, ovton::core::parse_camera_list(cameras));
   ovton::apply_dataset_defaults(data, !std::isnan(td_init_ms), req.opt);
   if (!quiet)
     ovton::msckf::print_vio_options(req.opt, std::cerr);
