@@ -143,6 +143,9 @@ int cmd_run(const Args &args) {
             << c.images_before_init << " before initialisation, " << r.report.images_skipped << " beyond the IMU log), "
             << c.updates << " updates, " << c.features_used << " features used, " << c.features_gated << " gated, "
             << c.zupts << " zero-velocity updates, " << c.td_rows << " observations constraining t_d\n";
+  if (c.frozen_frames > 0)
+    std::cout << "note: " << c.frozen_frames << " images showed no motion while the filter's velocity said the body "
+              << "moved (a frozen or re-sent camera frame): they were dropped\n";
   if (c.slam_initialised > 0)
     std::cout << "SLAM: " << c.slam_initialised << " landmarks initialised, " << c.slam_updates
               << " landmark observations used, " << c.slam_gated << " gated\n";

@@ -255,12 +255,18 @@ void VioManager::process_frame(int64_t t_cam_ns, const std::vector<ovton::core::
   t0 = Clock::now();
   propagate_to_image(t_cam_ns);
   if (opt_.zupt.enabled && is_still(t_cam_ns)) {
-    // Still platform: no parallax for triangulation, so constrain the velocity instead and keep no clone.
-    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3, s.dim());
-    H.block<3, 3>(0, ImuState::kVel).setIdentity();
-    td_tracked_update([&] { state_helper::ekf_update(s, H, -s.imu.v, opt_.zupt.sigma_v * opt_.zupt.sigma_v); });
+    // Still images: no parallax for triangulation. Either the platform stands still (constrain the velocity instead
+    // and keep no clone), or the velocity the IMU carried the state to says it moves: a frozen or re-sent frame,
+    // whose observations would tie two different poses to the same pixels; the frame is dropped.
+    if (zero_velocity_agrees()) {
+      Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3, s.dim());
+      H.block<3, 3>(0, ImuState::kVel).setIdentity();
+      td_tracked_update([&] { state_helper::ekf_update(s, H, -s.imu.v, opt_.zupt.sigma_v * opt_.zupt.sigma_v); });
+      ++counters_.zupts;
+    } else {
+      ++counters_.frozen_frames;
+    }
     db_.remove_observations_at(t_cam_ns);
-    ++counters_.zupts;
     times_.propagation += ms_since(t0);
     finish_image(t_cam_ns);
     ++times_.frames;
@@ -362,6 +368,13 @@ bool VioManager::is_still(int64_t t_cam_ns) const {
     return false;
   std::nth_element(disparity.begin(), disparity.begin() + disparity.size() / 2, disparity.end());
   return disparity[disparity.size() / 2] < opt_.zupt.max_disparity_px;
+}
+
+bool VioManager::zero_velocity_agrees() const {
+  const State &s = *state_;
+  Eigen::Matrix3d S = s.P.block<3, 3>(ImuState::kVel, ImuState::kVel);
+  S.diagonal().array() += opt_.zupt.sigma_v * opt_.zupt.sigma_v;
+  return s.imu.v.dot(S.ldlt().solve(s.imu.v)) <= updater_.chi2_threshold(3);
 }
 
 const VelocityProvider &VioManager::prepare_velocities(const std::vector<const ovton::core::Feature *> &feats,

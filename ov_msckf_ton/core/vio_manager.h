@@ -49,8 +49,11 @@ struct VioCounters {
   /// from ITS/F2F: a new feature's first observation has no tracked velocity, and without one none of its rows
   /// may carry t_d (updater_msckf.cpp).
   std::array<long, kNumVelocitySources> td_rows_by_source{};
-  long td_features = 0;                                        ///< used features whose rows carried t_d
-  long zupts = 0;                                              ///< frames handled by a zero-velocity update
+  long td_features = 0; ///< used features whose rows carried t_d
+  long zupts = 0;       ///< frames handled by a zero-velocity update
+  /// frames whose features stood still while the filter's velocity, within its covariance, says the body moved (a
+  /// frozen or re-sent frame): dropped, neither a zero-velocity update nor a clone
+  long frozen_frames = 0;
   long slam_initialised = 0, slam_updates = 0, slam_gated = 0; ///< SLAM landmarks initialised, observations used
 };
 
@@ -118,6 +121,9 @@ private:
                    const VelocityProvider &velocities);
   /// Median feature motion since the previous frame is below the ZUPT threshold.
   bool is_still(int64_t t_cam_ns) const;
+  /// A zero velocity agrees with the filter: the velocity's chi-square under its covariance plus the update's noise
+  /// within the MSCKF's 3-dof gate.
+  bool zero_velocity_agrees() const;
   /// Propagates the IMU state and t_d (through its model) to the image's IMU-clock time.
   void propagate_to_image(int64_t t_cam_ns);
   /// An EKF update wrapped so that t_d's model sees the correction it made.
