@@ -92,6 +92,13 @@ TEST_F(CliRobustness, BadReadingsAndStampsAreDataErrorsNamingFileAndLine) {
 TEST_F(CliRobustness, BadOptionsAndConfigsFailBeforeTheRun) {
   const std::string traj = tmp_ / "traj.csv";
   expect_failure(run("run --dataset " + sim() + " --output " + traj + " --td-init-ms inf"), 2, "--td-init-ms");
+  // NaN meant "not given" and ran with the config's offset; 0 and negative counts meant "no limit"; '-' made a file
+  // '-'.
+  expect_failure(run("run --dataset " + sim() + " --output " + traj + " --td-init-ms nan"), 2, "--td-init-ms");
+  expect_failure(run("run --dataset " + sim() + " --output " + traj + " --max-images 0"), 2, "--max-images");
+  expect_failure(run("run --dataset " + sim() + " --output " + traj + " --max-images -5"), 2, "--max-images");
+  expect_failure(run("run --dataset " + sim() + " --output -"), 2, "standard output");
+  EXPECT_FALSE(fs::exists("-"));
   expect_failure(run("run --dataset " + sim() + " --output " + traj + " --td-search maybe"), 2, "--td-search");
   expect_failure(run("run --dataset " + sim() + " --output " + traj + " --health-checks 1"), 2, "--health-checks");
   for (const auto &[text, where] : std::vector<std::pair<std::string, std::string>>{

@@ -13,6 +13,9 @@ bool parse_command_line(const Args &args, const boost::program_options::options_
     return false;
   }
   boost::program_options::notify(vm);
+  // Where a count limits the work, 0 or a negative number is a typo, not "no limit" (leave the option out for that).
+  if (vm.count("max-images") && vm["max-images"].as<long>() < 1)
+    throw ovton::core::UsageError("--max-images must be at least 1 (leave it out to process every image)");
   return true;
 }
 

@@ -96,8 +96,8 @@ int cmd_run(const Args &args) {
     ovton::msckf::apply_mode_spec(ovton::msckf::parse_mode_spec(mode), req.opt);
   if (!init.empty())
     req.opt.init.mode = ovton::msckf::parse_init_mode(init);
-  if (!std::isnan(td_init_ms)) {
-    if (!(std::abs(td_init_ms) <= 10000))
+  if (vm.count("td-init-ms")) {
+    if (!(std::abs(td_init_ms) <= 10000)) // NaN too: it would mean "not given"
       throw ovton::core::UsageError("--td-init-ms must be a number within +-10000 ms");
     req.opt.td.init_s = td_init_ms * 1e-3;
   }
@@ -120,7 +120,7 @@ int cmd_run(const Args &args) {
   ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
   if (!cameras.empty())
     ovton::core::select_cameras(data, ovton::core::parse_camera_list(cameras));
-  ovton::apply_dataset_defaults(data, !std::isnan(td_init_ms), req.opt);
+  ovton::apply_dataset_defaults(data, vm.count("td-init-ms") > 0, req.opt);
   if (!quiet)
     ovton::msckf::print_vio_options(req.opt, std::cerr);
 

@@ -22,6 +22,8 @@ void require_writable(const std::string &file) {
   namespace fs = std::filesystem;
   if (file.empty())
     throw UsageError("empty output path");
+  if (file == "-") // not a file named '-' beside the user's data: say that standard output is not an output here
+    throw UsageError("'-' (standard output) cannot take this output: give a file name");
   std::error_code ec;
   const fs::path p(file);
   if (fs::is_directory(p, ec))
