@@ -19,6 +19,21 @@ ovton::core::CameraCalib euroc_cam0_calib() {
   return c;
 }
 
+ovton::core::CameraCalib euroc_cam1_calib() {
+  ovton::core::CameraCalib c;
+  c.width = 752;
+  c.height = 480;
+  c.rate_hz = 20.0;
+  c.intrinsics << 457.587, 456.134, 379.999, 255.238;
+  c.distortion = ovton::core::DistortionModel::RadTan;
+  c.dist_coeffs << -0.28368365, 0.07451284, -0.00010473, -3.55590700e-05;
+  c.T_BC << 0.0125552670891, -0.999755099723, 0.0182237714554, -0.0198435579556, //
+      0.999598781151, 0.0130119051815, 0.0251588363115, 0.0453689425024,         //
+      -0.0253898008918, 0.0179005838253, 0.999517347078, 0.00786212447038,       //
+      0.0, 0.0, 0.0, 1.0;
+  return c;
+}
+
 ovton::core::ImuCalib euroc_imu0_calib() {
   ovton::core::ImuCalib c;
   c.rate_hz = 200.0;

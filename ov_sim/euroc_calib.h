@@ -8,6 +8,9 @@
 namespace ovton::sim {
 
 ovton::core::CameraCalib euroc_cam0_calib();
+/// The VI-Sensor's second camera (cam1, MT9M034), as mav0/cam1/sensor.yaml of V1_01_easy gives it: 11 cm to the
+/// side of cam0, the stereo pair's extrinsics.
+ovton::core::CameraCalib euroc_cam1_calib();
 ovton::core::ImuCalib euroc_imu0_calib();
 
 /// EuRoC-format sensor.yaml text (the layout of the original files, `%YAML:1.0` header included).

@@ -24,7 +24,15 @@ namespace ovton::sim {
 namespace {
 
 // Independent random streams per component: changing e.g. the scene never changes the IMU noise.
-enum Stream : uint64_t { kImu = 1, kTd = 2, kScene = 3, kFeatures = 4, kRenderNoise = 5, kImuErrors = 6 };
+enum Stream : uint64_t {
+  kImu = 1,
+  kTd = 2,
+  kScene = 3,
+  kFeatures = 4,
+  kRenderNoise = 5,
+  kImuErrors = 6,
+  kRenderNoiseCam1 = 7
+};
 
 std::ofstream open_out(const fs::path &p) {
   fs::create_directories(p.parent_path());
@@ -102,7 +110,7 @@ int render_exposed(const Renderer &renderer, CameraEffects &effects, const Traje
 
 } // namespace
 
-SimOptions::SimOptions() : cam(euroc_cam0_calib()), imu(euroc_imu0_calib()) {}
+SimOptions::SimOptions() : cam(euroc_cam0_calib()), cam1(euroc_cam1_calib()), imu(euroc_imu0_calib()) {}
 
 std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt) {
   if (!(opt.duration_s > 0.0))
@@ -205,6 +213,8 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   if (!(opt.readout_s >= 0.0 && opt.readout_s <= frame_s))
     throw ovton::core::UsageError(
         "rolling-shutter readout must lie in [0, one frame interval = " + std::to_string(frame_s) + " s]");
+  if (opt.cameras < 1 || opt.cameras > 2 || (opt.cameras == 2 && opt.features_only))
+    throw ovton::core::UsageError("cameras must be 1 or 2 (2: rendered images, not --features-only)");
   if (!(std::abs(opt.focal_error) < 0.5))
     throw ovton::core::UsageError("focal error must lie in (-0.5, 0.5) (relative)");
   if (!(std::abs(opt.gyro_scale) < 0.5))
@@ -344,6 +354,31 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
       }
     }
   }
+  // The second camera of a stereo rig: its own renderer and camera effects (its sensor has its own noise).
+  SimOptions opt1 = opt;
+  opt1.cam = opt.cam1;
+  std::unique_ptr<Renderer> renderer1;
+  std::unique_ptr<CameraEffects> effects1;
+  std::unique_ptr<ovton::core::CameraModel> cam1;
+  std::ofstream list1;
+  cv::Mat acc1, img1;
+  if (render && opt.cameras >= 2) {
+    cam1 = std::make_unique<ovton::core::CameraModel>(true_camera(opt1));
+    renderer1 = std::make_unique<Renderer>(*cam1, *scene, opt.render);
+    write_text(mav0 / "cam1" / "sensor.yaml", euroc_camera_yaml(opt.cam1, "simulated cam1 (EuRoC stereo pair)"));
+    fs::create_directories(mav0 / "cam1" / "data");
+    list1 = open_out(mav0 / "cam1" / "data.csv");
+    list1 << "#timestamp [ns],filename\n";
+    if (opt.camera_effects.enabled) {
+      effects1 = std::make_unique<CameraEffects>(opt.camera_effects, *cam1, derive_seed(opt.seed, kRenderNoiseCam1));
+      if (!frames.empty()) {
+        acc1.create(opt1.cam.height, opt1.cam.width, CV_32F);
+        acc1.setTo(0.0f);
+        renderer1->accumulate(frame_pose(*traj, opt1, frames.front().t_imu_ns), 1.0f, acc1);
+        effects1->settle(acc1);
+      }
+    }
+  }
   if (opt.features_only) {
     FeatureSimOptions fo = opt.features;
     fo.seed = derive_seed(opt.seed, kFeatures);
@@ -378,6 +413,17 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
       const fs::path file = mav0 / "cam0" / "data" / name;
       if (!ovton::core::write_image(file.string(), img, png_params))
         throw ovton::core::DataError(file.string(), "cannot write image");
+    }
+    if (renderer1) {
+      if (effects1)
+        rep.n_renderings += render_exposed(*renderer1, *effects1, *traj, opt1, fr.t_imu_ns, k, acc1, img1);
+      else
+        renderer1->render(frame_pose(*traj, opt1, fr.t_imu_ns), derive_seed(opt.seed, kRenderNoiseCam1) + k, img1);
+      const fs::path file = mav0 / "cam1" / "data" / name;
+      if (!ovton::core::write_image(file.string(), img1, png_params))
+        throw ovton::core::DataError(file.string(), "cannot write image");
+      list1 << fr.t_cam_ns << "," << name << "\n";
+      list1.flush();
     }
     if (feats) {
       char buf[128];

@@ -32,7 +32,10 @@ struct SimOptions {
   double first_image_s = 0.1; ///< first image this long after the first IMU sample (IMU clock)
   uint64_t seed = 1;
   ovton::core::CameraCalib cam; ///< defaults to euroc_cam0_calib()
-  ovton::core::ImuCalib imu;    ///< defaults to euroc_imu0_calib()
+  /// 2: render cam1 too (a stereo rig, triggered with cam0: the same stamps), with calibration `cam1`.
+  int cameras = 1;
+  ovton::core::CameraCalib cam1; ///< defaults to euroc_cam1_calib()
+  ovton::core::ImuCalib imu;     ///< defaults to euroc_imu0_calib()
   std::string cam_source = "builtin EuRoC cam0", imu_source = "builtin EuRoC imu0 (ADIS16448)";
   bool imu_noise = true;
   bool imu_bias_walk = true;

@@ -4,10 +4,20 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <cstdint>
+
 namespace {
 
 cv::Mat read(const std::string &path, bool color) {
   return cv::imread(path, color ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE);
+}
+
+cv::Mat decode(const uchar *data, size_t size, bool color) {
+  if (size == 0 || size > static_cast<size_t>(INT32_MAX))
+    return cv::Mat();
+  // A header over the caller's bytes: imdecode reads them in place.
+  const cv::Mat bytes(1, static_cast<int>(size), CV_8UC1, const_cast<uchar *>(data));
+  return cv::imdecode(bytes, color ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE);
 }
 
 bool write(const std::string &path, const cv::Mat &img, const std::vector<int> &params) {
@@ -18,7 +28,8 @@ bool encode(const std::string &ext, const cv::Mat &img, const std::vector<int> &
   return cv::imencode(ext, img, bytes, params);
 }
 
-const OvtonImageCodecs kTable{kOvtonImageCodecsAbi, read, write, encode, cv::IMWRITE_PNG_COMPRESSION};
+const OvtonImageCodecs kTable{kOvtonImageCodecsAbi,    read, decode, write, encode, cv::IMWRITE_PNG_COMPRESSION,
+                              cv::IMWRITE_JPEG_QUALITY};
 
 } // namespace
 

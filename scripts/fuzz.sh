@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
 # Runs libFuzzer targets on the readers for a given time each:
-#   scripts/fuzz.sh csv|euroc|yaml|trajectory|all SECONDS
+#   scripts/fuzz.sh csv|euroc|yaml|trajectory|mcap|rosbag|all SECONDS
+# (mcap: MCAP files and their ROS 2 CDR messages; rosbag: ROS 1 bags. Their seeds are made by fuzz/make_seeds.sh.)
 # Builds them with scripts/sanitize.sh's configuration (build-asan/) if needed. The corpus grows in
 # build-asan/fuzz/corpus/TARGET, seeded from fuzz/corpus/TARGET; a finding (crash, sanitizer report, uncaught
 # exception other than DataError/UsageError, timeout, memory blow-up) is saved in build-asan/fuzz/findings/ and the
 # script exits non-zero. Prints one line per target: runs, executions per second, coverage.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-TARGET=${1:?usage: scripts/fuzz.sh csv|euroc|yaml|trajectory|all SECONDS}
+TARGET=${1:?usage: scripts/fuzz.sh csv|euroc|yaml|trajectory|mcap|rosbag|all SECONDS}
 SECS=${2:?usage: scripts/fuzz.sh TARGET SECONDS}
-TARGETS=(csv euroc yaml trajectory)
+TARGETS=(csv euroc yaml trajectory mcap rosbag)
 [ "$TARGET" = all ] || TARGETS=("$TARGET")
 JOBS=${JOBS:-$(nproc)}
 if [ ! -f build-asan/CMakeCache.txt ]; then
@@ -24,10 +25,13 @@ for t in "${TARGETS[@]}"; do
   corpus=build-asan/fuzz/corpus/$t findings=build-asan/fuzz/findings/$t
   mkdir -p "$corpus" "$findings"
   log=build-asan/fuzz/$t.log
+  # A recording's seeds (several messages and images) are larger than a text file's.
+  max_len=16384
+  case $t in mcap | rosbag) max_len=65536 ;; esac
   set +e
   ASAN_OPTIONS=${ASAN_OPTIONS:-abort_on_error=1} UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1} \
     build-asan/fuzz/fuzz_"$t" "$corpus" "fuzz/corpus/$t" -max_total_time="$SECS" -timeout=10 -rss_limit_mb=2048 \
-    -max_len=16384 -artifact_prefix="$findings/" -print_final_stats=1 >"$log" 2>&1
+    -max_len=$max_len -artifact_prefix="$findings/" -print_final_stats=1 >"$log" 2>&1
   rc=$?
   set -e
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo "?")

@@ -159,7 +159,7 @@ TEST(FilterHealth, NonFiniteStateOrCovarianceFails) {
   EXPECT_EQ(broken([&](State &s) { s.start_report(); }), "");
   EXPECT_NE(broken([&](State &s) {
               s.start_report();
-              s.P_report(2, 9) = std::numeric_limits<float>::quiet_NaN();
+              s.P_report(2, 9) = std::numeric_limits<double>::quiet_NaN();
             }).find("reported covariance"),
             std::string::npos);
 }

@@ -95,30 +95,7 @@ TEST(UpdateJacobians, StackedFeatureJacobianIncludingTdColumnMatchesFiniteDiffer
   ASSERT_TRUE(up.linearize(s, f, p_f, TdObservation::ImagePlane, VelocityProvider(), plain));
   EXPECT_EQ(static_cast<int>(plain.cols.size()), 6 * m);
 
-  // r = z − h(x), so H = −∂r/∂x: the function checked is −r, of the state ⊞-perturbed along the compact columns and
-  // of the feature position.
-  const auto minus_r = [&](const State &si, const Eigen::Vector3d &p_fi) -> Eigen::VectorXd {
-    FeatureLinearization li;
-    EXPECT_TRUE(up.linearize(si, f, p_fi, TdObservation::ImagePlane, vp, li));
-    return -li.r;
-  };
-  const auto along_cols = [&](const State &si, const Eigen::VectorXd &d) {
-    Eigen::VectorXd dx = Eigen::VectorXd::Zero(si.dim());
-    for (size_t j = 0; j < lin.cols.size(); ++j)
-      dx(lin.cols[j]) = d(static_cast<Eigen::Index>(j));
-    State out = si;
-    out.boxplus(dx);
-    return out;
-  };
-  const double h = 1e-6;
-  const Eigen::MatrixXd num_x = ovtest::numeric_jacobian([&](const State &si) { return minus_r(si, p_f); }, s,
-                                                         static_cast<Eigen::Index>(lin.cols.size()), along_cols, h);
-  for (size_t j = 0; j < lin.cols.size(); ++j)
-    EXPECT_LT((num_x.col(j) - lin.H_x.col(j)).norm(), 1e-6 * (1 + lin.H_x.col(j).norm())) << "column " << j;
-  const Eigen::MatrixXd num_f =
-      ovtest::numeric_jacobian([&](const Eigen::Vector3d &p_fi) { return minus_r(s, p_fi); }, p_f, h);
-  for (int i = 0; i < 3; ++i)
-    EXPECT_LT((num_f.col(i) - lin.H_f.col(i)).norm(), 1e-6 * (1 + lin.H_f.col(i).norm())) << "feature axis " << i;
+  expect_linearization_matches_fd(up, s, f, p_f, TdObservation::ImagePlane, vp, lin);
   // The t_d column is +V (model form) on rows that have a velocity, in distorted pixels like every row.
   for (int k = 1; k < m; ++k)
     EXPECT_LT((lin.H_x.block<2, 1>(2 * k, 6 * m) - up.distortion_jacobian(f.obs[k].xy) * f.obs[k].vel_xy).norm(), 1e-9);

@@ -171,9 +171,9 @@ TEST(UpdateStructure, ReportedCovarianceIsTheJosephFormOfTheFiltersGain) {
     c.index = 16;
     nominal.clones[0] = c;
     State joseph = nominal;
-    // A different reported covariance (its own recursion), kept in single precision (State::P_report).
-    joseph.P_report = (random_spd(22, rng) * 2e-2).cast<float>();
-    const Eigen::MatrixXd Pr0 = joseph.P_report.cast<double>();
+    // A different reported covariance (its own recursion).
+    joseph.P_report = random_spd(22, rng) * 2e-2;
+    const Eigen::MatrixXd Pr0 = joseph.P_report;
     const std::vector<int> cols = {0, 1, 2, 15, 16, 17, 18, 19, 20, 21};
     const int nc = static_cast<int>(cols.size());
     const Eigen::MatrixXd Hc = Eigen::MatrixXd::NullaryExpr(m, nc, [&]() { return g(rng); });
@@ -198,10 +198,10 @@ TEST(UpdateStructure, ReportedCovarianceIsTheJosephFormOfTheFiltersGain) {
     Eigen::MatrixXd R = dR;
     R.diagonal().array() += sigma2;
     const Eigen::MatrixXd Pr_ref = IKH * Pr0 * IKH.transpose() + K * R * K.transpose();
-    // To single precision: float's 6e-8 times the few-fold cancellation of P_r against K H P_r.
-    const double tol = 1e-6;
-    EXPECT_LT((joseph.P_report.cast<double>() - Pr_ref).norm(), tol * Pr_ref.norm());
-    EXPECT_LT((joseph_rows.P_report.cast<double>() - Pr_ref).norm(), tol * Pr_ref.norm());
+    // To double rounding times the few-fold cancellation of P_r against K H P_r.
+    const double tol = 1e-12;
+    EXPECT_LT((joseph.P_report - Pr_ref).norm(), tol * Pr_ref.norm());
+    EXPECT_LT((joseph_rows.P_report - Pr_ref).norm(), tol * Pr_ref.norm());
     EXPECT_EQ(joseph.P_report, joseph.P_report.transpose());
     EXPECT_EQ(joseph.P, nominal.P); // the filter's own covariance, gain and mean are untouched
     EXPECT_EQ(joseph.td, nominal.td);
@@ -212,7 +212,7 @@ TEST(UpdateStructure, ReportedCovarianceIsTheJosephFormOfTheFiltersGain) {
     same.clones[0] = c;
     same.start_report();
     state_helper::ekf_update(same, cols, Hc, r, sigma2);
-    EXPECT_LT((same.P_report.cast<double>() - same.P).norm(), tol * P0.norm());
+    EXPECT_LT((same.P_report - same.P).norm(), tol * P0.norm());
     const Eigen::MatrixXd wrong = Eigen::MatrixXd::Identity(nc + 1, nc + 1);
     EXPECT_THROW(state_helper::ekf_update(joseph, cols, Hc, r, sigma2, {nullptr, &wrong}), ovton::core::UsageError);
     EXPECT_THROW(state_helper::ekf_update(joseph, cols, Hc, r, sigma2, {&wrong, nullptr}), ovton::core::UsageError);

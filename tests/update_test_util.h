@@ -1,11 +1,13 @@
 #pragma once
 // Synthetic MSCKF scenes for the update tests: a smooth body trajectory, points seen by every clone, a state whose
 // clones sit at the truth, noisy observations.
+#include "fd_check.h"
 #include "ov_core/cam/camera_model.h"
 #include "ov_core/math/so3.h"
 #include "ov_core/track/feature_database.h"
 #include "ov_msckf_ton/state/state.h"
 #include "ov_msckf_ton/update/feature_jacobians.h"
+#include "ov_msckf_ton/update/updater_msckf.h"
 #include "ov_sim/euroc_calib.h"
 
 #include <gtest/gtest.h>
@@ -168,6 +170,35 @@ inline std::vector<const ovton::core::Feature *> all_features(const ovton::core:
   std::vector<const ovton::core::Feature *> out;
   db.features_older_than(std::numeric_limits<int64_t>::max(), out);
   return out;
+}
+
+/// `lin` (columns each once: merge_repeated_columns for a rig) against central differences: r = z − h(x), so H =
+/// −∂r/∂x, of the state ⊞-perturbed along lin.cols and of the feature position.
+inline void expect_linearization_matches_fd(const UpdaterMSCKF &up, const State &s, const ovton::core::Feature &f,
+                                            const Eigen::Vector3d &p_f, TdObservation td_obs,
+                                            const VelocityProvider &vp, const FeatureLinearization &lin) {
+  const auto minus_r = [&](const State &si, const Eigen::Vector3d &p_fi) -> Eigen::VectorXd {
+    FeatureLinearization li;
+    EXPECT_TRUE(up.linearize(si, f, p_fi, td_obs, vp, li));
+    return -li.r;
+  };
+  const auto along_cols = [&](const State &si, const Eigen::VectorXd &d) {
+    Eigen::VectorXd dx = Eigen::VectorXd::Zero(si.dim());
+    for (size_t j = 0; j < lin.cols.size(); ++j)
+      dx(lin.cols[j]) = d(static_cast<Eigen::Index>(j));
+    State out = si;
+    out.boxplus(dx);
+    return out;
+  };
+  const double h = 1e-6;
+  const Eigen::MatrixXd num_x = ovtest::numeric_jacobian([&](const State &si) { return minus_r(si, p_f); }, s,
+                                                         static_cast<Eigen::Index>(lin.cols.size()), along_cols, h);
+  for (size_t j = 0; j < lin.cols.size(); ++j)
+    EXPECT_LT((num_x.col(j) - lin.H_x.col(j)).norm(), 1e-6 * (1 + lin.H_x.col(j).norm())) << "column " << j;
+  const Eigen::MatrixXd num_f =
+      ovtest::numeric_jacobian([&](const Eigen::Vector3d &p_fi) { return minus_r(s, p_fi); }, p_f, h);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_LT((num_f.col(i) - lin.H_f.col(i)).norm(), 1e-6 * (1 + lin.H_f.col(i).norm())) << "feature axis " << i;
 }
 
 /// Rotation and position error of a clone against the truth pose of its IMU time.

@@ -24,13 +24,14 @@ bool parse_on_off(const std::string &value, const char *option) {
 
 void add_bag_options(boost::program_options::options_description &desc, ovton::core::BagOptions &opt) {
   desc.add_options()("cam-topic", boost::program_options::value(&opt.cam_topic),
-                     "ROS bag: sensor_msgs/Image topic (default: the only one, the calibration's rostopic, or "
-                     "/cam0/image_raw)") //
+                     "ROS bag or MCAP: image topic, Image or CompressedImage (default: the calibration's "
+                     "rostopic, /cam0/image_raw, or the only one)") //
       ("imu-topic", boost::program_options::value(&opt.imu_topic),
-       "ROS bag: sensor_msgs/Imu topic (default: the only one, the calibration's rostopic, or /imu0)") //
+       "ROS bag or MCAP: sensor_msgs/Imu topic (default: the calibration's rostopic, /imu0, or the only one)") //
       ("calib", boost::program_options::value(&opt.calib)->multitoken(),
-       "ROS bag: Kalibr camchain and imu YAML, or an EuRoC folder (default: found beside the bag: BAG/ folder, "
-       "camchain-imucam-BAG.yaml + imu-BAG.yaml, camchain-imucam.yaml + imu.yaml)");
+       "ROS bag or MCAP: Kalibr camchain and imu YAML, or an EuRoC folder (default: found beside the recording: "
+       "STEM/ folder, camchain-imucam-STEM.yaml + imu-STEM.yaml, camchain-imucam.yaml + imu.yaml; else a ROS 2 "
+       "recording's CameraInfo and /tf_static)");
 }
 
 } // namespace ovton::cli

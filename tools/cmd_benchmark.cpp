@@ -275,12 +275,12 @@ int cmd_benchmark(const Args &args) {
   double gen_seconds = 30.0;
   bool quiet = false, threaded = false, realtime = false;
   RunRequest req;
-  desc.add_options()("help,h", "this help")                                                                       //
-      ("dataset,d", po::value(&dataset), "dataset folder (EuRoC or SCube) or ROS bag (.bag)")                     //
-      ("generate", po::value(&generate_dir), "without --dataset: render a built-in flight here and benchmark it") //
-      ("generate-seconds", po::value(&gen_seconds), "length of the --generate flight [s] (default 30)")           //
-      ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")                      //
-      ("modes,m", po::value(&modes_str), "comma-separated td modes, run in this order (default sr)")              //
+  desc.add_options()("help,h", "this help")                                                                         //
+      ("dataset,d", po::value(&dataset), "dataset folder (EuRoC or SCube), ROS 1 bag, MCAP file or rosbag2 folder") //
+      ("generate", po::value(&generate_dir), "without --dataset: render a built-in flight here and benchmark it")   //
+      ("generate-seconds", po::value(&gen_seconds), "length of the --generate flight [s] (default 30)")             //
+      ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")                        //
+      ("modes,m", po::value(&modes_str), "comma-separated td modes, run in this order (default sr)")                //
       ("init", po::value(&init),
        "static|groundtruth|auto|dynamic (overrides the config; groundtruth with --generate)") //
       ("max-images", po::value(&req.max_images), "stop each mode after this many images")     //

@@ -50,7 +50,7 @@ int cmd_compare(const Args &args) {
   CompareRequest req;
   desc.add_options()("help,h", "this help") //
       ("dataset,d", po::value(&dataset)->required(),
-       "dataset folder (EuRoC, SCube or `ovton simulate` output) or ROS bag")                                    //
+       "dataset folder (EuRoC, SCube or `ovton simulate` output), ROS 1 bag, MCAP file or rosbag2 folder")       //
       ("modes,m", po::value(&modes)->default_value(modes), "comma-separated time-offset modes to run")           //
       ("out,o", po::value(&req.out_dir)->required(), "results folder (created if needed)")                       //
       ("config,c", po::value(&config), "estimator config YAML shared by all modes (default: built-in defaults)") //

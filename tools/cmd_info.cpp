@@ -22,7 +22,7 @@ int cmd_info(const Args &args) {
   std::string dir;
   double prior_ms = 0.0, range_ms = 200.0;
   desc.add_options()("help,h", "this help")("dataset,d", po::value(&dir)->required(),
-                                            "dataset folder or ROS bag (.bag)")                        //
+                                            "dataset folder, ROS 1 bag, MCAP file or rosbag2 folder")  //
       ("td-search", "also search the camera-IMU time offset (images' rotation rate against the gyro)") //
       ("td-init-ms", po::value(&prior_ms), "centre of the search [ms] (default: the dataset's prior, else 0)")(
           "td-range-ms", po::value(&range_ms), "half width of the search [ms] (default 200)");

@@ -27,19 +27,23 @@ namespace ovton::cli {
 
 int cmd_run(const Args &args) {
   po::options_description desc("ovton run: replay a dataset folder through the MSCKF and write its trajectory");
-  std::string config, dataset, mode, format = "csv", init, nees_log, td_search, health;
+  std::string config, dataset, mode, format = "csv", init, nees_log, td_search, health, mcap_images = "jpeg", cameras;
   double td_init_ms = std::numeric_limits<double>::quiet_NaN();
   bool quiet = false, no_prefetch = false;
   int opencv_threads = -1;
   RunRequest req;
-  desc.add_options()("help,h", "this help")                                                               //
-      ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)")              //
-      ("dataset,d", po::value(&dataset)->required(), "dataset folder (EuRoC or SCube) or ROS bag (.bag)") //
+  desc.add_options()("help,h", "this help")                                                  //
+      ("config,c", po::value(&config), "estimator config YAML (default: built-in defaults)") //
+      ("dataset,d", po::value(&dataset)->required(),
+       "dataset folder (EuRoC or SCube), ROS 1 bag, MCAP file or rosbag2 folder") //
       ("td-mode,m", po::value(&mode),
        "off|sr|sir|fvon|tpn|ton|oracle|drift, optionally +PROCESS (constant|random_walk|drift|tpn), e.g. "
-       "sr+random_walk (overrides the config)")                                                           //
-      ("output,o", po::value(&req.output)->required(), "trajectory file to write")                        //
-      ("format", po::value(&format), "csv (default) or tum")                                              //
+       "sr+random_walk (overrides the config)")                                    //
+      ("output,o", po::value(&req.output)->required(), "trajectory file to write") //
+      ("format", po::value(&format), "csv (default) or tum")                       //
+      ("cameras", po::value(&cameras),
+       "the rig's cameras to use, e.g. 0 or 0,1 (the first is the primary; default: every camera the recording has, "
+       "up to rig.max_cameras)")                                                                          //
       ("residual-log", po::value(&req.residual_log), "write every feature residual of every update here") //
       ("velocity-log", po::value(&req.velocity_log),
        "write each observation's image velocity by every rule and network here (for `ovton velocities`)") //
@@ -53,6 +57,12 @@ int cmd_run(const Args &args) {
        "on|off: stop a run whose estimate has diverged, exit 4 (overrides health.enabled; default on)") //
       ("nees-log", po::value(&nees_log), "with --init groundtruth: write per-frame NEES (t_ns,ori,pos,td) here")(
           "max-images", po::value(&req.max_images), "stop after this many images") //
+      ("mcap-out", po::value(&req.mcap_out),
+       "also write the run as an MCAP file Foxglove opens (ROS 2 schemas): each image with its features (used, gated, "
+       "tracked), estimated and true pose, /tf, paths, t_d with its sigma band and the truth; written as the run goes, "
+       "closed whole on Ctrl-C (docs/bags.md)") //
+      ("mcap-images", po::value(&mcap_images),
+       "jpeg (CompressedImage, default) or raw (mono8 Image) images in --mcap-out") //
       ("no-prefetch", po::bool_switch(&no_prefetch),
        "one thread: decode, track and filter on the main thread, OpenCV's thread pool off too unless "
        "--opencv-threads is given (default: tracking and filter on threads of their own while the next image is "
@@ -76,6 +86,9 @@ int cmd_run(const Args &args) {
   if (format != "csv" && format != "tum")
     throw ovton::core::UsageError("--format must be csv or tum");
   req.tum = format == "tum";
+  if (mcap_images != "jpeg" && mcap_images != "raw")
+    throw ovton::core::UsageError("--mcap-images must be jpeg or raw");
+  req.mcap.image_format = mcap_images;
   req.progress = !quiet;
 
   req.opt = config.empty() ? ovton::msckf::VioOptions{} : ovton::msckf::load_vio_options(config);
@@ -94,7 +107,7 @@ int cmd_run(const Args &args) {
     req.opt.health.enabled = parse_on_off(health, "--health-checks");
   // Every output is checked before the run: a typo should not cost a whole run.
   std::vector<std::string> outputs = {req.output};
-  for (const auto *o : {&req.residual_log, &req.velocity_log, &nees_log})
+  for (const auto *o : {&req.residual_log, &req.velocity_log, &nees_log, &req.mcap_out})
     if (!o->empty())
       outputs.push_back(*o);
   for (size_t i = 0; i < outputs.size(); ++i) {
@@ -104,7 +117,9 @@ int cmd_run(const Args &args) {
         throw ovton::core::UsageError("two outputs are the same file: " + outputs[i]);
   }
 
-  const ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
+  ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
+  if (!cameras.empty())
+    ovton::core::select_cameras(data, ovton::core::parse_camera_list(cameras));
   ovton::apply_dataset_defaults(data, !std::isnan(td_init_ms), req.opt);
   if (!quiet)
     ovton::msckf::print_vio_options(req.opt, std::cerr);
@@ -115,6 +130,10 @@ int cmd_run(const Args &args) {
     r = run_dataset(data, req);
   } catch (const ovton::core::EstimatorFailure &e) {
     throw ovton::core::EstimatorFailure(e.t_ns(), std::string(e.what()) + "; the rows before it are in " + req.output);
+  } catch (const ovton::core::DataError &e) {
+    if (data.truncated_file.empty() || e.file() != data.truncated_file)
+      throw;
+    throw ovton::core::DataError(e.file(), data.truncated_reason + "; their rows are in " + req.output);
   }
 
   const auto &c = r.report.counters;
@@ -181,6 +200,12 @@ int cmd_run(const Args &args) {
     } catch (const ovton::core::UsageError &e) {
       std::cout << "evaluation skipped: " << e.what() << "\n";
     }
+  }
+  if (!req.mcap_out.empty()) {
+    std::cout << "run recording: " << req.mcap_out << " (";
+    for (size_t i = 0; i < r.mcap_counts.size(); ++i)
+      std::cout << (i ? ", " : "") << r.mcap_counts[i].first << " " << r.mcap_counts[i].second;
+    std::cout << " messages)\n";
   }
   std::cout << "trajectory: " << req.output << (r.play.interrupted ? " (interrupted; rows so far kept)" : "") << "\n";
   return r.play.interrupted ? 130 : 0;

@@ -116,6 +116,9 @@ int cmd_simulate(const Args &args) {
       ("start-s", po::value(&o.start_s)->default_value(0.0), "start, seconds after the first gt pose")        //
       ("duration-s", po::value(&o.duration_s)->default_value(20.0), "length [s]")                             //
       ("seed", po::value(&o.seed)->default_value(1), "random seed (same seed, same bytes)")                   //
+      ("cameras", po::value(&o.cameras)->default_value(1),
+       "1: cam0 alone; 2: a stereo rig, cam1 rendered too with EuRoC's stereo extrinsics (same stamps, own sensor "
+       "noise)")                                                                                              //
       ("td-model", po::value(&td_model)->default_value("constant"), "constant | drift | wander")              //
       ("td0-ms", po::value(&td0_ms)->default_value(10.0), "offset at the first image [ms]")                   //
       ("td-bias-ms-per-s", po::value(&td_bias)->default_value(0.1), "drift: growth [ms/s]")                   //

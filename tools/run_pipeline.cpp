@@ -1,5 +1,6 @@
 #include "tools/run_pipeline.h"
 #include "ov_core/io/trajectory_io.h"
+#include "ov_msckf_ton/estimator/mcap_run_recorder.h"
 #include "tools/progress.h"
 
 namespace ovton::cli {
@@ -29,6 +30,13 @@ RunResult run_dataset(const ovton::core::Dataset &data, const RunRequest &req) {
     est.add_observer(std::make_shared<ovton::msckf::VelocityLogObserver>(req.velocity_log));
   for (const auto &o : req.observers)
     est.add_observer(o);
+  std::shared_ptr<McapRunRecorder> recording; // closed by its destructor when the run throws
+  if (!req.mcap_out.empty()) {
+    ovton::core::RunMcapOptions mo = req.mcap;
+    mo.T_BC = data.imu_calib.T_BI.inverse() * data.cam.T_BC; // camera -> IMU (the state's body)
+    recording = McapRunRecorder::attach(est, req.mcap_out, mo);
+    recording->set_truth(data.groundtruth, data.td_truth);
+  }
 
   ProgressBar bar(req.label.empty() ? "run " + ovton::msckf::to_string(req.opt.td.mode) : req.label, !req.progress);
   PlayOptions po;
@@ -62,6 +70,10 @@ RunResult run_dataset(const ovton::core::Dataset &data, const RunRequest &req) {
   say_search(est.status());
   bar.finish();
   res.report = est.report();
+  if (recording) {
+    recording->close();
+    res.mcap_counts = recording->message_counts();
+  }
   if (nees)
     res.nees = nees->stats();
   return res;

@@ -4,6 +4,7 @@
 // file, residual and velocity logs, NEES against the ground truth — attached as callbacks and observers, and a progress
 // bar.
 #include "ov_core/io/dataset.h"
+#include "ov_core/io/run_mcap_writer.h"
 #include "ov_eval/nees.h"
 #include "ov_msckf_ton/estimator/dataset_player.h"
 #include "ov_msckf_ton/estimator/estimator.h"
@@ -29,8 +30,11 @@ struct RunRequest {
   bool threaded = true;
   /// Feed at this multiple of real time (PlayOptions::pace; 0: as fast as it goes).
   double pace = 0.0;
-  /// More observers of the filter (e.g. a Foxglove recording).
+  /// More observers of the filter.
   std::vector<std::shared_ptr<ovton::msckf::FilterObserver>> observers;
+  /// The run as Foxglove shows it (ovton::McapRunRecorder; "" = none), with the recording's truth and T_BC.
+  std::string mcap_out;
+  ovton::core::RunMcapOptions mcap;
   /// Called after each image fed with (images fed, images in the dataset); the benchmark samples memory here.
   std::function<void(size_t, size_t)> on_progress;
 };
@@ -40,6 +44,7 @@ struct RunResult {
   ovton::EstimatorReport report;
   ovton::PlayResult play;
   ovton::eval::NeesStats nees; ///< counted with ground-truth initialisation only (the estimate is in its frame)
+  std::vector<std::pair<std::string, uint64_t>> mcap_counts; ///< messages per topic in mcap_out
 };
 
 /// Runs the estimator over `data` as asked; rows are written (and flushed) as they come out. Throws

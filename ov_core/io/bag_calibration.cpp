@@ -129,7 +129,7 @@ BagCalibration finish(Parts &&p) {
 
 } // namespace
 
-BagCalibration resolve_bag_calibration(const std::string &bag, const std::vector<std::string> &calib) {
+std::optional<BagCalibration> find_bag_calibration(const std::string &bag, const std::vector<std::string> &calib) {
   Parts p;
   if (!calib.empty()) {
     for (const auto &c : calib) {
@@ -152,19 +152,36 @@ BagCalibration resolve_bag_calibration(const std::string &bag, const std::vector
   const fs::path companion = dir / stem;
   if (is_dir(companion) && add_folder(p, companion))
     return finish(std::move(p));
-  for (const auto &[chain, imu] :
-       {std::pair<fs::path, fs::path>{dir / ("camchain-imucam-" + stem + ".yaml"), dir / ("imu-" + stem + ".yaml")},
-        std::pair<fs::path, fs::path>{dir / "camchain-imucam.yaml", dir / "imu.yaml"}}) {
+  for (const auto &[chain, imu] : bag_calibration_file_pairs(bag)) {
     if (is_file(chain) && is_file(imu)) {
-      set_camera(p, chain.string());
-      set_imu(p, imu.string());
+      set_camera(p, chain);
+      set_imu(p, imu);
       return finish(std::move(p));
     }
   }
-  throw DataError(bag,
-                  "no calibration found: give --calib (Kalibr camchain + imu YAML, or the EuRoC folder); looked for " +
-                      companion.string() + "/, " + (dir / ("camchain-imucam-" + stem + ".yaml")).string() + " + imu-" +
-                      stem + ".yaml, and camchain-imucam.yaml + imu.yaml there");
+  return std::nullopt;
+}
+
+std::vector<std::pair<std::string, std::string>> bag_calibration_file_pairs(const std::string &bag) {
+  const fs::path b(bag), dir = b.parent_path().empty() ? fs::path(".") : b.parent_path();
+  const std::string stem = b.stem().string();
+  return {{(dir / ("camchain-imucam-" + stem + ".yaml")).string(), (dir / ("imu-" + stem + ".yaml")).string()},
+          {(dir / "camchain-imucam.yaml").string(), (dir / "imu.yaml").string()}};
+}
+
+std::string bag_calibration_places(const std::string &bag) {
+  const fs::path b(bag), dir = b.parent_path().empty() ? fs::path(".") : b.parent_path();
+  const std::string stem = b.stem().string();
+  return (dir / stem).string() + "/, " + (dir / ("camchain-imucam-" + stem + ".yaml")).string() + " + imu-" + stem +
+         ".yaml, and camchain-imucam.yaml + imu.yaml there";
+}
+
+BagCalibration resolve_bag_calibration(const std::string &bag, const std::vector<std::string> &calib) {
+  if (auto c = find_bag_calibration(bag, calib))
+    return std::move(*c);
+  throw DataError(bag, "no calibration found: give --calib (Kalibr camchain + imu YAML, or the EuRoC folder); looked "
+                       "for " +
+                           bag_calibration_places(bag));
 }
 
 } // namespace ovton::core

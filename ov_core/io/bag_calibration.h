@@ -4,7 +4,9 @@
 #include "ov_core/cam/camera_calib.h"
 #include "ov_core/types/sensor_data.h"
 
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ovton::core {
@@ -25,5 +27,12 @@ struct BagCalibration {
 /// B.bag, the folder B/, then camchain-imucam-B.yaml + imu-B.yaml (Kalibr's names), then camchain-imucam.yaml +
 /// imu.yaml. Throws DataError naming the bag and every place looked at when nothing is found.
 BagCalibration resolve_bag_calibration(const std::string &bag, const std::vector<std::string> &calib);
+/// The same, but nothing when `calib` is empty and nothing is found beside the recording (which may then carry its own:
+/// a ROS 2 recording's CameraInfo).
+std::optional<BagCalibration> find_bag_calibration(const std::string &bag, const std::vector<std::string> &calib);
+/// Where find_bag_calibration looks beside `bag`, for messages.
+std::string bag_calibration_places(const std::string &bag);
+/// The Kalibr file pairs (camchain, imu) looked for beside `bag`, in order.
+std::vector<std::pair<std::string, std::string>> bag_calibration_file_pairs(const std::string &bag);
 
 } // namespace ovton::core

@@ -290,6 +290,20 @@ std::string optional_file(const std::string &path) {
   return fs::exists(path, ec) ? path : std::string();
 }
 
+/// A further camera's list: images it lists but lacks are left out rather than refused (a cut of a recording keeps
+/// the primary camera's frames; a further camera's missing image only makes that instant monocular).
+std::vector<ImageEntry> read_further_camera(const std::string &csv, const std::string &image_dir,
+                                            const LoadOptions &opt, double rate_hz) {
+  LoadOptions unchecked = opt;
+  unchecked.check_images_exist = false;
+  std::vector<ImageEntry> images = read_image_list(csv, image_dir, unchecked, rate_hz);
+  if (opt.check_images_exist)
+    images.erase(
+        std::remove_if(images.begin(), images.end(), [](const ImageEntry &e) { return optional_file(e.path).empty(); }),
+        images.end());
+  return images;
+}
+
 /// Rate and noise densities of an IMU, from EuRoC's imu0/sensor.yaml (rate_hz) or Kalibr's imu.yaml (update_rate).
 ImuCalib read_imu_calib(const YAML::Node &n, const std::string &file, const std::string &rate_key) {
   ImuCalib c;
@@ -340,8 +354,11 @@ ImuCalib load_euroc_imu_yaml(const std::string &file) {
   return c;
 }
 
-KalibrCamera load_kalibr_camchain(const std::string &chain_file, const std::string &cam_name) {
-  const YAML::Node chain = load_yaml_file(chain_file);
+namespace {
+
+/// One camera of a loaded chain. `previous`: the T_BC of camera n-1, for a camera that gives only T_cn_cnm1.
+KalibrCamera read_kalibr_camera(const YAML::Node &chain, const std::string &chain_file, const std::string &cam_name,
+                                const Eigen::Matrix4d *previous) {
   const YAML::Node c0 = get_map(chain, chain_file, cam_name);
   KalibrCamera k;
   CameraCalib &c = k.cam;
@@ -365,6 +382,8 @@ KalibrCamera load_kalibr_camchain(const std::string &chain_file, const std::stri
     c.T_BC = get_transform(c0, chain_file, "T_cam_imu").inverse();
   else if (c0["T_imu_cam"])
     c.T_BC = get_transform(c0, chain_file, "T_imu_cam");
+  else if (previous && c0["T_cn_cnm1"]) // p_cn = T_cn_cnm1 p_cnm1, so T_B_cn = T_B_cnm1 T_cn_cnm1^-1
+    c.T_BC = *previous * get_transform(c0, chain_file, "T_cn_cnm1").inverse();
   else
     throw DataError(chain_file, "missing key 'T_cam_imu' (or 'T_imu_cam') in '" + cam_name + "'");
   check_camera(c, chain_file);
@@ -374,6 +393,21 @@ KalibrCamera load_kalibr_camchain(const std::string &chain_file, const std::stri
   if (c0["rostopic"])
     k.rostopic = get<std::string>(c0, chain_file, "rostopic");
   return k;
+}
+
+} // namespace
+
+KalibrCamera load_kalibr_camchain(const std::string &chain_file, const std::string &cam_name) {
+  return read_kalibr_camera(load_yaml_file(chain_file), chain_file, cam_name, nullptr);
+}
+
+std::vector<KalibrCamera> load_kalibr_rig(const std::string &chain_file) {
+  const YAML::Node chain = load_yaml_file(chain_file);
+  std::vector<KalibrCamera> rig;
+  rig.push_back(read_kalibr_camera(chain, chain_file, "cam0", nullptr));
+  for (int k = 1; chain["cam" + std::to_string(k)]; ++k)
+    rig.push_back(read_kalibr_camera(chain, chain_file, "cam" + std::to_string(k), &rig.back().cam.T_BC));
+  return rig;
 }
 
 KalibrImu load_kalibr_imu(const std::string &imu_file) {
@@ -390,6 +424,15 @@ KalibrImu load_kalibr_imu(const std::string &imu_file) {
 double Dataset::td_truth_at(int64_t t_cam_ns) const {
   if (td_truth.empty())
     throw UsageError("dataset " + root + " has no td_truth/data.csv");
+  return interpolate_td(td_truth, t_cam_ns);
+}
+
+void check_not_truncated(const Dataset &d) {
+  if (!d.truncated_file.empty())
+    throw DataError(d.truncated_file, d.truncated_reason);
+}
+
+double interpolate_td(const std::vector<TdSample> &td_truth, int64_t t_cam_ns) {
   if (t_cam_ns <= td_truth.front().t_cam_ns)
     return td_truth.front().td_s;
   if (t_cam_ns >= td_truth.back().t_cam_ns)
@@ -417,6 +460,16 @@ Dataset load_euroc(const std::string &dir, const LoadOptions &opt) {
   d.images = read_image_list(cam_csv, join_path(mav0, "cam0/data"), list_opt, d.cam.rate_hz);
   if (!features.empty())
     read_features_csv(features, d.cam, d.images);
+  else
+    for (int k = 1;; ++k) { // cam1, cam2, ... while the folder has them
+      const std::string cam = join_path(mav0, "cam" + std::to_string(k));
+      if (optional_file(join_path(cam, "sensor.yaml")).empty() || optional_file(join_path(cam, "data.csv")).empty())
+        break;
+      CameraStream c;
+      c.cam = load_euroc_camera_yaml(join_path(cam, "sensor.yaml"));
+      c.images = read_further_camera(join_path(cam, "data.csv"), join_path(cam, "data"), list_opt, c.cam.rate_hz);
+      d.more_cameras.push_back(std::move(c));
+    }
   d.imu = read_imu_csv(imu_csv, d.imu_calib.rate_hz);
   check_overlap(d.images, d.imu, cam_csv, imu_csv);
   if (auto gt = optional_file(join_path(mav0, "state_groundtruth_estimate0/data.csv")); !gt.empty())
@@ -434,13 +487,21 @@ Dataset load_scube(const std::string &dir, const LoadOptions &opt) {
   d.root = dir;
   d.kind = "scube";
 
-  const KalibrCamera kc = load_kalibr_camchain(join_path(dir, "camchain-imucam.yaml"));
+  const std::vector<KalibrCamera> rig = load_kalibr_rig(join_path(dir, "camchain-imucam.yaml"));
+  const KalibrCamera &kc = rig.front();
   d.cam = kc.cam;
   d.td_prior_s = kc.timeshift_cam_imu_s;
   d.imu_calib = load_kalibr_imu(join_path(dir, "imu.yaml")).imu;
 
   const std::string cam_csv = join_path(dir, "cam0/data.csv"), imu_csv = join_path(dir, "imu0/data.csv");
   d.images = read_image_list(cam_csv, join_path(dir, "cam0/data"), opt, d.cam.rate_hz);
+  for (size_t k = 1; k < rig.size(); ++k) { // the chain's further cameras that have images here
+    const std::string cam = join_path(dir, "cam" + std::to_string(k));
+    if (optional_file(join_path(cam, "data.csv")).empty())
+      break;
+    d.more_cameras.push_back(
+        {rig[k].cam, read_further_camera(join_path(cam, "data.csv"), join_path(cam, "data"), opt, rig[k].cam.rate_hz)});
+  }
   d.imu = read_imu_csv(imu_csv, d.imu_calib.rate_hz);
   check_overlap(d.images, d.imu, cam_csv, imu_csv);
   if (auto gt = optional_file(join_path(dir, "groundtruth/data.csv")); !gt.empty())

@@ -8,23 +8,43 @@
 
 namespace ovton::core {
 
+/// A camera of a rig beyond cam0 (cam1, cam2, ...): its calibration and its own image list, camera clock. The rig
+/// shares one clock offset t_d; an image pairs with the cam0 image of the same stamp.
+struct CameraStream {
+  CameraCalib cam;
+  std::vector<ImageEntry> images;
+};
+
 struct Dataset {
   std::string root;               ///< folder the user named
-  std::string kind;               ///< "euroc", "scube" or "rosbag"
+  std::string kind;               ///< "euroc", "scube", "rosbag", "mcap" or "ros2bag"
   std::string notes;              ///< what the reader chose on its own (a bag's topics, calibration), for `info`
   std::vector<ImageEntry> images; ///< cam0, time-ordered, camera clock
   std::vector<ImuData> imu;       ///< time-ordered, IMU clock
   CameraCalib cam;
+  /// cam1, cam2, ... in the recording's order; empty for a monocular recording (and for a feature-level one).
+  std::vector<CameraStream> more_cameras;
   ImuCalib imu_calib;
   std::vector<StateSample> groundtruth; ///< empty when absent; may be position-only (SCube RTK)
   std::vector<TdSample> td_truth;       ///< empty when absent
   double td_prior_s = 0.0;              ///< offset from calibration (Kalibr timeshift_cam_imu), 0 for EuRoC
+  /// Set when the recording ends in a cut (a recorder that crashed): the file and what is wrong there. The images and
+  /// readings before the cut are listed; a player calls check_not_truncated after the last of them, so that a run
+  /// writes its rows up to the cut and then reports it.
+  std::string truncated_file, truncated_reason;
 
+  size_t num_cameras() const { return 1 + more_cameras.size(); }
   bool has_groundtruth() const { return !groundtruth.empty(); }
   bool has_td_truth() const { return !td_truth.empty(); }
   /// True offset at a camera stamp, linearly interpolated (clamped at the ends). Throws when there is no truth.
   double td_truth_at(int64_t t_cam_ns) const;
 };
+
+/// Throws DataError(d.truncated_file, d.truncated_reason) when `d` ends in a cut (Dataset::truncated_file).
+void check_not_truncated(const Dataset &d);
+
+/// A true offset at a camera stamp from a non-empty td_truth list: linear between samples, clamped at the ends.
+double interpolate_td(const std::vector<TdSample> &td_truth, int64_t t_cam_ns);
 
 struct LoadOptions {
   bool check_images_exist = true; ///< stat every listed image (cheap; reading them is the front end's job)
@@ -35,6 +55,12 @@ struct LoadOptions {
 Dataset load_dataset(const std::string &dir, const LoadOptions &opt = {});
 Dataset load_euroc(const std::string &dir, const LoadOptions &opt = {});
 Dataset load_scube(const std::string &dir, const LoadOptions &opt = {});
+
+/// Keeps the cameras listed (indices into cam0, cam1, ... as loaded; the first becomes the primary camera, whose
+/// images drive the replay). Throws UsageError for an index the recording lacks, a repeat, or an empty list.
+void select_cameras(Dataset &d, const std::vector<int> &cameras);
+/// "0,1" -> {0, 1}; throws UsageError for anything but comma-separated non-negative integers.
+std::vector<int> parse_camera_list(const std::string &s);
 
 /// EuRoC sensor.yaml readers (also used by the simulator to copy calibration).
 CameraCalib load_euroc_camera_yaml(const std::string &file);
@@ -53,6 +79,9 @@ struct KalibrImu {
 };
 /// Kalibr readers. The chain's extrinsics may be Kalibr's T_cam_imu or an OpenVINS-style T_imu_cam.
 KalibrCamera load_kalibr_camchain(const std::string &file, const std::string &cam_name = "cam0");
+/// Every camera of a chain (cam0, cam1, ... until one is missing). A camera without its own T_cam_imu / T_imu_cam takes
+/// its extrinsics from the previous one through Kalibr's T_cn_cnm1 (camera n-1 to camera n).
+std::vector<KalibrCamera> load_kalibr_rig(const std::string &file);
 KalibrImu load_kalibr_imu(const std::string &file);
 
 } // namespace ovton::core

@@ -68,6 +68,13 @@ cv::Mat read_gray_image(const std::string &path) {
   return codecs().read(path, false);
 }
 
+cv::Mat decode_gray_image(const uint8_t *data, size_t size) {
+  cv::Mat img;
+  if (decode_png_gray8(data, size, img))
+    return img;
+  return codecs().decode(data, size, false);
+}
+
 cv::Mat read_color_image(const std::string &path) {
   return codecs().read(path, true);
 }
@@ -83,6 +90,10 @@ bool encode_image(const std::string &ext, const cv::Mat &img, std::vector<uchar>
 
 int png_compression_param() {
   return codecs().png_compression;
+}
+
+int jpeg_quality_param() {
+  return codecs().jpeg_quality;
 }
 
 } // namespace ovton::core

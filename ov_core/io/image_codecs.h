@@ -7,6 +7,8 @@
 // simulator's PNG writer, a chart.
 #include <opencv2/core.hpp>
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -15,6 +17,9 @@ namespace ovton::core {
 /// 8-bit grayscale pixels of the image file `path`: 8-bit gray PNGs by the fast decoder, any other file as
 /// cv::imread(IMREAD_GRAYSCALE) reads it. Empty when the file cannot be read or decoded (the caller names the file).
 cv::Mat read_gray_image(const std::string &path);
+/// 8-bit grayscale pixels of an image file held in memory (a ROS CompressedImage's JPEG or PNG): 8-bit gray PNGs by
+/// the fast decoder, anything else as cv::imdecode(IMREAD_GRAYSCALE) reads it. Empty when it cannot be decoded.
+cv::Mat decode_gray_image(const uint8_t *data, size_t size);
 /// 8-bit BGR pixels of `path` as cv::imread(IMREAD_COLOR) reads them; empty when unreadable.
 cv::Mat read_color_image(const std::string &path);
 /// cv::imwrite: false when the file cannot be written.
@@ -24,5 +29,7 @@ bool encode_image(const std::string &ext, const cv::Mat &img, std::vector<uchar>
                   const std::vector<int> &params = {});
 /// The PNG writer's zlib level (cv::IMWRITE_PNG_COMPRESSION) for write_image's params.
 int png_compression_param();
+/// The JPEG writer's quality (cv::IMWRITE_JPEG_QUALITY) for write_image's and encode_image's params.
+int jpeg_quality_param();
 
 } // namespace ovton::core

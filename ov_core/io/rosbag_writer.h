@@ -1,7 +1,7 @@
 #pragma once
 // A dataset written as a ROS 1 bag (`ovton export`), as a ROS user's recording would hold it: mono8 sensor_msgs/Image
-// on the camera topic, sensor_msgs/Imu on the IMU topic, header stamps from the dataset (camera clock for images, IMU
-// clock for the IMU) and bag time equal to the header stamp.
+// (or a JPEG or PNG sensor_msgs/CompressedImage) on the camera topic, sensor_msgs/Imu on the IMU topic, header stamps
+// from the dataset (camera clock for images, IMU clock for the IMU) and bag time equal to the header stamp.
 #include "ov_core/io/dataset.h"
 
 #include <cstdint>
@@ -14,6 +14,9 @@ struct BagWriteOptions {
   std::string cam_topic = "/cam0/image_raw";
   std::string imu_topic = "/imu0";
   std::string compression = "none"; ///< none | bz2 | lz4 (rosbag's chunk compression)
+  /// raw: mono8 sensor_msgs/Image on cam_topic; jpeg or png: sensor_msgs/CompressedImage on cam_topic/compressed
+  std::string image_format = "raw";
+  int jpeg_quality = 95;
   /// Also write Kalibr files beside the bag (camchain-imucam-STEM.yaml, imu-STEM.yaml: the names Kalibr gives them),
   /// which load_bag then finds on its own.
   bool kalibr_files = true;

@@ -25,7 +25,10 @@ struct FeatureObservation {
 /// One feature track: its observations in strictly increasing t_cam_ns.
 struct Feature {
   size_t id = 0;
-  std::vector<FeatureObservation> obs;
+  std::vector<FeatureObservation> obs; ///< in the rig's primary camera (cam0)
+  /// The same landmark in the rig's further cameras: more[k - 1] is camera k's track (same id, its own observations
+  /// and velocities; an image of camera k carries the stamp of the primary image it pairs with). Empty for one camera.
+  std::vector<Feature> more;
 
   const FeatureObservation &oldest() const { return obs.front(); }
   const FeatureObservation &newest() const { return obs.back(); }
@@ -44,14 +47,16 @@ public:
   /// Observations reserved when a feature is created, so that a track of up to this length never reallocates.
   explicit FeatureDatabase(size_t obs_capacity = 16) : obs_capacity_(obs_capacity) {}
 
-  /// Appends an observation to feature `id` (created if new) and computes its velocity from the previous one.
-  /// Throws UsageError when t_cam_ns is not strictly after the feature's newest observation or is not finite.
-  void add_observation(size_t id, int64_t t_cam_ns, const Eigen::Vector2d &uv, const Eigen::Vector2d &xy);
+  /// Appends an observation of camera `cam` (0: the primary) to feature `id` (created if new) and computes its velocity
+  /// from that camera's previous one. Throws UsageError when t_cam_ns is not strictly after the newest observation of
+  /// the same camera or is not finite.
+  void add_observation(size_t id, int64_t t_cam_ns, const Eigen::Vector2d &uv, const Eigen::Vector2d &xy, int cam = 0);
 
-  /// Appends one frame of tracker output (any container of elements with .id, .uv and .xy).
-  template <typename Range> void add_frame(int64_t t_cam_ns, const Range &observations) {
+  /// Appends one frame of tracker output (any container of elements with .id, .uv and .xy) of camera `cam`; a rig's
+  /// primary camera goes first.
+  template <typename Range> void add_frame(int64_t t_cam_ns, const Range &observations, int cam = 0) {
     for (const auto &o : observations)
-      add_observation(o.id, t_cam_ns, o.uv, o.xy);
+      add_observation(o.id, t_cam_ns, o.uv, o.xy, cam);
   }
 
   /// Features whose newest observation is older than t_newest_cam_ns: the tracker lost them in (or before) the
@@ -76,6 +81,7 @@ public:
   void clear() {
     features_.clear();
     last_seen_.clear();
+    last_seen_more_.clear();
   }
 
   const Feature *get(size_t id) const;
@@ -89,6 +95,8 @@ private:
   size_t obs_capacity_;
   std::unordered_map<size_t, Feature> features_;
   std::unordered_map<size_t, FeatureObservation> last_seen_; ///< newest observation of removed features
+  /// The same for the further cameras' tracks: last_seen_more_[id][k - 1] (t_cam_ns < 0: none).
+  std::unordered_map<size_t, std::vector<FeatureObservation>> last_seen_more_;
 };
 
 } // namespace ovton::core

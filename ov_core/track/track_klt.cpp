@@ -82,7 +82,42 @@ int ransac_fundamental(const std::vector<cv::Point2f> &xy0, const std::vector<cv
   return n_refit;
 }
 
-TrackKLT::TrackKLT(const CameraModel &camera, const TrackKLTOptions &opt) : camera_(camera), opt_(opt) {
+LkImagePreparer::LkImagePreparer(const TrackKLTOptions &opt) : opt_(opt) {
+  if (opt_.equalization == ImageEqualization::Clahe) {
+    check_option(opt_.clahe_clip > 0 && opt_.clahe_tiles > 0, "clahe_clip and clahe_tiles must be positive");
+    clahe_ = cv::createCLAHE(opt_.clahe_clip, cv::Size(opt_.clahe_tiles, opt_.clahe_tiles));
+  }
+}
+
+void LkImagePreparer::equalize(const cv::Mat &gray, cv::Mat &img) const {
+  switch (opt_.equalization) {
+  case ImageEqualization::None:
+    gray.copyTo(img);
+    break;
+  case ImageEqualization::Histogram:
+    cv::equalizeHist(gray, img);
+    break;
+  case ImageEqualization::Clahe:
+    clahe_->apply(gray, img);
+    break;
+  }
+}
+
+void LkImagePreparer::build_pyramid(const cv::Mat &img, LkPyramid &out) {
+  cv::buildOpticalFlowPyramid(img, pyr_, cv::Size(opt_.win_size, opt_.win_size), opt_.pyr_levels, false);
+  out.build(pyr_, opt_.win_size);
+}
+
+LkParams LkImagePreparer::lk_params() const {
+  LkParams lk;
+  lk.win = opt_.win_size;
+  lk.max_level = opt_.pyr_levels;
+  lk.max_iter = opt_.lk_max_iter;
+  lk.eps = opt_.lk_eps;
+  return lk;
+}
+
+TrackKLT::TrackKLT(const CameraModel &camera, const TrackKLTOptions &opt) : camera_(camera), opt_(opt), prep_(opt) {
   check_option(opt_.num_features > 0, "num_features must be positive");
   check_option(opt_.grid_x > 0 && opt_.grid_y > 0, "grid_x and grid_y must be positive");
   check_option(opt_.grid_x <= camera_.width() && opt_.grid_y <= camera_.height(), "grid finer than the image");
@@ -97,10 +132,6 @@ TrackKLT::TrackKLT(const CameraModel &camera, const TrackKLTOptions &opt) : came
   check_option(opt_.fb_max_px > 0, "fb_max_px must be positive");
   check_option(opt_.ransac_px > 0, "ransac_px must be positive");
   check_option(opt_.ransac_confidence > 0 && opt_.ransac_confidence < 1, "ransac_confidence must be in (0, 1)");
-  if (opt_.equalization == ImageEqualization::Clahe) {
-    check_option(opt_.clahe_clip > 0 && opt_.clahe_tiles > 0, "clahe_clip and clahe_tiles must be positive");
-    clahe_ = cv::createCLAHE(opt_.clahe_clip, cv::Size(opt_.clahe_tiles, opt_.clahe_tiles));
-  }
   const size_t cap = static_cast<size_t>(2 * opt_.num_features);
   for (auto *v : {&pts_, &pts_next_, &pts_back_, &xy0f_, &xy1f_})
     v->reserve(cap);
@@ -134,25 +165,14 @@ const std::vector<TrackedFeature> &TrackKLT::track(int64_t t_cam_ns, const cv::M
   const auto t_start = Clock::now();
 
   auto t0 = Clock::now();
-  switch (opt_.equalization) {
-  case ImageEqualization::None:
-    // Copy: the caller may reuse its buffer, and the pyramid and last_image() must outlive this call.
-    gray.copyTo(img_);
-    break;
-  case ImageEqualization::Histogram:
-    cv::equalizeHist(gray, img_);
-    break;
-  case ImageEqualization::Clahe:
-    clahe_->apply(gray, img_);
-    break;
-  }
+  // A copy even without equalisation: the caller may reuse its buffer, and last_image() must outlive this call.
+  prep_.equalize(gray, img_);
   stats_.t_equalize_ms = ms_since(t0);
 
   // Built once per image (and copied to float planes for lk_flow): this frame's pyramid becomes the next frame's
   // "previous" one.
   t0 = Clock::now();
-  cv::buildOpticalFlowPyramid(img_, pyr_, cv::Size(opt_.win_size, opt_.win_size), opt_.pyr_levels, false);
-  lk_curr_.build(pyr_, opt_.win_size);
+  prep_.build_pyramid(img_, lk_curr_);
   stats_.t_pyramid_ms = ms_since(t0);
 
   stats_.num_prev = static_cast<int>(ids_.size());
@@ -178,11 +198,7 @@ const std::vector<TrackedFeature> &TrackKLT::track(int64_t t_cam_ns, const cv::M
 
 void TrackKLT::track_previous(int64_t t_cam_ns) {
   const size_t n = ids_.size();
-  LkParams lk;
-  lk.win = opt_.win_size;
-  lk.max_level = opt_.pyr_levels;
-  lk.max_iter = opt_.lk_max_iter;
-  lk.eps = opt_.lk_eps;
+  LkParams lk = prep_.lk_params();
 
   auto t0 = Clock::now();
   if (opt_.gyro_prior && prior_)

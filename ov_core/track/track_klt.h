@@ -49,6 +49,23 @@ struct TrackKLTOptions {
   int clahe_tiles = 8;
 };
 
+/// An image as the trackers work on it: equalised as the options say, and its pyramid for lk_flow (built once per
+/// image). Shared by the primary camera's tracker and a rig's further cameras (track_stereo.h).
+class LkImagePreparer {
+public:
+  explicit LkImagePreparer(const TrackKLTOptions &opt);
+  /// Equalises `gray` into `img` (a copy when equalisation is off: the pyramid must outlive the caller's buffer).
+  void equalize(const cv::Mat &gray, cv::Mat &img) const;
+  void build_pyramid(const cv::Mat &img, LkPyramid &out);
+  /// lk_flow's parameters for the options (no initial guess).
+  LkParams lk_params() const;
+
+private:
+  TrackKLTOptions opt_;
+  cv::Ptr<cv::CLAHE> clahe_;
+  std::vector<cv::Mat> pyr_; // OpenCV's 8-bit pyramid, from which the float planes are made
+};
+
 /// One feature in one frame, as the tracker hands it to the feature database.
 struct TrackedFeature {
   size_t id = 0;
@@ -109,6 +126,9 @@ public:
   const TrackKLTOptions &options() const { return opt_; }
   /// The image the tracker worked on (after equalisation), for visualisation.
   const cv::Mat &last_image() const { return img_; }
+  /// The pyramid of the last image tracked (a rig's further cameras match into their images from it).
+  const LkPyramid &last_pyramid() const { return lk_prev_; }
+  const CameraModel &camera() const { return camera_; }
 
 private:
   void track_previous(int64_t t_cam_ns);
@@ -118,7 +138,7 @@ private:
 
   CameraModel camera_;
   TrackKLTOptions opt_;
-  cv::Ptr<cv::CLAHE> clahe_;
+  LkImagePreparer prep_;
   std::shared_ptr<const GyroRotationPrior> prior_;
 
   bool has_prev_ = false;
@@ -126,7 +146,6 @@ private:
   size_t next_id_ = 0;
 
   cv::Mat img_;
-  std::vector<cv::Mat> pyr_;    // OpenCV's 8-bit pyramid of the current image, from which lk_curr_ is made
   LkPyramid lk_prev_, lk_curr_; // swapped each frame so the pyramid is built once per image
 
   // Per-feature state, parallel arrays in id order (older tracks first, which detection prefers to keep).

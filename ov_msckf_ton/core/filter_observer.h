@@ -1,10 +1,12 @@
 #pragma once
 // What the filter shows of its work besides the state: the residuals of each update, the image velocities it used,
 // and each image's features with their fate. Logs, `diagnose`, `velocities` and a Foxglove recording are observers; the
-// filter calls them on its own thread and computes the same estimate whether any is attached (one exception is said
-// at wants_velocities).
+// filter calls them on its own thread (on_image alone comes from the tracking stage) and computes the same estimate
+// whether any is attached (one exception is said at wants_velocities).
 #include "ov_core/io/velocity_log.h"
 #include "ov_msckf_ton/update/residual_log.h"
+
+#include <opencv2/core.hpp>
 
 #include <cstdint>
 #include <memory>
@@ -38,7 +40,15 @@ public:
   virtual bool wants_velocities() const { return false; }
   /// Per observation of every feature an update uses, each rule's and network's image velocity.
   virtual void on_velocities(const std::vector<ovton::core::VelocityLogRow> &rows) { (void)rows; }
-  /// After each image the filter processed.
+  /// Each image as it is tracked — on the tracking stage's thread (the caller's when not threaded), before it waits for
+  /// the coarse t_d search and the filter —, not for a feature-level image. An observer that shows images keeps what
+  /// it needs of them here (an encoded copy: the image is the caller's, shared, read-only); on_frame follows for the
+  /// images the filter processes, in the same order.
+  virtual void on_image(int64_t t_cam_ns, const cv::Mat &gray) {
+    (void)t_cam_ns;
+    (void)gray;
+  }
+  /// After each image the filter processed (from its initialisation on), before its state goes to the callbacks.
   virtual void on_frame(const FrameFeatures &frame) { (void)frame; }
   /// After each image, the filter itself, read-only (its state, its networks' statistics): for tests and tools that
   /// look inside. Called on the filter's thread; what it reads is valid only during the call.

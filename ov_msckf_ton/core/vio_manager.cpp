@@ -39,10 +39,12 @@ TdObservation td_observation(TdMode m) {
 } // namespace
 
 VioManager::VioManager(const VioOptions &opt, const ovton::core::CameraCalib &cam, const ovton::core::ImuCalib &imu,
-                       FilterAids aids, StateCallback on_state, std::vector<std::shared_ptr<FilterObserver>> observers)
-    : opt_(opt), camera_(cam), propagator_(noise_from(imu, opt), opt.imu.gravity_mag), updater_(cam, opt.update.msckf),
-      slam_(cam, opt.slam.updater, updater_), state_(std::make_unique<State>(estimates_td(opt.td.mode))),
-      aids_(std::move(aids)), on_state_(std::move(on_state)), observers_(std::move(observers)), health_(opt) {
+                       FilterAids aids, StateCallback on_state, std::vector<std::shared_ptr<FilterObserver>> observers,
+                       std::vector<ovton::core::CameraCalib> more_cameras)
+    : opt_(opt), camera_(cam), propagator_(noise_from(imu, opt), opt.imu.gravity_mag),
+      updater_(cam, opt.update.msckf, std::move(more_cameras)), slam_(cam, opt.slam.updater, updater_),
+      state_(std::make_unique<State>(estimates_td(opt.td.mode))), aids_(std::move(aids)),
+      on_state_(std::move(on_state)), observers_(std::move(observers)), health_(opt) {
   validate_vio_options(opt_);
   for (const auto &o : observers_) {
     if (!o)
@@ -231,9 +233,12 @@ void VioManager::add_calibration_variables() {
     s.calib.imu_intrinsics_index = add(Eigen::VectorXd::Constant(12, o.sigma_imu_intrinsics));
 }
 
-void VioManager::process_frame(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features) {
+void VioManager::process_frame(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features,
+                               const std::vector<std::vector<ovton::core::TrackedFeature>> &more) {
   const auto t_start = Clock::now();
   db_.add_frame(t_cam_ns, features);
+  for (size_t k = 0; k < more.size(); ++k)
+    db_.add_frame(t_cam_ns, more[k], static_cast<int>(k + 1));
   fate_.clear();
   ++counters_.images;
   auto t0 = Clock::now();

@@ -67,14 +67,18 @@ public:
 
   /// `on_state` receives every state the filter hands out (after its health check); `observers` see the updates'
   /// residuals, velocities and each image's features.
+  /// `more_cameras`: a rig's further cameras (their features come with each image, process_frame's `more`).
   VioManager(const VioOptions &opt, const ovton::core::CameraCalib &cam, const ovton::core::ImuCalib &imu,
              FilterAids aids = {}, StateCallback on_state = {},
-             std::vector<std::shared_ptr<FilterObserver>> observers = {});
+             std::vector<std::shared_ptr<FilterObserver>> observers = {},
+             std::vector<ovton::core::CameraCalib> more_cameras = {});
 
   /// IMU readings, in time order, up to (and one past) each image's IMU-clock time before the image.
   void on_imu(const ovton::core::ImuData &m);
   /// One image's features (tracker output, or a feature-level dataset's points with their undistorted coordinates).
-  void process_frame(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features);
+  /// `more[k - 1]`: camera k's features at the same instant (ids of the primary's), for a rig.
+  void process_frame(int64_t t_cam_ns, const std::vector<ovton::core::TrackedFeature> &features,
+                     const std::vector<std::vector<ovton::core::TrackedFeature>> &more = {});
   /// t_d for an image at t_cam_ns as the next propagation will use it (t_imu = t_cam + t_d): the IMU must reach
   /// t_cam + this + imu_lookahead_ns() before the image.
   double td_for_image_s(int64_t t_cam_ns) const;

@@ -120,6 +120,7 @@ std::vector<Field> fields(VioOptions &o) {
   auto &cal = o.calibration;
   auto &its_train = ton.fvon.its.train, &f2f_train = ton.fvon.f2f.train, &tpn_train = ton.tpn.tpn.train;
   return {
+      field("rig", "max_cameras", o.rig.max_cameras),
       enum_field<TdMode>(T, "mode", td.mode, parse_td_mode, [](TdMode m) { return to_string(m); }),
       enum_field<TdProcess>(T, "process", td.process, parse_td_process, [](TdProcess p) { return to_string(p); }),
       field(T, "init_s", td.init_s),
@@ -265,6 +266,7 @@ void apply_mode_spec(const ModeSpec &spec, VioOptions &o) {
 }
 
 void validate_vio_options(const VioOptions &o) {
+  require(o.rig.max_cameras >= 0, "rig.max_cameras must be >= 0 (0: every camera the recording has)");
   const auto &td = o.td;
   require(td.sigma_init_s > 0, "time_offset.sigma_init_s must be > 0");
   require(td.random_walk >= 0 && td.random_walk_tpn >= 0 && td.rate_random_walk >= 0,

@@ -142,7 +142,14 @@ struct HealthOptions {
   bool enabled = true;
 };
 
+/// Which of a recording's cameras a run uses.
+struct RigOptions {
+  /// At most this many (cam0, cam1, ... in order); 0: every camera the recording has, 1: monocular.
+  int max_cameras = 0;
+};
+
 struct VioOptions {
+  RigOptions rig;
   TimeOffsetOptions td;
   TonOptions ton;
   UpdateOptions update;

@@ -17,6 +17,9 @@ EstimatorSetup setup_for(const core::Dataset &data, const msckf::VioOptions &opt
   EstimatorSetup s;
   s.options = opt;
   s.camera = data.cam;
+  const size_t n_cams = opt.rig.max_cameras > 0 ? static_cast<size_t>(opt.rig.max_cameras) : data.num_cameras();
+  for (size_t k = 1; k < std::min(n_cams, data.num_cameras()); ++k)
+    s.more_cameras.push_back(data.more_cameras[k - 1].cam);
   s.imu = data.imu_calib;
   s.source = data.root;
   if (opt.init.mode == msckf::InitMode::GroundTruth)
@@ -51,6 +54,10 @@ PlayResult play(const core::Dataset &data, Estimator &est, const PlayOptions &op
       std::this_thread::sleep_until(
           wall0 + std::chrono::nanoseconds(static_cast<int64_t>(static_cast<double>(t_ns - t_first) / opt.pace)));
   };
+  // A rig's further cameras: the image with the primary's stamp (cameras triggered together share it), if any.
+  const size_t n_more = est.camera_count() - 1;
+  std::vector<size_t> next_more(n_more, 0);
+  std::vector<cv::Mat> grays(1 + n_more);
   size_t k = 0; // next IMU reading
   const auto feed_imu_to = [&](int64_t t_ns) {
     for (; k < data.imu.size() && data.imu[k].t_imu_ns <= t_ns; ++k) {
@@ -67,8 +74,23 @@ PlayResult play(const core::Dataset &data, Estimator &est, const PlayOptions &op
     } else {
       const auto t0 = Clock::now();
       const cv::Mat gray = core::load_gray_image(e, data.cam.width, data.cam.height);
-      res.decode_ms += ms_since(t0);
-      est.feed_image(e.t_cam_ns, gray);
+      if (n_more == 0) {
+        res.decode_ms += ms_since(t0);
+        est.feed_image(e.t_cam_ns, gray);
+      } else {
+        grays[0] = gray;
+        for (size_t c = 0; c < n_more; ++c) {
+          const core::CameraStream &cs = data.more_cameras[c];
+          size_t &j = next_more[c];
+          while (j < cs.images.size() && cs.images[j].t_cam_ns < e.t_cam_ns)
+            ++j;
+          grays[c + 1] = j < cs.images.size() && cs.images[j].t_cam_ns == e.t_cam_ns
+                             ? core::load_gray_image(cs.images[j], cs.cam.width, cs.cam.height)
+                             : cv::Mat();
+        }
+        res.decode_ms += ms_since(t0);
+        est.feed_images(e.t_cam_ns, grays);
+      }
     }
     res.images_fed = i + 1;
     if (opt.on_progress && !opt.on_progress(i + 1, n)) {
@@ -84,6 +106,10 @@ PlayResult play(const core::Dataset &data, Estimator &est, const PlayOptions &op
     feed_imu_to(n_feed < n && n_feed > 0 ? data.images[n_feed - 1].t_cam_ns + core::s_to_ns(12.0)
                                          : std::numeric_limits<int64_t>::max());
     est.finish();
+    // A recording cut short: the states up to the cut are out; now the cut is an error (naming the file and byte).
+    // With max_images short of the recording the cut was never reached.
+    if (n_feed == n)
+      core::check_not_truncated(data);
   }
   res.imu_fed = k;
   res.wall_s = std::chrono::duration<double>(Clock::now() - wall0).count();

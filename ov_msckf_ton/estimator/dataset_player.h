@@ -42,6 +42,8 @@ struct PlayResult {
 /// Feeds `data` into `est` and finishes it. What the estimator throws passes through (an unreadable image as
 /// DataError naming its file; EstimatorFailure for a diverged estimate), after the states before it were handed out.
 /// With max_images the IMU is fed to 12 s past the last image fed (|t_d| is at most 10 s, and the filter looks ahead).
+/// A recording cut short (Dataset::truncated_file: a recorder that crashed) is played up to the cut and finished, then
+/// DataError names the file and the byte of the cut (core::check_not_truncated): its states were handed out first.
 PlayResult play(const core::Dataset &data, Estimator &est, const PlayOptions &opt = {});
 
 } // namespace ovton

@@ -32,6 +32,8 @@ Estimator::Impl::Impl(EstimatorSetup setup) : setup_(std::move(setup)), camera_(
     throw core::UsageError("ground-truth initialisation needs full-state ground truth in " + setup_.source);
   filter_opt_ = o;
   tracker_ = std::make_unique<core::TrackKLT>(camera_, o.track);
+  for (const auto &c : setup_.more_cameras)
+    secondary_.push_back(std::make_unique<core::TrackSecondary>(camera_, core::CameraModel(c), o.track));
   R_IC_ = core::camera_to_imu_rotation(setup_.camera, setup_.imu);
   prior_on_ = o.track.gyro_prior;
   if (prior_on_) {
@@ -128,7 +130,16 @@ void Estimator::Impl::feed_imu(const core::ImuData &m) {
 }
 
 void Estimator::Impl::feed_image(int64_t t_cam_ns, const cv::Mat &gray, std::vector<core::PointObservation> obs,
-                                 bool feature_level) {
+                                 bool feature_level, std::vector<cv::Mat> more) {
+  if (more.size() > setup_.more_cameras.size())
+    throw core::UsageError("image at " + stamp(t_cam_ns) + " comes with " + std::to_string(more.size()) +
+                           " further cameras' images; the setup has " + std::to_string(setup_.more_cameras.size()));
+  for (size_t k = 0; k < more.size(); ++k) {
+    const core::CameraCalib &c = setup_.more_cameras[k];
+    if (!more[k].empty() && (more[k].type() != CV_8UC1 || more[k].cols != c.width || more[k].rows != c.height))
+      throw core::UsageError("camera " + std::to_string(k + 1) + "'s image at " + stamp(t_cam_ns) +
+                             " is not 8-bit gray of " + std::to_string(c.width) + "x" + std::to_string(c.height));
+  }
   if (!feature_level &&
       (gray.type() != CV_8UC1 || gray.cols != setup_.camera.width || gray.rows != setup_.camera.height))
     throw core::UsageError("image at " + stamp(t_cam_ns) + " is " + std::to_string(gray.cols) + "x" +
@@ -156,7 +167,7 @@ void Estimator::Impl::feed_image(int64_t t_cam_ns, const cv::Mat &gray, std::vec
   rethrow_if_failed();
   last_image_ns_ = t_cam_ns;
   ++status_.images_received;
-  inputs_.push_back({t_cam_ns, gray, std::move(obs), feature_level, Clock::now()});
+  inputs_.push_back({t_cam_ns, gray, std::move(more), std::move(obs), feature_level, Clock::now()});
   cv_.notify_all();
   if (!setup_.threaded)
     pump(lk);
@@ -271,8 +282,16 @@ void Estimator::feed_imu(const core::ImuData &m) {
 void Estimator::feed_image(int64_t t_cam_ns, const cv::Mat &gray) {
   impl_->feed_image(t_cam_ns, gray, {}, false);
 }
+void Estimator::feed_images(int64_t t_cam_ns, const std::vector<cv::Mat> &grays) {
+  if (grays.empty())
+    throw core::UsageError("feed_images: no image");
+  impl_->feed_image(t_cam_ns, grays.front(), {}, false, std::vector<cv::Mat>(grays.begin() + 1, grays.end()));
+}
 void Estimator::feed_features(int64_t t_cam_ns, std::vector<core::PointObservation> observations) {
   impl_->feed_image(t_cam_ns, cv::Mat(), std::move(observations), true);
+}
+size_t Estimator::camera_count() const {
+  return impl_->camera_count();
 }
 size_t Estimator::poll(std::vector<core::StateSample> &out) {
   return impl_->poll(out);

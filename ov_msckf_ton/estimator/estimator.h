@@ -35,6 +35,8 @@ struct EstimatorSetup {
   msckf::VioOptions options;
   core::CameraCalib camera; ///< intrinsics, distortion, T_BC, image size, and the Kalibr time shift as t_d prior
   core::ImuCalib imu;       ///< noise figures (the options may override them)
+  /// A rig's further cameras (cam1, ...): their images come with the primary's through feed_images. Empty: monocular.
+  std::vector<core::CameraCalib> more_cameras;
   /// Simulations: the true state (for init.mode groundtruth) and the true offset (for mode oracle).
   msckf::FilterAids aids;
   /// Tracking and filter on threads of their own; false: on the caller's thread inside the feed calls.
@@ -104,8 +106,14 @@ public:
   /// stamp order. The image is shared, not copied: do not write into it afterwards. Throws UsageError for a wrong size
   /// or type or a stamp not after the previous one, and rethrows what stopped the run.
   void feed_image(int64_t t_cam_ns, const cv::Mat &gray);
+  /// A rig's images taken at one instant (one camera-clock stamp, the primary's): grays[0] the primary camera's,
+  /// grays[k] camera k's of setup.more_cameras (an empty Mat where that camera has no image at this stamp).
+  void feed_images(int64_t t_cam_ns, const std::vector<cv::Mat> &grays);
   /// A feature-level recording's image: the points seen (ids, distorted pixels) instead of pixels.
   void feed_features(int64_t t_cam_ns, std::vector<core::PointObservation> observations);
+
+  /// 1 + setup.more_cameras.size().
+  size_t camera_count() const;
 
   /// Moves the states that came out since the last poll to `out` (appended); returns how many.
   size_t poll(std::vector<core::StateSample> &out);

@@ -4,6 +4,7 @@
 // filter stage its VioManager) and does its heavy work with the mutex released.
 #include "ov_core/cam/camera_model.h"
 #include "ov_core/track/track_klt.h"
+#include "ov_core/track/track_stereo.h"
 #include "ov_core/types/imu_buffer.h"
 #include "ov_msckf_ton/estimator/estimator.h"
 
@@ -25,8 +26,9 @@ public:
   void add_observer(std::shared_ptr<msckf::FilterObserver> observer);
   void feed_imu(const core::ImuData &m);
   void feed_image(int64_t t_cam_ns, const cv::Mat &gray, std::vector<core::PointObservation> observations,
-                  bool feature_level);
+                  bool feature_level, std::vector<cv::Mat> more = {});
   size_t poll(std::vector<core::StateSample> &out);
+  size_t camera_count() const { return 1 + setup_.more_cameras.size(); }
   EstimatorStatus status() const;
   void finish();
   void stop();
@@ -39,6 +41,7 @@ private:
   struct Input {
     int64_t t_cam_ns;
     cv::Mat gray;
+    std::vector<cv::Mat> more;                        ///< the rig's further cameras' images (empty: none)
     std::vector<core::PointObservation> observations; ///< a feature-level image's points
     bool feature_level;
     Clock::time_point arrived;
@@ -47,6 +50,7 @@ private:
   struct Tracked {
     int64_t t_cam_ns;
     std::vector<core::TrackedFeature> features;
+    std::vector<std::vector<core::TrackedFeature>> more; ///< the rig's further cameras', by camera - 1
     Clock::time_point arrived;
   };
 
@@ -67,6 +71,8 @@ private:
   /// false (handing nothing) while that reading has not arrived and the stream goes on.
   bool imu_past_for_tracking(Lock &lk, int64_t t_imu_ns);
   std::vector<core::TrackedFeature> track(const Input &in);
+  /// The further cameras' features of an image `track` has just tracked in the primary.
+  std::vector<std::vector<core::TrackedFeature>> track_more(const Input &in);
   /// The coarse search has decided: the filter's t_d prior, the gyro prior's offset, the held images to the filter.
   void release_search(Lock &lk);
   bool tracking_uses_imu() const { return (search_ && !search_->done()) || prior_on_; }
@@ -101,6 +107,7 @@ private:
   bool track_imu_handed_ = false;
   int64_t track_last_handed_ns_ = 0;
   std::unique_ptr<core::TrackKLT> tracker_;
+  std::vector<std::unique_ptr<core::TrackSecondary>> secondary_; ///< the rig's further cameras
   bool prior_on_ = false;
   std::shared_ptr<core::ImuBuffer> prior_imu_;
   Eigen::Matrix3d R_IC_ = Eigen::Matrix3d::Identity();

@@ -86,8 +86,11 @@ bool Estimator::Impl::track_step(Lock &lk) {
   cv_.notify_all(); // a caller may wait for room
   lk.unlock();
   const auto t0 = Clock::now();
-  Tracked out{in.t_cam_ns, track(in), in.arrived};
+  Tracked out{in.t_cam_ns, track(in), track_more(in), in.arrived};
   const double ms = ms_between(t0, Clock::now());
+  if (!in.feature_level)
+    for (const auto &o : observers_)
+      o->on_image(in.t_cam_ns, in.gray);
   lk.lock();
   tracking_ms_ += ms;
   // The next image's rotation starts at this one, at an offset the search may still move by its range.
@@ -112,6 +115,14 @@ std::vector<core::TrackedFeature> Estimator::Impl::track(const Input &in) {
   out.reserve(in.observations.size());
   for (const auto &o : in.observations)
     out.push_back({o.id, o.uv, camera_.undistort(o.uv)});
+  return out;
+}
+
+std::vector<std::vector<core::TrackedFeature>> Estimator::Impl::track_more(const Input &in) {
+  std::vector<std::vector<core::TrackedFeature>> out(secondary_.size());
+  for (size_t k = 0; k < secondary_.size() && k < in.more.size(); ++k)
+    if (!in.more[k].empty())
+      out[k] = secondary_[k]->track(in.t_cam_ns, in.more[k], *tracker_);
   return out;
 }
 
@@ -147,7 +158,7 @@ bool Estimator::Impl::filter_step(Lock &lk) {
     lk.unlock();
     auto vio = std::make_unique<msckf::VioManager>(
         filter_opt_, setup_.camera, setup_.imu, setup_.aids, [this](const core::StateSample &s) { on_state(s); },
-        observers_);
+        observers_, setup_.more_cameras);
     lk.lock();
     vio_ = std::move(vio);
     return true;
@@ -201,7 +212,7 @@ bool Estimator::Impl::filter_step(Lock &lk) {
   for (const auto &m : readings)
     vio_->on_imu(m);
   if (covered)
-    vio_->process_frame(frame.t_cam_ns, frame.features);
+    vio_->process_frame(frame.t_cam_ns, frame.features, frame.more);
   lk.lock();
   if (covered)
     ++status_.images_processed;

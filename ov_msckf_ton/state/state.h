@@ -109,7 +109,7 @@ struct LandmarkState {
   int updates = 0;       ///< observations that updated it
 };
 
-/// The scalar of the covariance a State::for_each_covariance function receives: double for P, float for P_report.
+/// The scalar of the covariance a State::for_each_covariance function receives.
 template <class M> using covariance_scalar = typename std::decay_t<M>::Scalar;
 
 class State {
@@ -132,19 +132,18 @@ public:
   /// covariance_track_correlation, slam.covariance_sigma_px). The gains and gates use P; every operation on P
   /// applies to P_report alike (the same Φ, Q, cloning, marginalisation), the updates with the Joseph form of P's
   /// gain under the model's noise (state_helper::ekf_update). Empty: P is both.
-  /// Single precision: nothing the filter decides reads it, and in double its updates (the Joseph form's rank-2m
-  /// products over the whole state) cost a quarter of a run's CPU; in float about 60 % of that, and the reported
-  /// sigmas move by ≤ 1e-3 of themselves in the first second, ~1e-5 after (docs/benchmarks.md, "The reported
-  /// covariance in single precision").
-  Eigen::MatrixXf P_report;
+  /// Double precision like P: after a dynamic initialisation P's eigenvalues span ~5e8 (velocity and gravity
+  /// against t_d and the biases), beyond float's 1e7, and a float P_report lost positive definiteness within a
+  /// second (t_d's variance negative, clamped to a sigma of 0; docs/benchmarks.md, "The reported covariance").
+  Eigen::MatrixXd P_report;
 
   int dim() const { return static_cast<int>(P.rows()); }
   bool separate_report() const { return P_report.size() != 0; }
   /// Starts the reported covariance at the filter's P.
-  void start_report() { P_report = P.cast<float>(); }
+  void start_report() { P_report = P; }
   /// A block of the covariance the run reports (P_report where kept, else P), in double.
   Eigen::MatrixXd reported_block(int row, int col, int rows, int cols) const {
-    return separate_report() ? Eigen::MatrixXd(P_report.block(row, col, rows, cols).cast<double>())
+    return separate_report() ? Eigen::MatrixXd(P_report.block(row, col, rows, cols))
                              : Eigen::MatrixXd(P.block(row, col, rows, cols));
   }
   /// P, then P_report when it is kept: for the operations that act on both alike (`f` takes either matrix type;
@@ -160,7 +159,7 @@ public:
   double reported_td_sigma() const {
     if (!estimates_td() || !separate_report())
       return td_sigma();
-    return std::sqrt(std::max(0.0, static_cast<double>(P_report(td_index, td_index))));
+    return std::sqrt(std::max(0.0, P_report(td_index, td_index)));
   }
   double td_variance() const { return estimates_td() ? P(td_index, td_index) : 0.0; }
   /// t_d at clone c's image minus the t̂_d the clone was placed with (td_ref): an image-plane observation is shifted

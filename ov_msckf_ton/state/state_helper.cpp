@@ -115,55 +115,53 @@ template <class Mat> void mirror_lower(Mat &P) {
 /// The reported covariance's Joseph form for the gain K of P (apply_update): P_r⁺ = P_r − K H P_r − P_r Hᵀ Kᵀ +
 /// K (H P_r Hᵀ + σ²I) Kᵀ + K ΔR Kᵀ, where K ΔR Kᵀ = Z G Zᵀ with Z = P⁺_c/σ² (P⁺'s columns at cols; K = P⁺Hᵀ/σ²
 /// for the σ²I weight) and G = HᵀΔRH. Both forms below write P_r + A Bᵀ + B Aᵀ on the lower triangle, mirrored.
-/// In single precision, as P_r is kept (State::P_report); K comes from the filter's double P.
 void joseph_report(State &s, const std::vector<int> &cols, const Eigen::MatrixXd &Hc, Eigen::MatrixXd &Wt,
                    const Eigen::LLT<Eigen::MatrixXd> &llt, double sigma2, const ReportNoise &noise) {
-  using Mf = Eigen::MatrixXf;
   const Eigen::Index n = s.P.rows(), m = Hc.rows(), nc = static_cast<Eigen::Index>(cols.size());
-  const float s2 = static_cast<float>(sigma2);
-  Mf Pr_cols(n, nc); // P_r's columns at the compact columns
+  const double s2 = sigma2;
+  Eigen::MatrixXd Pr_cols(n, nc); // P_r's columns at the compact columns
   for (Eigen::Index j = 0; j < nc; ++j)
     Pr_cols.col(j) = s.P_report.col(cols[j]);
   const auto p_plus_cols = [&] { // Z = P⁺'s columns at the compact columns / σ²
-    Mf Z(n, nc);
+    Eigen::MatrixXd Z(n, nc);
     for (Eigen::Index j = 0; j < nc; ++j)
-      Z.col(j) = (s.P.col(cols[j]) / sigma2).cast<float>();
+      Z.col(j) = (s.P.col(cols[j]) / sigma2);
     return Z;
   };
-  const Mf H = Hc.cast<float>();
-  Mf A, B;
+  const Eigen::MatrixXd H = Hc;
+  Eigen::MatrixXd A, B;
   if (m == nc) {
     // Square (the MSCKF's compressed rows): in the columns' space, K = Z Hᵀ, J = HᵀH:
     // P_r⁺ = P_r + Z Bᵀ + B Zᵀ with B = ½ Z M − P_r,c J and M = J P_r,cc J + σ²J + G — no Kᵀ solve.
-    const Mf J = H.transpose() * H;
-    Mf Pcc(nc, nc);
+    const Eigen::MatrixXd J = H.transpose() * H;
+    Eigen::MatrixXd Pcc(nc, nc);
     for (Eigen::Index j = 0; j < nc; ++j)
       for (Eigen::Index i = 0; i < nc; ++i)
         Pcc(i, j) = Pr_cols(cols[i], j);
-    Mf M = J * Pcc * J + s2 * J;
+    Eigen::MatrixXd M = J * Pcc * J + s2 * J;
     if (noise.cols)
-      M += noise.cols->cast<float>();
+      M += *noise.cols;
     if (noise.rows)
-      M += (Hc.transpose() * *noise.rows * Hc).cast<float>();
+      M += (Hc.transpose() * *noise.rows * Hc);
     A = p_plus_cols();
-    B = 0.5f * A * M - Pr_cols * J;
+    B = 0.5 * A * M - Pr_cols * J;
   } else {
     // Fewer rows than columns: in the rows' space, with K = S⁻¹PHᵀ solved and T = H P_r Hᵀ + σ²I:
     // P_r⁺ = P_r + K Bᵀ + B Kᵀ with B = ½ K T − (H P_r)ᵀ, and Z G Zᵀ on top.
-    llt.matrixU().solveInPlace(Wt);           // Kᵀ = S⁻¹ PHᵀᵀ = L⁻ᵀ Wᵀ
-    const Mf HPr_t = Pr_cols * H.transpose(); // (H P_r)ᵀ, n × m
-    Mf HPr_t_c(nc, m);
+    llt.matrixU().solveInPlace(Wt);                        // Kᵀ = S⁻¹ PHᵀᵀ = L⁻ᵀ Wᵀ
+    const Eigen::MatrixXd HPr_t = Pr_cols * H.transpose(); // (H P_r)ᵀ, n × m
+    Eigen::MatrixXd HPr_t_c(nc, m);
     for (Eigen::Index j = 0; j < nc; ++j)
       HPr_t_c.row(j) = HPr_t.row(cols[j]);
-    Mf T = H * HPr_t_c;
+    Eigen::MatrixXd T = H * HPr_t_c;
     T.diagonal().array() += s2;
     if (noise.rows)
-      T += noise.rows->cast<float>();
-    A = Wt.transpose().cast<float>();
-    B = 0.5f * A * T - HPr_t;
+      T += *noise.rows;
+    A = Wt.transpose();
+    B = 0.5 * A * T - HPr_t;
     if (noise.cols) {
-      const Mf Z = p_plus_cols();
-      const Mf ZG = Z * noise.cols->cast<float>();
+      const Eigen::MatrixXd Z = p_plus_cols();
+      const Eigen::MatrixXd ZG = Z * *noise.cols;
       s.P_report.triangularView<Eigen::Lower>() += ZG * Z.transpose();
     }
   }

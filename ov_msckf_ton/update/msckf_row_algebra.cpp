@@ -1,11 +1,13 @@
 // The row algebra of an MSCKF update on a feature's stacked system (UpdaterMSCKF, updater_msckf.h): the projection
 // onto the left nullspace of the feature's position Jacobian, the QR compression of the stacked rows, the AR(1)
-// whitening of correlated track errors, and the projected innovation covariance for the χ² gate. Split from
-// updater_msckf.cpp, which linearises features and runs the update.
+// whitening of correlated track errors, the projected innovation covariance for the χ² gate, a rig's repeated clone
+// columns, and the errors-in-variables bias of t_d. Split from updater_msckf.cpp, which linearises features and runs
+// the update.
 #include "ov_core/types/errors.h"
 #include "ov_msckf_ton/update/updater_msckf.h"
 
 #include <Eigen/QR>
+#include <algorithm>
 #include <cmath>
 
 namespace ovton::msckf {
@@ -111,6 +113,75 @@ Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &l
   Eigen::MatrixXd S2 = S.bottomRightCorner(rows - 3, rows - 3);
   S2.diagonal().array() += sigma2;
   return S2;
+}
+
+void UpdaterMSCKF::merge_repeated_columns(FeatureLinearization &lin) {
+  std::vector<int> cols;
+  std::vector<Eigen::Index> to(lin.cols.size());
+  for (size_t j = 0; j < lin.cols.size(); ++j) {
+    const auto it = std::find(cols.begin(), cols.end(), lin.cols[j]);
+    to[j] = it - cols.begin();
+    if (it == cols.end())
+      cols.push_back(lin.cols[j]);
+  }
+  if (cols.size() == lin.cols.size())
+    return;
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(lin.H_x.rows(), static_cast<Eigen::Index>(cols.size()));
+  for (size_t j = 0; j < lin.cols.size(); ++j)
+    H.col(to[j]) += lin.H_x.col(static_cast<Eigen::Index>(j));
+  lin.H_x.swap(H);
+  lin.cols.swap(cols);
+}
+
+double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ovton::core::Feature &feature,
+                                      const VelocityProvider &velocities, const FeatureQR &qr) {
+  const int m = static_cast<int>(lin.obs.size());
+  if (m == 0 || !lin.obs.front().td_column)
+    return 0.0;
+  // Row of each observation index of each camera's track (-1: no clone, so its noise is in no row).
+  std::vector<std::vector<int>> rows_of(1 + feature.more.size());
+  rows_of[0].assign(feature.obs.size(), -1);
+  for (size_t c = 0; c < feature.more.size(); ++c)
+    rows_of[c + 1].assign(feature.more[c].obs.size(), -1);
+  for (int k = 0; k < m; ++k)
+    rows_of[static_cast<size_t>(lin.obs[k].cam)][lin.obs[k].obs_index] = k;
+  const VelocityProvider tracked; // the further cameras' velocities are eq. 2 (velocity_of)
+  // D: row block k's t_d entry is J_k·V_k with δV_k = Σ W_j·δxy_j and xy_j's noise J_j⁻¹·n_j (n_j the pixel noise of
+  // row block j, as the residual carries it), so D_kj = J_k·W_j·J_j⁻¹.
+  std::vector<Eigen::Matrix2d> Jd_inv(m);
+  for (int k = 0; k < m; ++k)
+    Jd_inv[k] = lin.obs[k].Jd.inverse();
+  Eigen::MatrixXd D = Eigen::MatrixXd::Zero(2 * m, 2 * m);
+  VelocityStencil st;
+  bool any = false;
+  for (int k = 0; k < m; ++k) {
+    const int cam = lin.obs[k].cam;
+    if (cam == 0)
+      velocities.stencil(feature, lin.obs[k].obs_index, st);
+    else
+      tracked.stencil(feature.more[static_cast<size_t>(cam - 1)], lin.obs[k].obs_index, st);
+    const std::vector<int> &row_of = rows_of[static_cast<size_t>(cam)];
+    for (const auto &[i, w] : st.terms) {
+      const int j = i < row_of.size() ? row_of[i] : -1;
+      if (j < 0)
+        continue;
+      D.block<2, 2>(2 * k, 2 * j) += lin.obs[k].Jd * w * Jd_inv[j];
+      any = true;
+    }
+  }
+  if (!any)
+    return 0.0;
+  // tr(Q₂ᵀDQ₂) = tr(D) − tr(Q₁ᵀDQ₁): Q₁ (the first three columns of H_f's Q) is thin.
+  const Eigen::MatrixXd Q1 = qr.householderQ() * Eigen::MatrixXd::Identity(2 * m, 3);
+  return D.trace() - (Q1.transpose() * D * Q1).trace();
+}
+
+double UpdaterMSCKF::remove_td_bias(State &state, double bias) {
+  if (bias == 0.0)
+    return 0.0;
+  const Eigen::VectorXd dx = -bias * state.P.col(state.td_index);
+  state.boxplus(dx);
+  return dx(state.td_index);
 }
 
 } // namespace ovton::msckf

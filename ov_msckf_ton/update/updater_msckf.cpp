@@ -22,10 +22,18 @@ double chi2_quantile(double confidence, int dof) {
   return boost::math::quantile(dist, confidence);
 }
 
+/// The observation a usable entry names, in its camera's track.
+const ovton::core::FeatureObservation &track_obs(const ovton::core::Feature &f, const UpdaterMSCKF::Usable &u) {
+  return u.cam == 0 ? f.obs[u.obs_index] : f.more[static_cast<size_t>(u.cam - 1)].obs[u.obs_index];
+}
+
 } // namespace
 
-UpdaterMSCKF::UpdaterMSCKF(const ovton::core::CameraCalib &calib, const UpdaterMSCKFOptions &options)
-    : calib_(calib), opt_(options), camera_(calib) {
+UpdaterMSCKF::UpdaterMSCKF(const ovton::core::CameraCalib &calib, const UpdaterMSCKFOptions &options,
+                           std::vector<ovton::core::CameraCalib> more)
+    : calib_(calib), opt_(options), camera_(calib), more_calib_(std::move(more)) {
+  for (const auto &c : more_calib_)
+    more_cam_.emplace_back(c);
   const double fu = calib.intrinsics(0), fv = calib.intrinsics(1);
   if (!(fu > 0) || !(fv > 0))
     throw ovton::core::UsageError("UpdaterMSCKF: focal lengths must be positive");
@@ -78,19 +86,44 @@ double UpdaterMSCKF::chi2_threshold(int dof) const {
   return opt_.chi2_multiplier * chi2_quantile(opt_.chi2_confidence, dof);
 }
 
-void UpdaterMSCKF::usable_observations(const State &state, const ovton::core::Feature &feature,
-                                       std::vector<std::pair<size_t, const CloneState *>> &out) const {
+void UpdaterMSCKF::usable_observations(const State &state, const ovton::core::Feature &feature, TdObservation td_obs,
+                                       std::vector<Usable> &out) const {
   out.clear();
   for (size_t i = 0; i < feature.obs.size(); ++i) {
     const auto it = state.clones.find(feature.obs[i].t_cam_ns);
     if (it != state.clones.end())
-      out.emplace_back(i, &it->second);
+      out.push_back({i, &it->second, 0});
+  }
+  for (size_t k = 0; k < feature.more.size() && k < more_cam_.size(); ++k) {
+    const auto &obs = feature.more[k].obs;
+    for (size_t i = 0; i < obs.size(); ++i) {
+      const auto it = state.clones.find(obs[i].t_cam_ns);
+      if (it != state.clones.end() && (td_obs != TdObservation::ImagePlane || obs[i].vel_valid))
+        out.push_back({i, &it->second, static_cast<int>(k + 1)});
+    }
   }
 }
 
-UpdaterMSCKF::CameraView UpdaterMSCKF::camera_view(const State &state) const {
+bool UpdaterMSCKF::velocity_of(const VelocityProvider &velocities, const ovton::core::Feature &feature, const Usable &u,
+                               Eigen::Vector2d &vel, int &src) const {
+  if (u.cam == 0)
+    return velocities.velocity(feature, u.obs_index, vel, src);
+  return tracked_.velocity(feature.more[static_cast<size_t>(u.cam - 1)], u.obs_index, vel, src);
+}
+
+UpdaterMSCKF::CameraView UpdaterMSCKF::camera_view(const State &state, int cam) const {
   const CalibState &c = state.calib;
   CameraView v;
+  if (cam > 0) {
+    const ovton::core::CameraCalib &k = more_calib_.at(static_cast<size_t>(cam - 1));
+    v.R_BC = k.T_BC.topLeftCorner<3, 3>();
+    v.p_BC = k.T_BC.topRightCorner<3, 1>();
+    v.cam = &more_cam_[static_cast<size_t>(cam - 1)];
+    v.readout_s = c.readout_s;
+    v.est_readout = c.readout_index >= 0;
+    v.height = k.height;
+    return v;
+  }
   v.est_ext = c.extrinsics_index >= 0;
   v.est_intr = c.intrinsics_index >= 0;
   v.est_readout = c.readout_index >= 0;
@@ -115,20 +148,31 @@ Eigen::Vector2d UpdaterMSCKF::observation_xy(const CameraView &v, const ovton::c
 
 TriangulationResult UpdaterMSCKF::triangulate_feature(const State &state, const ovton::core::Feature &feature,
                                                       TdObservation td_obs, const VelocityProvider &velocities) const {
-  const CameraView view = camera_view(state);
-  usable_observations(state, feature, usable_);
+  const CameraView primary = camera_view(state);
+  usable_observations(state, feature, td_obs, usable_);
   poses_.clear();
   xy_.clear();
-  for (const auto &[i, c] : usable_) {
+  size_t anchor = 0;
+  std::optional<CameraView> other;
+  int other_cam = 0;
+  for (const Usable &u : usable_) {
+    if (u.cam != 0 && u.cam != other_cam) {
+      other = camera_view(state, u.cam);
+      other_cam = u.cam;
+    }
+    const CameraView &view = u.cam == 0 ? primary : *other;
+    const CloneState *c = u.clone;
+    if (u.cam == 0)
+      anchor = poses_.size();
     CameraPose cp;
     cp.R_WC = c->R * view.R_BC;
     cp.p_WC = c->p + c->R * view.p_BC;
     poses_.push_back(cp);
-    const ovton::core::FeatureObservation &o = feature.obs[i];
+    const ovton::core::FeatureObservation &o = track_obs(feature, u);
     Eigen::Vector2d z = observation_xy(view, o);
     Eigen::Vector2d v;
     int src = 0;
-    const bool has_v = velocities.velocity(feature, i, v, src);
+    const bool has_v = velocity_of(velocities, feature, u, v, src);
     if (td_obs == TdObservation::ImagePlane && has_v)
       z -= v * state.td_offset_at(*c);
     if (view.readout_s != 0.0 && has_v)
@@ -141,27 +185,36 @@ TriangulationResult UpdaterMSCKF::triangulate_feature(const State &state, const 
   to.min_parallax_deg = opt_.min_parallax_deg;
   to.max_reproj_rms = opt_.max_reproj_px / (0.5 * (calib_.intrinsics(0) + calib_.intrinsics(1)));
   to.max_iterations = opt_.triangulation_max_iterations;
-  // The newest observation anchors the inverse depth: it is the view the current state knows best.
-  return triangulate(poses_, xy_, poses_.empty() ? 0 : poses_.size() - 1, to);
+  // The primary camera's newest observation anchors the inverse depth: it is the view the current state knows best.
+  return triangulate(poses_, xy_, anchor, to);
 }
 
 bool UpdaterMSCKF::linearize(const State &state, const ovton::core::Feature &feature, const Eigen::Vector3d &p_f,
                              TdObservation td_obs, const VelocityProvider &velocities,
                              FeatureLinearization &out) const {
-  const CameraView view = camera_view(state);
-  const std::vector<std::pair<size_t, const CloneState *>> &usable = usable_;
-  usable_observations(state, feature, usable_);
+  const CameraView primary = camera_view(state);
+  const CameraView &view = primary;
+  const std::vector<Usable> &usable = usable_;
+  usable_observations(state, feature, td_obs, usable_);
   const int m = static_cast<int>(usable.size());
   out.obs.resize(m);
+  std::vector<CameraView> others; // the rig's further cameras, by cam - 1
+  for (int cam = 1; cam <= static_cast<int>(more_cam_.size()); ++cam)
+    others.push_back(camera_view(state, cam));
+  const auto view_of = [&](int cam) -> const CameraView & { return cam == 0 ? primary : others[cam - 1]; };
   bool all_vel = m > 0;
+  out.anchor = 0;
   for (int k = 0; k < m; ++k) {
     FeatureLinearization::Obs &o = out.obs[k];
-    o.obs_index = usable[k].first;
-    o.clone = usable[k].second;
+    o.obs_index = usable[k].obs_index;
+    o.clone = usable[k].clone;
+    o.cam = usable[k].cam;
+    if (o.cam == 0)
+      out.anchor = k;
     o.vel_xy.setZero();
     o.vel_source = kVelocityNone;
     // Queried in every mode: the residual log needs the velocity to diagnose a time offset the model lacks.
-    if (!velocities.velocity(feature, o.obs_index, o.vel_xy, o.vel_source)) {
+    if (!velocity_of(velocities, feature, usable[k], o.vel_xy, o.vel_source)) {
       o.vel_xy.setZero();
       o.vel_source = kVelocityNone;
     }
@@ -180,13 +233,13 @@ bool UpdaterMSCKF::linearize(const State &state, const ovton::core::Feature &fea
   // consistent with the first-estimate poses.
   if (m == 0)
     return false;
-  const CloneState &anchor = *out.obs[m - 1].clone;
+  const CloneState &anchor = *out.obs[out.anchor].clone;
   const Eigen::Vector3d p_f_lin = anchor.R_lin() * (anchor.R.transpose() * (p_f - anchor.p)) + anchor.p_lin();
   // The rolling shutter's velocity per row; the readout column, like t_d's, on all rows of a feature or on none.
   const bool readout = view.readout_s != 0.0 || view.est_readout;
   bool all_readout = readout;
   for (FeatureLinearization::Obs &o : out.obs) {
-    o.has_readout_vel = readout && readout_velocity(view, *o.clone, p_f, p_f_lin, o.vel_xy,
+    o.has_readout_vel = readout && readout_velocity(view_of(o.cam), *o.clone, p_f, p_f_lin, o.vel_xy,
                                                     o.vel_source != kVelocityNone, o.vel_readout, nullptr);
     all_readout = all_readout && o.has_readout_vel;
   }
@@ -218,11 +271,14 @@ bool UpdaterMSCKF::linearize(const State &state, const ovton::core::Feature &fea
   for (int k = 0; k < m; ++k) {
     FeatureLinearization::Obs &o = out.obs[k];
     const CloneState &c = *o.clone;
+    const CameraView &view = view_of(o.cam);
     if (!project_in_clone(c.R, c.p, view.R_BC, view.p_BC, p_f, zhat, &p_C) ||
         !project_in_clone(c.R_lin(), c.p_lin(), view.R_BC, view.p_BC, p_f_lin, z_lin, nullptr, &J))
       return false;
     o.depth = p_C.z();
-    const ovton::core::FeatureObservation &obs = feature.obs[o.obs_index];
+    const ovton::core::FeatureObservation &obs = track_obs(feature, usable[k]);
+    // The extrinsics and intrinsics in the state are the primary camera's: the others' rows have no such columns.
+    const bool ext_cols = view.est_ext, intr_cols = view.est_intr;
     // The image-plane shifts: the image was taken when the point was V·(t_d − td_ref) away, and row v of it
     // V·ρ·t_r later (rolling shutter).
     Eigen::Vector2d shift = Eigen::Vector2d::Zero();
@@ -235,7 +291,7 @@ bool UpdaterMSCKF::linearize(const State &state, const ovton::core::Feature &fea
       readout_velocity(view, c, p_f, p_f_lin, o.vel_xy, true, o.vel_readout, &Jv);
     }
     Eigen::Matrix2d Jd;
-    if (view.est_intr) {
+    if (intr_cols) {
       // With the intrinsics in the state the measurement is the raw pixel: r = uv − π_d(k; ẑ + shift), exact in k.
       const Eigen::Vector2d zs = zhat + shift;
       out.r.segment<2>(2 * k) = obs.uv - view.cam->distort(zs, &Jd);
@@ -255,7 +311,7 @@ bool UpdaterMSCKF::linearize(const State &state, const ovton::core::Feature &fea
     if (o.td_column)
       out.H_x.block<2, 1>(2 * k, c_td) = Jd * o.vel_xy;
     o.Jd = Jd;
-    if (view.est_ext) {
+    if (ext_cols) {
       out.H_x.block<2, 3>(2 * k, c_ext) = Jd * J.H_ext_theta;
       out.H_x.block<2, 3>(2 * k, c_ext + 3) = Jd * J.H_ext_p;
     }
@@ -265,7 +321,7 @@ bool UpdaterMSCKF::linearize(const State &state, const ovton::core::Feature &fea
       out.H_x.block<2, 3>(2 * k, 6 * k) += tr * Jd * Jv.H_theta;
       out.H_x.block<2, 3>(2 * k, 6 * k + 3) += tr * Jd * Jv.H_p;
       out.H_f.block<2, 3>(2 * k, 0) += tr * Jd * Jv.H_f;
-      if (view.est_ext) {
+      if (ext_cols) {
         out.H_x.block<2, 3>(2 * k, c_ext) += tr * Jd * Jv.H_ext_theta;
         out.H_x.block<2, 3>(2 * k, c_ext + 3) += tr * Jd * Jv.H_ext_p;
       }
@@ -291,63 +347,22 @@ bool UpdaterMSCKF::readout_velocity(const CameraView &view, const CloneState &c,
   return !J || predicted_image_velocity(c.R_lin(), c.p_lin(), view.R_BC, view.p_BC, p_lin_f, c.motion, at_lin, J);
 }
 
-double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ovton::core::Feature &feature,
-                                      const VelocityProvider &velocities, const FeatureQR &qr) {
-  const int m = static_cast<int>(lin.obs.size());
-  if (m == 0 || !lin.obs.front().td_column)
-    return 0.0;
-  // Row of each observation index (-1: no clone, so its noise is in no row).
-  std::vector<int> row_of(feature.obs.size(), -1);
-  for (int k = 0; k < m; ++k)
-    row_of[lin.obs[k].obs_index] = k;
-  // D: row block k's t_d entry is J_k·V_k with δV_k = Σ W_j·δxy_j and xy_j's noise J_j⁻¹·n_j (n_j the pixel noise of
-  // row block j, as the residual carries it), so D_kj = J_k·W_j·J_j⁻¹.
-  std::vector<Eigen::Matrix2d> Jd_inv(m);
-  for (int k = 0; k < m; ++k)
-    Jd_inv[k] = lin.obs[k].Jd.inverse();
-  Eigen::MatrixXd D = Eigen::MatrixXd::Zero(2 * m, 2 * m);
-  VelocityStencil st;
-  bool any = false;
-  for (int k = 0; k < m; ++k) {
-    velocities.stencil(feature, lin.obs[k].obs_index, st);
-    for (const auto &[i, w] : st.terms) {
-      const int j = i < row_of.size() ? row_of[i] : -1;
-      if (j < 0)
-        continue;
-      D.block<2, 2>(2 * k, 2 * j) += lin.obs[k].Jd * w * Jd_inv[j];
-      any = true;
-    }
-  }
-  if (!any)
-    return 0.0;
-  // tr(Q₂ᵀDQ₂) = tr(D) − tr(Q₁ᵀDQ₁): Q₁ (the first three columns of H_f's Q) is thin.
-  const Eigen::MatrixXd Q1 = qr.householderQ() * Eigen::MatrixXd::Identity(2 * m, 3);
-  return D.trace() - (Q1.transpose() * D * Q1).trace();
-}
-
 double UpdaterMSCKF::td_bias_to_remove(const FeatureLinearization &lin, const ovton::core::Feature &feature,
                                        const VelocityProvider &velocities, const FeatureQR &qr) const {
   return opt_.td_velocity_debias != 0.0 ? opt_.td_velocity_debias * td_velocity_bias(lin, feature, velocities, qr)
                                         : 0.0;
 }
 
-double UpdaterMSCKF::remove_td_bias(State &state, double bias) {
-  if (bias == 0.0)
-    return 0.0;
-  const Eigen::VectorXd dx = -bias * state.P.col(state.td_index);
-  state.boxplus(dx);
-  return dx(state.td_index);
-}
-
 void UpdaterMSCKF::append_records(const State &state, const ovton::core::Feature &feature,
-                                  const FeatureLinearization *lin,
-                                  const std::vector<std::pair<size_t, const CloneState *>> &usable,
+                                  const FeatureLinearization *lin, const std::vector<Usable> &usable,
                                   TdObservation td_obs, const VelocityProvider &velocities, const Eigen::Vector3d &p_f,
                                   double chi2, double threshold, ResidualStatus status,
                                   std::vector<ResidualRecord> &log) const {
   for (size_t k = 0; k < usable.size(); ++k) {
-    const size_t i = usable[k].first;
-    const CloneState &c = *usable[k].second;
+    if (usable[k].cam != 0)
+      continue; // the residual log's rows are the primary camera's
+    const size_t i = usable[k].obs_index;
+    const CloneState &c = *usable[k].clone;
     const ovton::core::FeatureObservation &o = feature.obs[i];
     ResidualRecord rec;
     rec.update_id = update_count_;
@@ -422,7 +437,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
   for (const ovton::core::Feature *f : features) {
     if (!f)
       throw ovton::core::UsageError("UpdaterMSCKF::update: null feature");
-    usable_observations(state, *f, usable_);
+    usable_observations(state, *f, td_obs, usable_);
     if (static_cast<int>(usable_.size()) < opt_.min_observations) {
       ++st.too_few_observations;
       continue;
@@ -440,7 +455,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
   const double sigma2 = opt_.sigma_px * opt_.sigma_px;
   size_t n_acc = 0;
   double td_bias = 0.0; // Σ_f tr(Q₂ᵀDQ₂) (td_velocity_debias)
-  std::vector<std::pair<size_t, const CloneState *>> usable;
+  std::vector<Usable> usable;
   for (const auto &[count, fp] : order) {
     const ovton::core::Feature &f = *fp;
     const TriangulationResult tri = triangulate_feature(state, f, td_obs, velocities);
@@ -449,7 +464,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
       if (tri.quality == TriangulationQuality::LowParallax || tri.quality == TriangulationQuality::IllConditioned)
         ++st.low_parallax;
       if (log) {
-        usable_observations(state, f, usable);
+        usable_observations(state, f, td_obs, usable);
         append_records(state, f, nullptr, usable, td_obs, velocities, tri.p_W, ResidualRecord::kNaN,
                        ResidualRecord::kNaN, ResidualStatus::TriangulationFailed, *log);
       }
@@ -459,6 +474,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
       accepted_.emplace_back();
     Accepted &a = accepted_[n_acc];
     a.cols = lin_.cols;
+    a.repeated_cols = std::any_of(lin_.obs.begin(), lin_.obs.end(), [](const auto &o) { return o.cam != 0; });
     a.H = lin_.H_x;
     a.r = lin_.r;
     // Projected copies: lin_ keeps the pre-projection residuals that the log reports. With correlated track errors
@@ -482,7 +498,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
     if (log) {
       usable.clear();
       for (const auto &o : lin_.obs)
-        usable.emplace_back(o.obs_index, o.clone);
+        usable.push_back({o.obs_index, o.clone, o.cam});
       append_records(state, f, &lin_, usable, td_obs, velocities, tri.p_W, chi2, thr,
                      pass ? ResidualStatus::Accepted : ResidualStatus::GatedChi2, *log);
     }
@@ -527,8 +543,14 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
   for (size_t k = 0; k < n_acc; ++k) {
     const Accepted &a = accepted_[k];
     const int rows = static_cast<int>(a.r.size());
-    for (size_t j = 0; j < a.cols.size(); ++j)
-      H.block(row, where_[a.cols[j]], rows, 1) = a.H.col(static_cast<Eigen::Index>(j));
+    // A rig's clone seen by two cameras repeats its columns: they add.
+    for (size_t j = 0; j < a.cols.size(); ++j) {
+      auto dst = H.block(row, where_[a.cols[j]], rows, 1);
+      if (a.repeated_cols)
+        dst += a.H.col(static_cast<Eigen::Index>(j));
+      else
+        dst = a.H.col(static_cast<Eigen::Index>(j));
+    }
     r.segment(row, rows) = a.r;
     row += rows;
   }

@@ -46,7 +46,8 @@ struct UpdateStats {
 /// window.
 struct FeatureLinearization {
   struct Obs {
-    size_t obs_index = 0;
+    size_t obs_index = 0; ///< in the track of camera `cam` (ovton::core::Feature::more for cam > 0)
+    int cam = 0;
     const CloneState *clone = nullptr; ///< points into State::clones: valid until the state changes
     Eigen::Vector2d vel_xy = Eigen::Vector2d::Zero();
     int vel_source = kVelocityNone;
@@ -56,7 +57,10 @@ struct FeatureLinearization {
     Eigen::Vector2d vel_readout = Eigen::Vector2d::Zero(); ///< the velocity of the rolling-shutter shift
     bool has_readout_vel = false;
   };
+  /// Columns may repeat (a clone seen by two cameras of a rig has six per observation): sums of repeats are what
+  /// count (merge_repeated_columns).
   std::vector<int> cols;
+  int anchor = 0;                               ///< obs index of the anchor: the primary camera's newest
   Eigen::MatrixXd H_x;                          ///< 2m × cols.size()
   Eigen::Matrix<double, Eigen::Dynamic, 3> H_f; ///< 2m × 3, w.r.t. the world feature position
   Eigen::VectorXd r;                            ///< 2m, z − h(x̂, p̂_f) in normalised units
@@ -66,7 +70,9 @@ struct FeatureLinearization {
 /// Not thread-safe: const methods share scratch buffers. Use one updater per filter.
 class UpdaterMSCKF {
 public:
-  explicit UpdaterMSCKF(const ovton::core::CameraCalib &calib, const UpdaterMSCKFOptions &options = {});
+  /// `more`: the rig's further cameras (Feature::more), with calibration fixed at these values.
+  explicit UpdaterMSCKF(const ovton::core::CameraCalib &calib, const UpdaterMSCKFOptions &options = {},
+                        std::vector<ovton::core::CameraCalib> more = {});
 
   /// One MSCKF update with the given features (typically lost ones and those observed in the clone that leaves the
   /// window). Observations without a clone are ignored. Appends one ResidualRecord per observation of each feature
@@ -98,6 +104,8 @@ public:
   /// When H has more rows than columns, replaces (H, r) by (R, Q₁ᵀr) of H's QR: the same information in at most
   /// dim rows, noise still σ²I.
   static void compress(Eigen::MatrixXd &H, Eigen::VectorXd &r);
+  /// Sums the H_x columns that name the same state index into one (a rig: clones seen by several cameras).
+  static void merge_repeated_columns(FeatureLinearization &lin);
   /// L with L Lᵀ = C, the AR(1) correlation of a track's stacked rows (C_ij = ρ^|i−j| per coordinate; rows even).
   static Eigen::MatrixXd track_noise_factor(Eigen::Index rows, double rho);
   /// The noise factor of one feature's nullspace-projected rows for AR(1) errors (covariance_track_correlation):
@@ -146,7 +154,8 @@ public:
     int height = 0;
     bool est_ext = false, est_intr = false, est_readout = false;
   };
-  CameraView camera_view(const State &state) const;
+  /// Camera `cam` of the rig (0: the primary). The further cameras' calibration is fixed; the readout is the rig's.
+  CameraView camera_view(const State &state, int cam = 0) const;
   /// The observation's undistorted normalised coordinates under the view's intrinsics.
   Eigen::Vector2d observation_xy(const CameraView &v, const ovton::core::FeatureObservation &o) const;
   /// ρ = v/H − ½: the observation's row time relative to the image's middle row, in readouts.
@@ -158,25 +167,40 @@ public:
                         const Eigen::Vector3d &p_lin_f, const Eigen::Vector2d &tracked, bool has_tracked,
                         Eigen::Vector2d &vel, CloneMeasurementJacobians *J) const;
 
+  /// One observation with a clone: its index in camera `cam`'s track.
+  struct Usable {
+    size_t obs_index;
+    const CloneState *clone;
+    int cam;
+  };
+
 private:
-  /// Observations of `feature` that have a clone, as (obs index, clone).
-  void usable_observations(const State &state, const ovton::core::Feature &feature,
-                           std::vector<std::pair<size_t, const CloneState *>> &out) const;
+  /// Observations of `feature` that have a clone: the primary camera's first, then each further camera's. In the
+  /// image-plane mode a further camera's observation needs its own velocity (eq. 2): without one its rows would
+  /// deny t_d's shift of the others (the all-or-nothing rule of linearize), so it is left out.
+  void usable_observations(const State &state, const ovton::core::Feature &feature, TdObservation td_obs,
+                           std::vector<Usable> &out) const;
+  /// The velocity of a usable observation: `velocities` for the primary camera, eq. 2 for the others.
+  bool velocity_of(const VelocityProvider &velocities, const ovton::core::Feature &feature, const Usable &u,
+                   Eigen::Vector2d &vel, int &src) const;
   void append_records(const State &state, const ovton::core::Feature &feature, const FeatureLinearization *lin,
-                      const std::vector<std::pair<size_t, const CloneState *>> &usable, TdObservation td_obs,
-                      const VelocityProvider &velocities, const Eigen::Vector3d &p_f, double chi2, double threshold,
-                      ResidualStatus status, std::vector<ResidualRecord> &log) const;
+                      const std::vector<Usable> &usable, TdObservation td_obs, const VelocityProvider &velocities,
+                      const Eigen::Vector3d &p_f, double chi2, double threshold, ResidualStatus status,
+                      std::vector<ResidualRecord> &log) const;
 
   ovton::core::CameraCalib calib_;
   UpdaterMSCKFOptions opt_;
   Eigen::Matrix3d R_BC_;
   Eigen::Vector3d p_BC_;
   ovton::core::CameraModel camera_;
+  std::vector<ovton::core::CameraCalib> more_calib_;
+  std::vector<ovton::core::CameraModel> more_cam_;
+  VelocityProvider tracked_;       ///< eq. 2, for the further cameras' tracks
   std::vector<double> chi2_table_; ///< index = dof
   uint64_t update_count_ = 0;
 
   // Scratch reused across features and updates.
-  mutable std::vector<std::pair<size_t, const CloneState *>> usable_;
+  mutable std::vector<Usable> usable_;
   mutable std::vector<CameraPose> poses_;
   mutable std::vector<Eigen::Vector2d> xy_;
   FeatureLinearization lin_;
@@ -184,6 +208,7 @@ private:
   FeatureQR qr_;                                       ///< the feature's H_f QR, kept to reuse its storage
   struct Accepted {
     std::vector<int> cols;
+    bool repeated_cols = false; ///< a rig's observations: some clone's columns appear twice
     Eigen::MatrixXd H;
     Eigen::VectorXd r;
     Eigen::MatrixXd dR; ///< the projected rows' extra noise for the reported covariance (covariance_track_correlation)

@@ -36,6 +36,8 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ovton::core::
       ++stats.init_rejected;
       continue;
     }
+    // A rig's clone seen by two cameras has its columns twice; the landmark's covariance blocks want them once.
+    UpdaterMSCKF::merge_repeated_columns(lin_);
     // Correlated track errors: the window's rows whitened as in the MSCKF; the observations after it are then
     // differenced against their predecessor (update()), so the landmark's whole track is whitened.
     const double rho = opt_.track_correlation;
@@ -77,7 +79,7 @@ void UpdaterSLAM::initialize(State &state, const std::vector<const ovton::core::
     l.id = f->id;
     l.p_W = tri.p_W + R1inv * r1;
     // First estimate in the anchor clone's first-estimate frame, as the MSCKF linearises (UpdaterMSCKF::linearize).
-    const CloneState &anchor = *lin_.obs.back().clone;
+    const CloneState &anchor = *lin_.obs[lin_.anchor].clone;
     l.p_fej = anchor.R_lin() * (anchor.R.transpose() * (l.p_W - anchor.p)) + anchor.p_lin();
     l.t_init_ns = t_cam_ns;
     const LandmarkBlock block = landmark_block(state.P, lin_.cols, H1, R1inv, sigma2 * Eigen::Matrix3d::Identity());
