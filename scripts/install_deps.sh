@@ -1,5 +1,9 @@
 #!/usr/bin/env bash
 # Installs the Debian packages the build needs, and any given as arguments (skips apt when everything is already there).
+# --minimal: what the `ovton` binary needs (scripts/quickstart.sh): OpenCV's six modules one by one instead of the
+# libopencv-dev metapackage (every module, with Qt, VTK, FFmpeg, ...), no python3; GoogleTest stays (0.6 MB), so that
+# the build folder is configured as scripts/test.sh configures it. cmake/ovtonOpenCV.cmake finds the modules without
+# OpenCVConfig.cmake; what it saves: docs/quickstart.md, "What apt installs".
 # --sanitize adds clang and its runtime libraries (ASan, UBSan, libFuzzer) for scripts/sanitize.sh and scripts/fuzz.sh;
 # other arguments are extra packages a script needs (check_format.sh: clang-format).
 set -euo pipefail
@@ -10,16 +14,25 @@ set -euo pipefail
 # libdeflate-dev: the fast decoder of 8-bit gray PNGs (ov_core/io/png_gray.cpp; optional in CMake, cv::imread without).
 # libzstd-dev, liblz4-dev, zlib1g-dev, libsqlite3-dev: MCAP chunks (zstd, lz4, CRC-32) and rosbag2 .db3 files; the MCAP
 # and CDR parsing is ovton's own (no library for them is packaged).
-PKGS=(build-essential cmake ccache libeigen3-dev libopencv-dev libyaml-cpp-dev libboost-dev libboost-program-options-dev
-      libgtest-dev python3 librosbag-storage-dev libsensor-msgs-dev libroscpp-core-dev libconsole-bridge-dev libroslz4-dev
-      libdeflate-dev libzstd-dev liblz4-dev zlib1g-dev libsqlite3-dev)
+PKGS=(build-essential cmake ccache libeigen3-dev libyaml-cpp-dev libboost-dev libboost-program-options-dev
+      librosbag-storage-dev libsensor-msgs-dev libroscpp-core-dev libconsole-bridge-dev libroslz4-dev libdeflate-dev
+      libzstd-dev liblz4-dev zlib1g-dev libsqlite3-dev)
+OPENCV_MODULES=(libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-video-dev
+                libopencv-features2d-dev libopencv-calib3d-dev)
+MINIMAL=("${OPENCV_MODULES[@]}" libgtest-dev)
+FULL=(libopencv-dev libgtest-dev python3)
+MINIMAL_ONLY=""
 for a in "$@"; do
-  if [ "$a" = "--sanitize" ]; then
+  if [ "$a" = "--minimal" ]; then
+    FULL=("${MINIMAL[@]}")
+    MINIMAL_ONLY=yes
+  elif [ "$a" = "--sanitize" ]; then
     PKGS+=(clang libclang-rt-14-dev)
   else
     PKGS+=("$a")
   fi
 done
+PKGS+=("${FULL[@]}")
 # The MCAP writer and reader that are not ovton's own (scripts/mcap_tools: Foxglove's @mcap/core, its ROS 2 CDR
 # serializer), for the tests that check ovton's MCAP files against them (tests/test_mcap_external.cpp). Optional:
 # without node/npm or the registry those tests skip with a message.
@@ -37,7 +50,7 @@ npm_tools() {
     echo "install_deps: npm ci in scripts/mcap_tools failed (offline?): the independent MCAP writer's tests will skip"
   fi
 }
-npm_tools
+[ -n "$MINIMAL_ONLY" ] || npm_tools # the quickstart runs no test
 
 missing=()
 for p in "${PKGS[@]}"; do

@@ -66,6 +66,10 @@ TEST_F(TdSearchSim, NoRotationChangeKeepsThePriorAndSaysWhy) {
   EXPECT_NE(r.why.find("too little rotation"), std::string::npos) << r.summary();
   EXPECT_NE(r.summary().find("not used"), std::string::npos);
   EXPECT_TRUE(r.weak_excitation);
+  EXPECT_NE(r.caution().find("weakly observable"), std::string::npos); // what run and compare print
+  TdSearchResult strong = r;
+  strong.weak_excitation = false;
+  EXPECT_EQ(strong.caution(), "");
 }
 
 // The built-in agile flight in its 6 m room: walls 1 m away and an attitude oscillating at 3-3.7 rad/s, so that the

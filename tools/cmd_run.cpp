@@ -176,11 +176,7 @@ int cmd_run(const Args &args) {
     std::cout << "final t_d " << r.traj.back().td_s * 1e3 << " ms (sigma " << r.traj.back().td_sigma_s * 1e3
               << " ms)\n";
   if (r.report.td_search && r.report.td_search->weak_excitation)
-    // A gentle flight with a realistic IMU pulls t_d confidently off the truth (docs/robustness.md, "Weak excitation").
-    std::cout << "caution: the rotation rate barely changes over the first images (RMS angular acceleration "
-              << r.report.td_search->rms_alpha
-              << " rad/s^2): t_d is weakly observable, its estimate can be pulled by IMU "
-              << "errors the model lacks and its sigma can be optimistic\n";
+    std::cout << r.report.td_search->caution() << "\n";
   if (!nees_log.empty()) {
     std::ofstream out(nees_log);
     if (!out)

@@ -150,6 +150,11 @@ CompareResult run_compare(const ovton::core::Dataset &data, const CompareRequest
     info.notes.push_back("coarse t_d search (the same in every mode that estimates t_d): " + search->summary());
     if (req.log)
       *req.log << "compare: " << info.notes.back() << "\n" << std::flush;
+    if (search->weak_excitation) {
+      info.notes.push_back(search->caution());
+      if (req.log)
+        *req.log << "compare: " << info.notes.back() << "\n" << std::flush;
+    }
   }
   res.rows = ovton::eval::evaluate_runs(res.runs, data, req.report);
   res.files = ovton::eval::write_report(req.out_dir, res.runs, res.rows, data, info, req.report);

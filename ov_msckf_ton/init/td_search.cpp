@@ -39,6 +39,19 @@ std::string TdSearchResult::summary() const {
   return buf;
 }
 
+std::string TdSearchResult::caution() const {
+  if (!weak_excitation)
+    return "";
+  // A gentle flight with a realistic IMU pulls t_d confidently off the truth (docs/robustness.md, "Weak excitation").
+  char buf[320];
+  std::snprintf(buf, sizeof buf,
+                "caution: the rotation rate barely changes over the first images (RMS angular acceleration %g "
+                "rad/s^2): t_d is weakly observable, its estimate can be pulled by IMU errors the model lacks and its "
+                "sigma can be optimistic",
+                rms_alpha);
+  return buf;
+}
+
 TdSearch::TdSearch(const ovton::core::CameraCalib &cam, double prior_td_s, const TdSearchOptions &opt)
     : cam_(cam), prior_s_(prior_td_s), opt_(opt) {
   res_.prior_s = res_.td_s = prior_td_s;

@@ -39,6 +39,8 @@ struct TdSearchResult {
   double residual_sigma = 0.0; ///< rad/s per axis at the best candidate
   /// One line for the run summary, e.g. "t_d 10.2 ± 0.4 ms (search 160 ± 200 ms, images 0.0-8.0 s, 159 pairs, 1.3 s)".
   std::string summary() const;
+  /// When weak_excitation: the caution `ovton run` and `ovton compare` print beside the result ("" otherwise).
+  std::string caution() const;
 };
 
 /// The search on a stream: IMU readings and images' features arrive in time order, and the search decides once a
