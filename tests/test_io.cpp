@@ -111,7 +111,8 @@ TEST(EurocReaderBadInput, RowErrorsNameFileAndLine) {
       {"imu0/data.csv", 6, "1010000000,0.01,0.02,0.03,0.1,0.2,9.81", "non-monotonic timestamp"},
       {"imu0/data.csv", 7, "1020000000,0.01,0.02,0.03,0.1,0.2,9.81", "duplicate timestamp"},
       {"imu0/data.csv", 8, "1030000000,0.01,nan,0.03,0.1,0.2,9.81", "NaN"},
-      {"imu0/data.csv", 10, "1900000000,0.01,0.02,0.03,0.1,0.2,9.81", "IMU gap"},
+      // The last reading 305 ms after the one before: within a second of the images, longer than is propagated through.
+      {"imu0/data.csv", 202, "2300000000,0.01,0.02,0.03,0.1,0.2,9.81", "IMU gap"},
       {"cam0/data.csv", 3, "1100000000,missing.png", "listed image missing"},
       {"cam0/data.csv", 4, "1100000000,1100000000.png", "duplicate image stamp"},
       {"cam0/data.csv", 2, "10x50000000,1050000000.png", "malformed image stamp"},

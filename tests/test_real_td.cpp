@@ -12,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <optional>
 
 namespace {
@@ -49,6 +50,45 @@ RealRun run_perturbed_cut(const ovton::sim::TdModelOptions &td, std::optional<ov
   r.ape_m = e.ape_rmse_m;
   r.are_deg = e.are_rmse_deg;
   return r;
+}
+
+/// The real cut as a folder of symlinks in `dir` whose mav0/SENSOR/data.csv is rewritten line by line: `edit` gets each
+/// data line (not comments) and its number from 1, and returns what to write for it ("" drops it).
+std::filesystem::path edited_cut(const ovtest::TempDir &dir, const std::string &sensor,
+                                 const std::function<std::string(const std::string &, int)> &edit) {
+  const std::filesystem::path cut = ovtest::shared_data() + "/euroc_v1_01_moving", out = dir / "cut",
+                              mav = out / "mav0";
+  std::filesystem::create_directories(mav / sensor);
+  for (const auto &e : std::filesystem::directory_iterator(cut / "mav0"))
+    if (e.path().filename() != sensor)
+      std::filesystem::create_directory_symlink(e.path(), mav / e.path().filename());
+  for (const auto &e : std::filesystem::directory_iterator(cut / "mav0" / sensor))
+    if (e.path().filename() != "data.csv")
+      std::filesystem::create_symlink(e.path(), mav / sensor / e.path().filename());
+  std::ifstream in(cut / "mav0" / sensor / "data.csv");
+  std::ofstream o(mav / sensor / "data.csv");
+  std::string line;
+  int row = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#')
+      o << line << '\n';
+    else if (const std::string w = edit(line, ++row); !w.empty())
+      o << w << '\n';
+  }
+  return out;
+}
+
+/// APE of the shipped config from the ground truth on `folder`, and the run's report.
+double shipped_ape(const std::filesystem::path &folder, ovtest::EstimatorRun *run = nullptr) {
+  ovton::msckf::VioOptions opt =
+      ovton::msckf::load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
+  opt.init.mode = ovton::msckf::InitMode::GroundTruth;
+  const ovton::core::Dataset d = ovton::core::load_dataset(folder);
+  ovtest::EstimatorRun r = ovtest::run_estimator(d, opt);
+  const double ape = ovton::eval::evaluate(r.traj, d.groundtruth, {}, ovton::eval::EvalOptions{}).ape_rmse_m;
+  if (run)
+    *run = std::move(r);
+  return ape;
 }
 
 } // namespace
@@ -144,46 +184,64 @@ TEST(RealMovingCut, FrozenFramesAreDroppedNotTakenForStandingStill) {
   if (!std::filesystem::is_directory(cut))
     GTEST_SKIP() << "../shared/data/euroc_v1_01_moving not found";
   ovtest::TempDir dir;
-  const std::filesystem::path frozen_dir = dir / "frozen", mav = frozen_dir / "mav0";
-  std::filesystem::create_directories(mav / "cam0");
-  for (const auto &e : std::filesystem::directory_iterator(cut / "mav0"))
-    if (e.path().filename() != "cam0")
-      std::filesystem::create_directory_symlink(e.path(), mav / e.path().filename());
-  std::filesystem::create_directory_symlink(cut / "mav0" / "cam0" / "data", mav / "cam0" / "data");
-  std::filesystem::copy_file(cut / "mav0" / "cam0" / "sensor.yaml", mav / "cam0" / "sensor.yaml");
-  std::ifstream in(cut / "mav0" / "cam0" / "data.csv");
-  std::ofstream out(mav / "cam0" / "data.csv");
-  std::string line, prev_file;
-  int row = 0, frozen = 0;
-  while (std::getline(in, line)) {
+  std::string prev_file;
+  int frozen = 0;
+  const std::filesystem::path frozen_dir = edited_cut(dir, "cam0", [&](const std::string &line, int row) {
     const size_t comma = line.find(',');
-    if (line.empty() || line[0] == '#' || comma == std::string::npos) {
-      out << line << '\n';
-      continue;
-    }
-    if (++row % 10 == 0 && !prev_file.empty()) {
-      out << line.substr(0, comma) << ',' << prev_file << '\n';
+    if (row % 10 == 0 && !prev_file.empty()) {
       ++frozen;
-    } else {
-      out << line << '\n';
-      prev_file = line.substr(comma + 1);
+      return line.substr(0, comma) + ',' + prev_file;
     }
-  }
-  out.close();
-  ovton::msckf::VioOptions opt =
-      ovton::msckf::load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
-  opt.init.mode = ovton::msckf::InitMode::GroundTruth;
-  const auto ape = [&](const std::filesystem::path &folder, long *dropped) {
-    const ovton::core::Dataset d = ovton::core::load_dataset(folder);
-    const ovtest::EstimatorRun r = ovtest::run_estimator(d, opt);
-    *dropped = r.report.counters.frozen_frames;
-    return ovton::eval::evaluate(r.traj, d.groundtruth, {}, ovton::eval::EvalOptions{}).ape_rmse_m;
-  };
-  long dropped_clean = -1, dropped = -1;
-  const double clean = ape(cut, &dropped_clean), with_frozen = ape(frozen_dir, &dropped);
+    prev_file = line.substr(comma + 1);
+    return line;
+  });
+  ovtest::EstimatorRun clean_run, frozen_run;
+  const double clean = shipped_ape(cut, &clean_run), with_frozen = shipped_ape(frozen_dir, &frozen_run);
+  const long dropped = frozen_run.report.counters.frozen_frames;
   std::cout << "[ measured ] real cut, " << frozen << " frozen frames: APE " << with_frozen * 1e3 << " mm (clean "
-            << clean * 1e3 << " mm), " << dropped << " frames dropped (clean run: " << dropped_clean << ")\n";
-  EXPECT_EQ(dropped_clean, 0);
+            << clean * 1e3 << " mm), " << dropped
+            << " frames dropped (clean run: " << clean_run.report.counters.frozen_frames << ")\n";
+  EXPECT_EQ(clean_run.report.counters.frozen_frames, 0);
   EXPECT_GE(dropped, frozen - 1); // the first may fall before the filter moves
   EXPECT_LE(with_frozen, 1.5 * clean);
+}
+
+// IMU packets dropped (phones, USB IMUs): a 60 ms gap mid-flight is propagated through and reported, a 300 ms gap 85 s
+// after the last image is never read; both refused the whole recording before. A 300 ms gap mid-flight is refused by
+// its line.
+TEST(RealMovingCut, ShortImuGapsArePropagatedThroughAndLongOnesNamed) {
+  OVTEST_REQUIRE_SHARED_DATA();
+  const std::filesystem::path cut = ovtest::shared_data() + "/euroc_v1_01_moving";
+  if (!std::filesystem::is_directory(cut))
+    GTEST_SKIP() << "../shared/data/euroc_v1_01_moving not found";
+  const ovton::core::Dataset d = ovton::core::load_dataset(cut);
+  const int64_t mid = (d.images.front().t_cam_ns + d.images.back().t_cam_ns) / 2,
+                late = d.images.back().t_cam_ns + 85000000000LL;
+  const auto drop = [](int64_t from, int64_t ms) {
+    return [from, ms](const std::string &line, int) {
+      const int64_t t = std::stoll(line.substr(0, line.find(',')));
+      return t > from && t < from + ms * 1000000 ? std::string() : line;
+    };
+  };
+  const auto both = [&](const std::string &line, int row) {
+    return drop(mid, 60)(line, row).empty() ? std::string() : drop(late, 300)(line, row);
+  };
+  ovtest::TempDir dir, dir_long;
+  const std::filesystem::path gaps = edited_cut(dir, "imu0", both);
+  const ovton::core::Dataset g = ovton::core::load_dataset(gaps);
+  EXPECT_EQ(g.imu_gaps.count, 1) << g.imu_gaps.summary(); // the late one is not counted
+  EXPECT_NEAR(g.imu_gaps.longest_s, 0.065, 0.006);
+  const double clean = shipped_ape(cut), with_gap = shipped_ape(gaps);
+  std::cout << "[ measured ] real cut with a 60 ms IMU gap mid-flight and a 300 ms one 85 s after the images: APE "
+            << with_gap * 1e3 << " mm (clean " << clean * 1e3 << " mm); " << g.imu_gaps.summary() << "\n";
+  EXPECT_LE(with_gap, 1.5 * clean);
+  const std::filesystem::path long_gap = edited_cut(dir_long, "imu0", drop(mid, 300));
+  try {
+    ovton::core::load_dataset(long_gap);
+    ADD_FAILURE() << "a 300 ms IMU gap mid-flight was accepted";
+  } catch (const ovton::core::DataError &e) {
+    EXPECT_NE(std::string(e.what()).find("imu0/data.csv"), std::string::npos) << e.what();
+    EXPECT_GT(e.line(), 0) << e.what();
+    EXPECT_NE(std::string(e.what()).find("IMU gap"), std::string::npos) << e.what();
+  }
 }

@@ -1,5 +1,6 @@
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/csv.h"
+#include "ov_core/io/imu_gaps.h"
 #include "ov_core/io/trajectory_io.h"
 #include "ov_core/io/yaml_file.h"
 #include "ov_core/types/errors.h"
@@ -201,16 +202,14 @@ std::vector<ImageEntry> read_image_list(const std::string &csv, const std::strin
   return out;
 }
 
-std::vector<ImuData> read_imu_csv(const std::string &csv, double rate_hz) {
+/// The IMU log; `lines` (when given) receives each reading's line in the file, for errors found later.
+std::vector<ImuData> read_imu_csv(const std::string &csv, double rate_hz, std::vector<long> *lines_out = nullptr) {
   TextTableReader r(csv, ',');
   std::vector<ImuData> out;
   out.reserve(1 << 16);
   std::vector<int64_t> stamps;
   std::vector<long> lines;
   std::vector<std::string> f;
-  // A hole of more than a few nominal periods breaks propagation silently; reject it loudly. (rate_hz is checked to
-  // lie in a sensor's range when it is read, so the period is finite.)
-  const int64_t max_gap_ns = rate_hz > 0 ? static_cast<int64_t>(10.0 / rate_hz * 1e9) : 100000000;
   while (r.next(f)) {
     if (f.size() != 7)
       r.fail("expected 7 columns (timestamp, gyro xyz, accel xyz), found " + std::to_string(f.size()));
@@ -226,12 +225,6 @@ std::vector<ImuData> read_imu_csv(const std::string &csv, double rate_hz) {
         r.fail("accel value " + f[4 + i] + " m/s^2 is beyond any real accelerometer's range (" +
                std::to_string(kMaxAccelMS2) + " m/s^2)");
     }
-    if (!out.empty()) {
-      const int64_t dt = d.t_imu_ns - out.back().t_imu_ns; // both stamps in [0, kMaxStampNs]: no overflow
-      if (dt > max_gap_ns)
-        r.fail("IMU gap of " + std::to_string(dt * 1e-6) + " ms before this row (rate " + std::to_string(rate_hz) +
-               " Hz)");
-    }
     stamps.push_back(d.t_imu_ns);
     lines.push_back(r.line());
     out.push_back(d);
@@ -239,7 +232,22 @@ std::vector<ImuData> read_imu_csv(const std::string &csv, double rate_hz) {
   if (out.size() < 2)
     throw DataError(csv, "fewer than 2 IMU readings");
   check_spacing(csv, stamps, lines, rate_hz, "the IMU's rate");
+  if (lines_out)
+    *lines_out = std::move(lines);
   return out;
+}
+
+/// IMU gaps over the images' span (imu_gaps.h): counted into d.imu_gaps, a long one refused by its line.
+void check_imu_gaps(Dataset &d, const std::string &imu_csv, const std::vector<long> &lines) {
+  if (d.images.empty() || d.imu.empty())
+    return;
+  const size_t bad =
+      scan_imu_gaps(d.imu, d.images.front().t_cam_ns, d.images.back().t_cam_ns, d.imu_calib.rate_hz, d.imu_gaps);
+  if (bad < d.imu.size())
+    throw DataError(imu_csv, lines[bad],
+                    "IMU gap of " + std::to_string((d.imu[bad].t_imu_ns - d.imu[bad - 1].t_imu_ns) / 1000000) +
+                        " ms before this row, within the images' span (gaps up to " +
+                        std::to_string(static_cast<int>(kMaxImuGapS * 1000)) + " ms are propagated through)");
 }
 
 /// Images and IMU must share a clock: when no image lies within the IMU log's span (give or take a second, far more
@@ -470,8 +478,10 @@ Dataset load_euroc(const std::string &dir, const LoadOptions &opt) {
       c.images = read_further_camera(join_path(cam, "data.csv"), join_path(cam, "data"), list_opt, c.cam.rate_hz);
       d.more_cameras.push_back(std::move(c));
     }
-  d.imu = read_imu_csv(imu_csv, d.imu_calib.rate_hz);
+  std::vector<long> imu_lines;
+  d.imu = read_imu_csv(imu_csv, d.imu_calib.rate_hz, &imu_lines);
   check_overlap(d.images, d.imu, cam_csv, imu_csv);
+  check_imu_gaps(d, imu_csv, imu_lines);
   if (auto gt = optional_file(join_path(mav0, "state_groundtruth_estimate0/data.csv")); !gt.empty())
     d.groundtruth = read_trajectory(gt);
   if (auto td = optional_file(join_path(mav0, "td_truth/data.csv")); !td.empty())
@@ -502,8 +512,10 @@ Dataset load_scube(const std::string &dir, const LoadOptions &opt) {
     d.more_cameras.push_back(
         {rig[k].cam, read_further_camera(join_path(cam, "data.csv"), join_path(cam, "data"), opt, rig[k].cam.rate_hz)});
   }
-  d.imu = read_imu_csv(imu_csv, d.imu_calib.rate_hz);
+  std::vector<long> imu_lines;
+  d.imu = read_imu_csv(imu_csv, d.imu_calib.rate_hz, &imu_lines);
   check_overlap(d.images, d.imu, cam_csv, imu_csv);
+  check_imu_gaps(d, imu_csv, imu_lines);
   if (auto gt = optional_file(join_path(dir, "groundtruth/data.csv")); !gt.empty())
     d.groundtruth = read_trajectory(gt);
   if (auto td = optional_file(join_path(dir, "td_truth/data.csv")); !td.empty())

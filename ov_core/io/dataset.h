@@ -1,6 +1,7 @@
 #pragma once
 // A replayable dataset folder (EuRoC ASL or SCube), loaded and validated in one place.
 #include "ov_core/cam/camera_calib.h"
+#include "ov_core/io/imu_gaps.h"
 #include "ov_core/types/sensor_data.h"
 #include <optional>
 #include <string>
@@ -32,6 +33,8 @@ struct Dataset {
   /// readings before the cut are listed; a player calls check_not_truncated after the last of them, so that a run
   /// writes its rows up to the cut and then reports it.
   std::string truncated_file, truncated_reason;
+  /// IMU gaps within the images' span that the filter propagates through (imu_gaps.h), for the run's output.
+  ImuGaps imu_gaps;
 
   size_t num_cameras() const { return 1 + more_cameras.size(); }
   bool has_groundtruth() const { return !groundtruth.empty(); }

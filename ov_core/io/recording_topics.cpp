@@ -1,4 +1,5 @@
 #include "ov_core/io/recording_topics.h"
+#include "ov_core/io/imu_gaps.h"
 #include "ov_core/types/errors.h"
 
 #include <algorithm>
@@ -74,12 +75,20 @@ void finish_recording(const std::string &file, const std::string &cam_topic, con
       m.images, [](const ImageEntry &e) { return e.t_cam_ns; }, file, cam_topic);
   sort_and_check(
       m.imu, [](const ImuData &u) { return u.t_imu_ns; }, file, imu_topic);
-  const int64_t max_gap_ns = static_cast<int64_t>(10.0 / imu_rate_hz * 1e9);
-  for (size_t i = 1; i < m.imu.size(); ++i)
-    if (m.imu[i].first.t_imu_ns - m.imu[i - 1].first.t_imu_ns > max_gap_ns)
-      throw DataError(file, message_label(m.imu[i].second, imu_topic) + ": IMU gap of " +
-                                std::to_string((m.imu[i].first.t_imu_ns - m.imu[i - 1].first.t_imu_ns) * 1e-6) +
-                                " ms before it (rate " + std::to_string(imu_rate_hz) + " Hz)");
+  const size_t bad = scan_imu_gaps(
+      [&] {
+        std::vector<ImuData> imu;
+        imu.reserve(m.imu.size());
+        for (const auto &[u, index] : m.imu)
+          imu.push_back(u);
+        return imu;
+      }(),
+      m.images.front().first.t_cam_ns, m.images.back().first.t_cam_ns, imu_rate_hz, d.imu_gaps);
+  if (bad < m.imu.size())
+    throw DataError(file, message_label(m.imu[bad].second, imu_topic) + ": IMU gap of " +
+                              std::to_string((m.imu[bad].first.t_imu_ns - m.imu[bad - 1].first.t_imu_ns) / 1000000) +
+                              " ms before it, within the images' span (gaps up to " +
+                              std::to_string(static_cast<int>(kMaxImuGapS * 1000)) + " ms are propagated through)");
   d.images.clear();
   d.images.reserve(m.images.size());
   for (auto &[e, index] : m.images) {

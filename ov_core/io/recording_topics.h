@@ -1,8 +1,8 @@
 #pragma once
 // What every recording reader (ROS 1 bags, MCAP files, ROS 2 bags) does alike once it has listed the topics and read
 // the messages' headers: choose the camera and IMU topics, order the messages by header stamp (the sensor's time, not
-// the recorder's receive time), refuse duplicate stamps and IMU gaps, and hand the result over as a Dataset whose
-// images stay in the recording (ImageStore) until the replay reaches them.
+// the recorder's receive time), refuse duplicate stamps and long IMU gaps (imu_gaps.h), and hand the result over as a
+// Dataset whose images stay in the recording (ImageStore) until the replay reaches them.
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/image_store.h"
 
@@ -34,8 +34,8 @@ struct RecordingMessages {
 };
 
 /// Fills d.images (each pointing at `store`) and d.imu from `m`, sorted by header stamp. Throws DataError naming
-/// `file` when a topic has no message (the IMU: fewer than 2), for duplicate stamps and for an IMU gap longer than 10
-/// periods of `imu_rate_hz`.
+/// `file` when a topic has no message (the IMU: fewer than 2), for duplicate stamps and for an IMU gap within the
+/// images' span longer than kMaxImuGapS (shorter ones are counted in d.imu_gaps).
 void finish_recording(const std::string &file, const std::string &cam_topic, const std::string &imu_topic,
                       double imu_rate_hz, RecordingMessages &&m, const std::shared_ptr<const ImageStore> &store,
                       Dataset &d);
