@@ -241,8 +241,9 @@ std::vector<ImuData> read_imu_csv(const std::string &csv, double rate_hz, std::v
 void check_imu_gaps(Dataset &d, const std::string &imu_csv, const std::vector<long> &lines) {
   if (d.images.empty() || d.imu.empty())
     return;
-  const size_t bad =
-      scan_imu_gaps(d.imu, d.images.front().t_cam_ns, d.images.back().t_cam_ns, d.imu_calib.rate_hz, d.imu_gaps);
+  const size_t bad = scan_imu_gaps(
+      d.imu.size(), [&](size_t i) { return d.imu[i].t_imu_ns; }, d.images.front().t_cam_ns, d.images.back().t_cam_ns,
+      d.imu_calib.rate_hz, d.imu_gaps);
   if (bad < d.imu.size())
     throw DataError(imu_csv, lines[bad],
                     "IMU gap of " + std::to_string((d.imu[bad].t_imu_ns - d.imu[bad - 1].t_imu_ns) / 1000000) +

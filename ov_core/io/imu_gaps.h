@@ -9,7 +9,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
-#include <vector>
 
 namespace ovton::core {
 
@@ -24,10 +23,31 @@ struct ImuGaps {
 /// Longest gap within the images' span that is propagated through [s]; a longer one is refused.
 inline constexpr double kMaxImuGapS = 0.25;
 
-/// Scans `imu` (time-ordered) over [images_begin_ns - 1 s, images_end_ns + 1 s]: counts the gaps longer than 10 periods
-/// of rate_hz into `gaps` and returns the index of the reading after the first gap longer than kMaxImuGapS there
-/// (imu.size() when there is none). Gaps outside the span are ignored.
-size_t scan_imu_gaps(const std::vector<ImuData> &imu, int64_t images_begin_ns, int64_t images_end_ns, double rate_hz,
-                     ImuGaps &gaps);
+/// Scans n time-ordered IMU stamps (stamp(i) for i < n) over [images_begin_ns - 1 s, images_end_ns + 1 s]: counts the
+/// gaps longer than 10 periods of rate_hz into `gaps` and returns the index of the reading after the first gap longer
+/// than kMaxImuGapS there (n when there is none). Gaps outside the span are ignored. A stamp function, so that a reader
+/// scans its messages where they are.
+template <class Stamp>
+size_t scan_imu_gaps(size_t n, Stamp &&stamp, int64_t images_begin_ns, int64_t images_end_ns, double rate_hz,
+                     ImuGaps &gaps) {
+  constexpr int64_t kMarginNs = 1000000000; // beyond any offset the search or a prior can give
+  const int64_t lo = images_begin_ns - kMarginNs, hi = images_end_ns + kMarginNs;
+  const int64_t counted_ns = rate_hz > 0 ? static_cast<int64_t>(10.0 / rate_hz * 1e9) : 100000000;
+  const auto refused_ns = static_cast<int64_t>(kMaxImuGapS * 1e9);
+  size_t refused = n;
+  for (size_t i = 1; i < n; ++i) {
+    const int64_t a = stamp(i - 1), b = stamp(i), dt = b - a;
+    if (b < lo || a > hi || dt <= counted_ns)
+      continue;
+    if (dt > refused_ns && refused == n)
+      refused = i;
+    ++gaps.count;
+    if (dt * 1e-9 > gaps.longest_s) {
+      gaps.longest_s = dt * 1e-9;
+      gaps.longest_at_ns = b;
+    }
+  }
+  return refused;
+}
 
 } // namespace ovton::core

@@ -76,14 +76,8 @@ void finish_recording(const std::string &file, const std::string &cam_topic, con
   sort_and_check(
       m.imu, [](const ImuData &u) { return u.t_imu_ns; }, file, imu_topic);
   const size_t bad = scan_imu_gaps(
-      [&] {
-        std::vector<ImuData> imu;
-        imu.reserve(m.imu.size());
-        for (const auto &[u, index] : m.imu)
-          imu.push_back(u);
-        return imu;
-      }(),
-      m.images.front().first.t_cam_ns, m.images.back().first.t_cam_ns, imu_rate_hz, d.imu_gaps);
+      m.imu.size(), [&](size_t i) { return m.imu[i].first.t_imu_ns; }, m.images.front().first.t_cam_ns,
+      m.images.back().first.t_cam_ns, imu_rate_hz, d.imu_gaps);
   if (bad < m.imu.size())
     throw DataError(file, message_label(m.imu[bad].second, imu_topic) + ": IMU gap of " +
                               std::to_string((m.imu[bad].first.t_imu_ns - m.imu[bad - 1].first.t_imu_ns) / 1000000) +
