@@ -152,6 +152,39 @@ TEST(ReaderPlausibility, StampsThatCannotBeNanosecondsNameFileAndLine) {
   }
 }
 
+// A T_BS whose last row is not [0 0 0 1] (here the translation written into the last row as well, as a transposed
+// matrix has it) is not a rigid transform: refused naming the file and the matrix's line, and saying what it is.
+TEST(ReaderPlausibility, TransformWhoseLastRowIsNotRigidIsRefused) {
+  TempDir tmp;
+  const std::string root = make_euroc(tmp);
+  std::string cam = kCamYaml;
+  const std::string row = "0.0, 0.0, 0.0, 1.0]";
+  cam.replace(cam.find(row), row.size(), "-0.0216401454975, -0.064676986768, 0.00981073058949, 1.0]");
+  write_text(root + "/mav0/cam0/sensor.yaml", cam);
+  expect_data_error([&] { load_dataset(root); }, "cam0/sensor.yaml", 4, "last row of T_BS not [0 0 0 1]");
+  try {
+    load_dataset(root);
+  } catch (const ovton::core::DataError &e) {
+    EXPECT_NE(std::string(e.what()).find("'T_BS' last row is [-0.021640 -0.064677 0.009811 1.000000], not [0 0 0 1]"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// An IMU log at 200 Hz whose sensor.yaml says 100 (within the factor of 3 refused as a unit error): read, with a
+// warning naming the log, the rates and the yaml; the matching rate warns nothing.
+TEST(ReaderPlausibility, ImuRateOtherThanTheYamlsIsAWarning) {
+  TempDir tmp;
+  const std::string root = make_euroc(tmp);
+  EXPECT_TRUE(load_dataset(root).warnings.empty());
+  write_text(root + "/mav0/imu0/sensor.yaml", with_line(kImuYaml, "rate_hz", "rate_hz: 100"));
+  const auto d = load_dataset(root);
+  ASSERT_EQ(d.warnings.size(), 1u);
+  const std::string &w = d.warnings.front();
+  EXPECT_NE(w.find("imu0/data.csv: the IMU readings are 5 ms apart (median: 200 Hz) but "), std::string::npos) << w;
+  EXPECT_NE(w.find("imu0/sensor.yaml's rate_hz says 100 Hz"), std::string::npos) << w;
+}
+
 TEST(ReaderPlausibility, SensorYamlValuesOutsideAnySensorNameFileAndLine) {
   struct Case {
     const char *file, *key, *line;

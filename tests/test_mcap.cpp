@@ -198,6 +198,29 @@ TEST(Cdr, MessagesReadBackAsWritten) {
   EXPECT_EQ(ri.header.stamp_ns, -5);
   EXPECT_EQ(ri.pixels.encoding, "mono8");
   EXPECT_EQ(cv::countNonZero(raw_image_to_gray(ri.pixels, "f", "w") != gray), 0);
+  // mono16 of the same pixels, widened as v << 8 and as v * 257 (full range), little- and big-endian, at an odd
+  // address: each gives back the mono8 pixels exactly (a rounding 1/256 scale turns v * 257 into v + 1 for v >= 128).
+  cv::Mat wide(1, 256, CV_8UC1);
+  std::iota(wide.data, wide.data + wide.total(), 0);
+  for (const int factor : {256, 257})
+    for (const bool big : {false, true}) {
+      std::vector<uint8_t> bytes(1 + 2 * 256);
+      for (int v = 0; v < 256; ++v) {
+        const int w = v * factor;
+        bytes[1 + 2 * v + (big ? 0 : 1)] = static_cast<uint8_t>(w >> 8);
+        bytes[1 + 2 * v + (big ? 1 : 0)] = static_cast<uint8_t>(w & 0xff);
+      }
+      RawImageView m16;
+      m16.width = 256;
+      m16.height = 1;
+      m16.step = 512;
+      m16.encoding = "mono16";
+      m16.big_endian = big;
+      m16.data = bytes.data() + 1;
+      m16.size = 512;
+      EXPECT_EQ(cv::countNonZero(raw_image_to_gray(m16, "f", "w") != wide), 0)
+          << "mono16 as v * " << factor << (big ? ", big-endian" : ", little-endian");
+    }
   // Only the first bytes given: header and size read, the pixels' place known, the bytes not there.
   const Ros2Image head = decode_ros2_image(im.data(), 56, "f", "w", im.size());
   EXPECT_EQ(head.pixels.width, 6u);

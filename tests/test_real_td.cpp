@@ -245,3 +245,23 @@ TEST(RealMovingCut, ShortImuGapsArePropagatedThroughAndLongOnesNamed) {
     EXPECT_NE(std::string(e.what()).find("IMU gap"), std::string::npos) << e.what();
   }
 }
+
+// An offset beyond the coarse search's range (+250 ms on a ±200 ms search): the search declines with its best candidate
+// at the edge, the filter starts at 0 and the health check stops the run. The stop must pass on what the search saw, so
+// that the user learns where to look (an initial t_d or a wider range), not only that the estimate diverged.
+TEST(RealMovingCut, AnOffsetBeyondTheSearchSaysSoWhenTheRunStops) {
+  OVTEST_REQUIRE_SHARED_DATA();
+  if (!std::filesystem::is_directory(ovtest::shared_data() + "/euroc_v1_01_moving"))
+    GTEST_SKIP() << "../shared/data/euroc_v1_01_moving not found";
+  ovton::sim::TdModelOptions td;
+  td.kind = ovton::sim::TdModelKind::Constant;
+  td.td0_s = 0.25;
+  try {
+    run_perturbed_cut(td, std::nullopt, true);
+    ADD_FAILURE() << "a run 250 ms off its offset finished";
+  } catch (const ovton::core::EstimatorFailure &e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("the coarse t_d search had found no offset"), std::string::npos) << m;
+    EXPECT_NE(m.find("at the edge of the range"), std::string::npos) << m;
+  }
+}

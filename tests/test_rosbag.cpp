@@ -3,12 +3,14 @@
 #include "ov_core/io/bag_calibration.h"
 #include "ov_core/io/dataset.h"
 #include "ov_core/io/image_store.h"
+#include "ov_core/io/kalibr_writer.h"
 #include "ov_core/io/rosbag_reader.h"
 #include "ov_core/io/rosbag_writer.h"
 #include "ov_sim/simulator.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -174,6 +176,62 @@ TEST_F(BagTest, TopicsChosenOrRefused) {
   EXPECT_EQ(load_bag(d / "left.bag", o).images.size(), folder_->images.size()); // the only image topic
 }
 
+// A stereo camchain (Kalibr: cam1 with T_cn_cnm1 and its rostopic): the calibration used is that of the camera whose
+// topic is replayed, never cam0's intrinsics and lever arm on cam1's images; a topic the chain does not name is
+// refused.
+TEST_F(BagTest, CalibrationChosenPerCameraTopic) {
+  ovtest::TempDir d;
+  const std::string chain = d / "camchain-imucam.yaml", imu = d / "imu.yaml";
+  write_kalibr_camchain(chain, folder_->cam, 0.0, "/cam0/image_raw");
+  write_kalibr_imu(imu, folder_->imu_calib, "/imu0");
+  YAML::Node y = YAML::LoadFile(chain);
+  YAML::Node cam1 = YAML::Clone(y["cam0"]);
+  cam1.remove("T_cam_imu");
+  YAML::Node T; // cam1 11 cm to the right of cam0, as EuRoC's pair, and its own time shift
+  for (const std::vector<double> row : {std::vector<double>{1, 0, 0, -0.11}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}})
+    T.push_back(row);
+  cam1["T_cn_cnm1"] = T;
+  cam1["rostopic"] = "/cam1/image_raw";
+  cam1["timeshift_cam_imu"] = 0.004;
+  y["cam1"] = cam1;
+  ovtest::write_text(chain, YAML::Dump(y) + "\n");
+
+  BagWriteOptions w;
+  w.kalibr_files = false;
+  w.cam_topic = "/cam1/image_raw";
+  write_bag(*folder_, d / "right.bag", w);
+  BagOptions o;
+  o.calib = {chain, imu};
+  const Dataset right = load_bag(d / "right.bag", o);
+  Eigen::Matrix4d T_C0C1 = Eigen::Matrix4d::Identity(); // the inverse of T_cn_cnm1
+  T_C0C1(0, 3) = 0.11;
+  const Eigen::Matrix4d T_BC1 = folder_->cam.T_BC * T_C0C1;
+  EXPECT_LT((right.cam.T_BC - T_BC1).norm(), 1e-12) << right.cam.T_BC;
+  EXPECT_DOUBLE_EQ(right.td_prior_s, 0.004);
+  EXPECT_NE(right.notes.find("its cam1"), std::string::npos) << right.notes;
+
+  // The same bag's cam0 topic gets cam0's calibration.
+  w.cam_topic = "/cam0/image_raw";
+  write_bag(*folder_, d / "left.bag", w);
+  const Dataset left = load_bag(d / "left.bag", o);
+  EXPECT_LT((left.cam.T_BC - folder_->cam.T_BC).norm(), 1e-14);
+  EXPECT_EQ(left.td_prior_s, 0.0);
+
+  // A topic the chain's two cameras do not name: refused, naming the calibration and the topics it has.
+  w.cam_topic = "/left/image";
+  write_bag(*folder_, d / "other.bag", w);
+  try {
+    load_bag(d / "other.bag", o);
+    ADD_FAILURE() << "expected an error for a topic the camchain does not name";
+  } catch (const DataError &e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("camchain-imucam.yaml"), std::string::npos) << m;
+    EXPECT_NE(m.find("/left/image is none of the calibration's cameras (cam0 /cam0/image_raw, cam1 /cam1/image_raw)"),
+              std::string::npos)
+        << m;
+  }
+}
+
 TEST_F(BagTest, TruncatedBagNamesTheFile) {
   ovtest::TempDir d;
   const std::string cut = d / "cut.bag";
@@ -188,6 +246,7 @@ TEST_F(BagTest, TruncatedBagNamesTheFile) {
     const std::string m = e.what();
     EXPECT_NE(m.find("cut.bag"), std::string::npos) << m;
     EXPECT_NE(m.find("corrupt or truncated"), std::string::npos) << m;
+    EXPECT_NE(m.find("`rosbag reindex` rebuilds its index"), std::string::npos) << m; // what the user can do
   }
   // Not a bag at all.
   write_bytes(d / "text.bag", "hello\n");

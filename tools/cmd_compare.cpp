@@ -91,6 +91,8 @@ int cmd_compare(const Args &args) {
 
   const ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
   ovton::apply_dataset_defaults(data, false, req.base);
+  for (const std::string &w : data.warnings)
+    std::cerr << "compare: warning: " << w << "\n";
   std::cerr << "compare: " << req.modes.size() << " modes on " << data.root << " (" << data.images.size()
             << " images), " << std::min<size_t>(req.jobs, req.modes.size()) << " at a time on "
             << std::thread::hardware_concurrency() << " cores\n";

@@ -67,6 +67,8 @@ int cmd_info(const Args &args) {
   }
   if (!d.notes.empty())
     std::cout << "read         " << d.notes << "\n";
+  for (const std::string &w : d.warnings)
+    std::cout << "warning      " << w << "\n";
   return 0;
 }
 

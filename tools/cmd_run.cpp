@@ -120,6 +120,8 @@ int cmd_run(const Args &args) {
   ovton::core::Dataset data = ovton::core::load_recording(dataset, bag_opt);
   if (const std::string gaps = data.imu_gaps.summary(); !gaps.empty())
     std::cout << "note: " << gaps << " with the process noise of their length\n";
+  for (const std::string &w : data.warnings)
+    std::cerr << "warning: " << w << "\n";
   if (!cameras.empty())
     ovton::core::select_cameras(data, ovton::core::parse_camera_list(cameras));
   ovton::apply_dataset_defaults(data, vm.count("td-init-ms") > 0, req.opt);

@@ -27,7 +27,8 @@ bool is_dir(const fs::path &p) {
 
 /// What one piece of calibration contributed; a complete calibration needs a camera and an IMU.
 struct Parts {
-  std::optional<KalibrCamera> cam;
+  std::vector<KalibrCamera> rig; ///< the calibration's cameras, cam0 first (empty: none given yet)
+  bool topics_by_convention = false;
   std::optional<KalibrImu> imu;
   std::vector<StateSample> groundtruth;
   std::vector<TdSample> td_truth;
@@ -35,9 +36,9 @@ struct Parts {
 };
 
 void set_camera(Parts &p, const std::string &file) {
-  if (p.cam)
+  if (!p.rig.empty())
     throw UsageError("two camera calibrations given (" + p.read.front() + " and " + file + ")");
-  p.cam = load_kalibr_camchain(file);
+  p.rig = load_kalibr_rig(file);
   p.read.push_back(file);
 }
 
@@ -93,14 +94,22 @@ std::string only_match(const fs::path &dir, const std::string &prefix) {
 bool add_folder(Parts &p, const fs::path &dir) {
   const fs::path mav0 = is_dir(dir / "mav0") ? dir / "mav0" : dir;
   if (is_file(mav0 / "cam0" / "sensor.yaml")) {
-    const std::string cam = (mav0 / "cam0" / "sensor.yaml").string(), imu = (mav0 / "imu0" / "sensor.yaml").string();
-    KalibrCamera c;
-    c.cam = load_euroc_camera_yaml(cam);
+    const std::string imu = (mav0 / "imu0" / "sensor.yaml").string();
+    p.read.clear();
+    // camN/sensor.yaml names no topic; the ASL bags that come with these folders record camera N as /camN/image_raw.
+    for (int k = 0; is_file(mav0 / ("cam" + std::to_string(k)) / "sensor.yaml"); ++k) {
+      const std::string cam = (mav0 / ("cam" + std::to_string(k)) / "sensor.yaml").string();
+      KalibrCamera c;
+      c.cam = load_euroc_camera_yaml(cam);
+      c.rostopic = "/cam" + std::to_string(k) + "/image_raw";
+      p.rig.push_back(c);
+      p.read.push_back(cam);
+    }
+    p.topics_by_convention = true;
     KalibrImu i;
     i.imu = load_euroc_imu_yaml(imu);
-    p.cam = c;
     p.imu = i;
-    p.read = {cam, imu};
+    p.read.push_back(imu);
     add_optional_truth(p, mav0 / "state_groundtruth_estimate0" / "data.csv", mav0 / "td_truth" / "data.csv");
     return true;
   }
@@ -115,9 +124,11 @@ bool add_folder(Parts &p, const fs::path &dir) {
 
 BagCalibration finish(Parts &&p) {
   BagCalibration c;
-  c.cam = p.cam->cam;
-  c.td_prior_s = p.cam->timeshift_cam_imu_s;
-  c.cam_topic_hint = p.cam->rostopic;
+  c.rig = std::move(p.rig);
+  c.topics_by_convention = p.topics_by_convention;
+  c.cam = c.rig.front().cam;
+  c.td_prior_s = c.rig.front().timeshift_cam_imu_s;
+  c.cam_topic_hint = c.rig.front().rostopic;
   c.imu = p.imu->imu;
   c.imu_topic_hint = p.imu->rostopic;
   c.groundtruth = std::move(p.groundtruth);
@@ -142,8 +153,8 @@ std::optional<BagCalibration> find_bag_calibration(const std::string &bag, const
         add_yaml(p, c);
       }
     }
-    if (!p.cam || !p.imu)
-      throw UsageError(std::string("--calib gave no ") + (p.cam ? "IMU" : "camera") +
+    if (p.rig.empty() || !p.imu)
+      throw UsageError(std::string("--calib gave no ") + (p.rig.empty() ? "camera" : "IMU") +
                        " calibration: give a Kalibr camchain and imu YAML, or an EuRoC folder");
     return finish(std::move(p));
   }
@@ -174,6 +185,30 @@ std::string bag_calibration_places(const std::string &bag) {
   const std::string stem = b.stem().string();
   return (dir / stem).string() + "/, " + (dir / ("camchain-imucam-" + stem + ".yaml")).string() + " + imu-" + stem +
          ".yaml, and camchain-imucam.yaml + imu.yaml there";
+}
+
+std::string select_topic_camera(BagCalibration &c, const std::string &topic) {
+  std::string named;
+  for (size_t k = 0; k < c.rig.size(); ++k) {
+    if (c.rig[k].rostopic.empty())
+      continue;
+    if (c.rig[k].rostopic == topic) {
+      c.cam = c.rig[k].cam;
+      c.td_prior_s = c.rig[k].timeshift_cam_imu_s;
+      return "cam" + std::to_string(k);
+    }
+    named += std::string(named.empty() ? "" : ", ") + "cam" + std::to_string(k) + " " + c.rig[k].rostopic;
+  }
+  if (c.topics_by_convention)
+    return "cam0 (its folder names no topics)";
+  if (c.rig.size() == 1 && !named.empty()) // one camera calibrated: recorded under another name, most likely
+    return "cam0 (calibrated on " + c.rig[0].rostopic + ")";
+  // A camera's intrinsics and lever arm on another camera's images would run without complaint and be wrong.
+  if (!named.empty())
+    throw DataError(c.source, "the image topic " + topic + " is none of the calibration's cameras (" + named +
+                                  "): choose one of those topics with --cam-topic, or give the calibration of " +
+                                  topic + " with --calib");
+  return "cam0 (the calibration names no topics)";
 }
 
 BagCalibration resolve_bag_calibration(const std::string &bag, const std::vector<std::string> &calib) {

@@ -2,6 +2,7 @@
 // Where a bag's calibration comes from. A bag carries no calibration of its own; users have it as Kalibr output
 // (camchain-imucam-<bag>.yaml and imu-<bag>.yaml beside the bag) or, for EuRoC, as the ASL folder downloaded with it.
 #include "ov_core/cam/camera_calib.h"
+#include "ov_core/io/dataset.h"
 #include "ov_core/types/sensor_data.h"
 
 #include <optional>
@@ -12,9 +13,11 @@
 namespace ovton::core {
 
 struct BagCalibration {
-  CameraCalib cam;
+  CameraCalib cam;                   ///< the camera of the chosen image topic (select_topic_camera)
+  std::vector<KalibrCamera> rig;     ///< every camera of the calibration, cam0 first, with its topic
+  bool topics_by_convention = false; ///< an EuRoC folder: camN's topic is the ASL bags' /camN/image_raw
   ImuCalib imu;
-  double td_prior_s = 0.0;                    ///< Kalibr timeshift_cam_imu (0 for EuRoC)
+  double td_prior_s = 0.0;                    ///< the chosen camera's Kalibr timeshift_cam_imu (0 for EuRoC)
   std::vector<StateSample> groundtruth;       ///< from a companion folder, when it has one
   std::vector<TdSample> td_truth;             ///< from a companion folder (`ovton simulate` output)
   std::string cam_topic_hint, imu_topic_hint; ///< Kalibr's rostopic entries ("" when absent)
@@ -30,6 +33,10 @@ BagCalibration resolve_bag_calibration(const std::string &bag, const std::vector
 /// The same, but nothing when `calib` is empty and nothing is found beside the recording (which may then carry its own:
 /// a ROS 2 recording's CameraInfo).
 std::optional<BagCalibration> find_bag_calibration(const std::string &bag, const std::vector<std::string> &calib);
+/// Makes `cam` and `td_prior_s` those of the calibration's camera recorded on `topic` (Kalibr's rostopic; an EuRoC
+/// folder's camN is /camN/image_raw) and returns its name for the run's notes. Throws DataError naming the calibration
+/// when its cameras (two or more) name topics (Kalibr) and none is `topic`; otherwise cam0, said in the name.
+std::string select_topic_camera(BagCalibration &c, const std::string &topic);
 /// Where find_bag_calibration looks beside `bag`, for messages.
 std::string bag_calibration_places(const std::string &bag);
 /// The Kalibr file pairs (camchain, imu) looked for beside `bag`, in order.

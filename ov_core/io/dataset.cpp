@@ -91,7 +91,14 @@ Eigen::Matrix4d get_transform(const YAML::Node &n, const std::string &file, cons
     }
   const Eigen::Matrix3d R = T.block<3, 3>(0, 0);
   if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-3 || std::abs(R.determinant() - 1.0) > 1e-3)
-    throw DataError(file, "'" + key + "' rotation block is not a rotation matrix");
+    throw DataError(file, yaml_line(t), "'" + key + "' rotation block is not a rotation matrix");
+  // A last row other than [0 0 0 1] is not a rigid transform: a transposed matrix (translation in the last row) or a
+  // projection; taking its top three rows would drop what the file says.
+  if ((T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9)
+    throw DataError(file, yaml_line(t),
+                    "'" + key + "' last row is [" + std::to_string(T(3, 0)) + " " + std::to_string(T(3, 1)) + " " +
+                        std::to_string(T(3, 2)) + " " + std::to_string(T(3, 3)) +
+                        "], not [0 0 0 1]: a rigid transform's (a transposed matrix?)");
   return T;
 }
 
@@ -237,10 +244,14 @@ std::vector<ImuData> read_imu_csv(const std::string &csv, double rate_hz, std::v
   return out;
 }
 
-/// IMU gaps over the images' span (imu_gaps.h): counted into d.imu_gaps, a long one refused by its line.
-void check_imu_gaps(Dataset &d, const std::string &imu_csv, const std::vector<long> &lines) {
+/// IMU gaps over the images' span (imu_gaps.h): counted into d.imu_gaps, a long one refused by its line; a rate other
+/// than the calibration's (`rate_source`) is a warning.
+void check_imu_gaps(Dataset &d, const std::string &imu_csv, const std::vector<long> &lines,
+                    const std::string &rate_source) {
   if (d.images.empty() || d.imu.empty())
     return;
+  if (std::string w = imu_rate_mismatch(d.imu, d.imu_calib.rate_hz, rate_source); !w.empty())
+    d.warnings.push_back(imu_csv + ": " + w);
   const size_t bad = scan_imu_gaps(
       d.imu.size(), [&](size_t i) { return d.imu[i].t_imu_ns; }, d.images.front().t_cam_ns, d.images.back().t_cam_ns,
       d.imu_calib.rate_hz, d.imu_gaps);
@@ -482,7 +493,7 @@ Dataset load_euroc(const std::string &dir, const LoadOptions &opt) {
   std::vector<long> imu_lines;
   d.imu = read_imu_csv(imu_csv, d.imu_calib.rate_hz, &imu_lines);
   check_overlap(d.images, d.imu, cam_csv, imu_csv);
-  check_imu_gaps(d, imu_csv, imu_lines);
+  check_imu_gaps(d, imu_csv, imu_lines, join_path(mav0, "imu0/sensor.yaml") + "'s rate_hz");
   if (auto gt = optional_file(join_path(mav0, "state_groundtruth_estimate0/data.csv")); !gt.empty())
     d.groundtruth = read_trajectory(gt);
   if (auto td = optional_file(join_path(mav0, "td_truth/data.csv")); !td.empty())
@@ -516,7 +527,7 @@ Dataset load_scube(const std::string &dir, const LoadOptions &opt) {
   std::vector<long> imu_lines;
   d.imu = read_imu_csv(imu_csv, d.imu_calib.rate_hz, &imu_lines);
   check_overlap(d.images, d.imu, cam_csv, imu_csv);
-  check_imu_gaps(d, imu_csv, imu_lines);
+  check_imu_gaps(d, imu_csv, imu_lines, join_path(dir, "imu.yaml") + "'s update_rate");
   if (auto gt = optional_file(join_path(dir, "groundtruth/data.csv")); !gt.empty())
     d.groundtruth = read_trajectory(gt);
   if (auto td = optional_file(join_path(dir, "td_truth/data.csv")); !td.empty())

@@ -35,6 +35,9 @@ struct Dataset {
   std::string truncated_file, truncated_reason;
   /// IMU gaps within the images' span that the filter propagates through (imu_gaps.h), for the run's output.
   ImuGaps imu_gaps;
+  /// What the reader could read but a user should check (an IMU rate other than the calibration's), for the run's
+  /// output.
+  std::vector<std::string> warnings;
 
   size_t num_cameras() const { return 1 + more_cameras.size(); }
   bool has_groundtruth() const { return !groundtruth.empty(); }

@@ -79,17 +79,18 @@ cv::Mat raw_image_to_gray(const RawImageView &m, const std::string &file, const 
                      m.step);
   cv::Mat gray;
   if (enc->bytes_per_channel == 2) {
-    cv::Mat swapped;
-    const bool host_big_endian = cv::Mat(1, 1, CV_16U, cv::Scalar(1)).data[0] == 0;
-    if (m.big_endian != host_big_endian) {
-      swapped = view.clone();
-      for (int r = 0; r < swapped.rows; ++r) {
-        auto *p = swapped.ptr<uint16_t>(r);
-        for (int c = 0; c < swapped.cols; ++c)
-          p[c] = static_cast<uint16_t>((p[c] >> 8) | (p[c] << 8));
-      }
+    // The high byte: mono8 images widened to mono16 (v << 8, or v * 257 for the full range) come back as the same
+    // mono8 pixels, so both recordings give the same run; a rounding scale (1/256) would move every v >= 128 of
+    // v * 257 up by one. Read byte by byte: the high byte's place is the message's endianness, whatever the host's, and
+    // a message's pixels need not be 2-byte aligned.
+    const int high = m.big_endian ? 0 : 1;
+    gray.create(view.rows, view.cols, CV_8UC1);
+    for (int r = 0; r < view.rows; ++r) {
+      const uint8_t *p = view.ptr<uint8_t>(r);
+      auto *q = gray.ptr<uint8_t>(r);
+      for (int c = 0; c < view.cols; ++c)
+        q[c] = p[2 * c + high];
     }
-    (swapped.empty() ? view : swapped).convertTo(gray, CV_8U, 1.0 / 256.0);
   } else if (enc->to_gray >= 0) {
     cv::cvtColor(view, gray, enc->to_gray);
   } else {

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace ovton::core {
 
@@ -49,5 +50,11 @@ size_t scan_imu_gaps(size_t n, Stamp &&stamp, int64_t images_begin_ns, int64_t i
   }
   return refused;
 }
+
+/// One sentence when the readings' median spacing and the calibration's stated rate (`rate_hz`, named by
+/// `rate_source`) differ by more than 20 %, "" otherwise. A factor of 3 or more is refused by the folder readers as a
+/// unit error; between, the log is read (the filter integrates over the stamps' own spacing) and the user told, since
+/// noise figures taken from a datasheet or a calibration at the stated rate may not be the IMU's as it runs.
+std::string imu_rate_mismatch(const std::vector<ImuData> &imu, double rate_hz, const std::string &rate_source);
 
 } // namespace ovton::core

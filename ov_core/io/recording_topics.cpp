@@ -93,6 +93,8 @@ void finish_recording(const std::string &file, const std::string &cam_topic, con
   d.imu.reserve(m.imu.size());
   for (const auto &[u, index] : m.imu)
     d.imu.push_back(u);
+  if (std::string w = imu_rate_mismatch(d.imu, imu_rate_hz, "the IMU calibration's update_rate"); !w.empty())
+    d.warnings.push_back(file + ": " + imu_topic + ": " + w);
 }
 
 } // namespace ovton::core

@@ -309,7 +309,10 @@ Dataset build_ros2_dataset(const std::string &root, const std::string &kind,
   Topic &imu = topics.at(imu_topic);
   if (cam.messages == 0 || imu.messages == 0)
     throw DataError(root, "topic " + (cam.messages == 0 ? cam_topic : imu_topic) + " has no messages");
-  if (!calib) {
+  std::string camera;
+  if (calib) {
+    camera = select_topic_camera(*calib, cam_topic);
+  } else {
     if (tf_error)
       std::rethrow_exception(tf_error);
     calib = calibration_from_recording(root, topics, cam_topic, imu_topic, tf_static);
@@ -338,7 +341,8 @@ Dataset build_ros2_dataset(const std::string &root, const std::string &kind,
   finish_recording(root, cam_topic, imu_topic, d.imu_calib.rate_hz, std::move(m), store, d);
   d.notes = "topics " + cam_topic + " (" + std::to_string(d.images.size()) + (compressed ? " compressed" : "") +
             " images), " + imu_topic + " (" + std::to_string(d.imu.size()) +
-            " readings), by header stamp; calibration from " + calib->source + extra_notes;
+            " readings), by header stamp; calibration from " + calib->source +
+            (camera.empty() ? "" : ", its " + camera) + extra_notes;
   if (!cut_file.empty()) {
     d.truncated_file = cut_file;
     d.truncated_reason = cut_reason + ": the recording was cut short (a recorder that stopped without closing "

@@ -17,6 +17,10 @@ constexpr size_t kMagic = 13; // "#ROSBAG V2.0\n"
 /// A chunk's records, uncompressed: rosbag writes chunks of about 768 kB; anything past this is a damaged size field.
 constexpr uint64_t kMaxChunkBytes = uint64_t{1} << 30;
 
+/// What a user can do with a bag cut short (a recorder that crashed): ROS's own tool rebuilds the index from the
+/// messages that made it to disk; ovton reads ROS 1 bags through their index.
+const std::string kReindex = " (a recording cut short? `rosbag reindex` rebuilds its index from the messages it holds)";
+
 enum Op : uint8_t { kMessageData = 2, kBagHeader = 3, kIndexData = 4, kChunk = 5, kChunkInfo = 6, kConnection = 7 };
 
 uint32_t le32(const uint8_t *p) {
@@ -57,7 +61,7 @@ public:
       const std::string where = "byte " + std::to_string(pos);
       if (r.h.op == kBagHeader && r.h.index_pos > size_)
         throw DataError(file_, where + ": the index position " + std::to_string(r.h.index_pos) +
-                                   " lies past the end of the file: the bag is corrupt or truncated");
+                                   " lies past the end of the file: the bag is corrupt or truncated" + kReindex);
       if (r.h.op == kChunk)
         chunk(r, where);
       else if (r.h.op == kIndexData)
@@ -117,7 +121,7 @@ private:
     const auto past = [&](const char *what) {
       return DataError(file_, where + ": the record's " + std::string(what) + " runs past the end of " +
                                   (in_chunk.empty() ? "the file (" + std::to_string(end) + " bytes)" : "its chunk") +
-                                  ": the bag is corrupt or truncated");
+                                  ": the bag is corrupt or truncated" + (in_chunk.empty() ? kReindex : ""));
     };
     Record r;
     r.pos = pos;

@@ -126,6 +126,7 @@ Dataset load_bag(const std::string &file, const BagOptions &opt) {
                                              {kImageType, kCompressedType}, "/cam0/image_raw", "--cam-topic");
   const std::string imu_topic =
       choose_topic(file, types, opt.imu_topic, calib.imu_topic_hint, {kImuType}, "/imu0", "--imu-topic");
+  const std::string camera = select_topic_camera(calib, cam_topic);
   const bool compressed = types.at(cam_topic) == kCompressedType;
   auto store = std::make_shared<BagImageStore>(file, cam_topic, compressed, std::move(bag));
 
@@ -167,7 +168,7 @@ Dataset load_bag(const std::string &file, const BagOptions &opt) {
   finish_recording(file, cam_topic, imu_topic, calib.imu.rate_hz, std::move(msgs), store, d);
   d.notes = "topics " + cam_topic + " (" + std::to_string(d.images.size()) + (compressed ? " compressed" : "") +
             " images), " + imu_topic + " (" + std::to_string(d.imu.size()) + " readings); calibration from " +
-            calib.source;
+            calib.source + ", its " + camera;
   return d;
 }
 

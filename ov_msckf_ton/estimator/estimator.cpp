@@ -93,6 +93,18 @@ void Estimator::Impl::rethrow_if_failed() const {
 void Estimator::Impl::fail(Lock &lk, std::exception_ptr e) {
   (void)lk;
   if (!error_) {
+    // A filter that failed after the coarse search found no offset most likely started at the wrong one: say so, with
+    // what the search saw (an offset beyond its range reads "at the edge of the range").
+    if (status_.td_search && !status_.td_search->found && status_.td_search->pairs > 0) {
+      try {
+        std::rethrow_exception(e);
+      } catch (const core::EstimatorFailure &f) {
+        e = std::make_exception_ptr(core::EstimatorFailure(
+            f.t_ns(), std::string(f.what()) + "; the coarse t_d search had found no offset (" + status_.td_search->why +
+                          "): give an initial t_d near the true one or widen time_offset.search_range_s"));
+      } catch (...) {
+      }
+    }
     error_ = e;
     status_.phase = EstimatorStatus::Phase::Stopped;
     try {
