@@ -6,6 +6,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <optional>
 
@@ -193,6 +194,7 @@ std::string select_topic_camera(BagCalibration &c, const std::string &topic) {
     if (c.rig[k].rostopic.empty())
       continue;
     if (c.rig[k].rostopic == topic) {
+      c.selected = k;
       c.cam = c.rig[k].cam;
       c.td_prior_s = c.rig[k].timeshift_cam_imu_s;
       return "cam" + std::to_string(k);
@@ -209,6 +211,18 @@ std::string select_topic_camera(BagCalibration &c, const std::string &topic) {
                                   "): choose one of those topics with --cam-topic, or give the calibration of " +
                                   topic + " with --calib");
   return "cam0 (the calibration names no topics)";
+}
+
+std::vector<size_t> further_cameras(const BagCalibration &c, const std::map<std::string, std::string> &types,
+                                    const std::vector<std::string> &image_types) {
+  std::vector<size_t> out;
+  for (size_t k = 0; k < c.rig.size(); ++k) {
+    const auto it = types.find(c.rig[k].rostopic);
+    if (k != c.selected && it != types.end() &&
+        std::find(image_types.begin(), image_types.end(), it->second) != image_types.end())
+      out.push_back(k);
+  }
+  return out;
 }
 
 BagCalibration resolve_bag_calibration(const std::string &bag, const std::vector<std::string> &calib) {

@@ -5,6 +5,7 @@
 #include "ov_core/io/dataset.h"
 #include "ov_core/types/sensor_data.h"
 
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -16,6 +17,7 @@ struct BagCalibration {
   CameraCalib cam;                   ///< the camera of the chosen image topic (select_topic_camera)
   std::vector<KalibrCamera> rig;     ///< every camera of the calibration, cam0 first, with its topic
   bool topics_by_convention = false; ///< an EuRoC folder: camN's topic is the ASL bags' /camN/image_raw
+  size_t selected = 0;               ///< which camera of `rig` is `cam` (select_topic_camera)
   ImuCalib imu;
   double td_prior_s = 0.0;                    ///< the chosen camera's Kalibr timeshift_cam_imu (0 for EuRoC)
   std::vector<StateSample> groundtruth;       ///< from a companion folder, when it has one
@@ -37,6 +39,10 @@ std::optional<BagCalibration> find_bag_calibration(const std::string &bag, const
 /// folder's camN is /camN/image_raw) and returns its name for the run's notes. Throws DataError naming the calibration
 /// when its cameras (two or more) name topics (Kalibr) and none is `topic`; otherwise cam0, said in the name.
 std::string select_topic_camera(BagCalibration &c, const std::string &topic);
+/// The calibration's cameras other than the selected one whose topics `types` (topic -> message type) holds as one of
+/// `image_types`: a stereo recording's further cameras, in the chain's order (indices into c.rig).
+std::vector<size_t> further_cameras(const BagCalibration &c, const std::map<std::string, std::string> &types,
+                                    const std::vector<std::string> &image_types);
 /// Where find_bag_calibration looks beside `bag`, for messages.
 std::string bag_calibration_places(const std::string &bag);
 /// The Kalibr file pairs (camchain, imu) looked for beside `bag`, in order.

@@ -34,20 +34,28 @@ void write_text(const std::string &file, const std::string &text) {
 
 void write_kalibr_camchain(const std::string &file, const CameraCalib &cam, double td_prior_s,
                            const std::string &rostopic) {
-  const Eigen::Matrix4d T_CI = cam.T_BC.inverse();
+  write_kalibr_rig(file, {cam}, td_prior_s, {rostopic});
+}
+
+void write_kalibr_rig(const std::string &file, const std::vector<CameraCalib> &cams, double td_prior_s,
+                      const std::vector<std::string> &rostopics) {
   std::ostringstream o;
-  o << "# Kalibr camchain written by ovton export: T_cam_imu maps IMU-frame points into the camera frame.\n"
-    << "cam0:\n  T_cam_imu:\n";
-  for (int r = 0; r < 4; ++r)
-    o << "  - " << list(T_CI.row(r).transpose().eval()) << "\n";
-  o << "  camera_model: pinhole\n"
-    << "  distortion_model: " << (cam.distortion == DistortionModel::RadTan ? "radtan" : "equidistant") << "\n"
-    << "  distortion_coeffs: " << list(cam.dist_coeffs) << "\n"
-    << "  intrinsics: " << list(cam.intrinsics) << "\n"
-    << "  resolution: [" << cam.width << ", " << cam.height << "]\n"
-    << "  rate_hz: " << num(cam.rate_hz) << "\n"
-    << "  timeshift_cam_imu: " << num(td_prior_s) << "\n"
-    << "  rostopic: " << rostopic << "\n";
+  o << "# Kalibr camchain written by ovton export: T_cam_imu maps IMU-frame points into the camera frame.\n";
+  for (size_t k = 0; k < cams.size(); ++k) {
+    const CameraCalib &cam = cams[k];
+    const Eigen::Matrix4d T_CI = cam.T_BC.inverse();
+    o << "cam" << k << ":\n  T_cam_imu:\n";
+    for (int r = 0; r < 4; ++r)
+      o << "  - " << list(T_CI.row(r).transpose().eval()) << "\n";
+    o << "  camera_model: pinhole\n"
+      << "  distortion_model: " << (cam.distortion == DistortionModel::RadTan ? "radtan" : "equidistant") << "\n"
+      << "  distortion_coeffs: " << list(cam.dist_coeffs) << "\n"
+      << "  intrinsics: " << list(cam.intrinsics) << "\n"
+      << "  resolution: [" << cam.width << ", " << cam.height << "]\n"
+      << "  rate_hz: " << num(cam.rate_hz) << "\n"
+      << "  timeshift_cam_imu: " << num(td_prior_s) << "\n"
+      << "  rostopic: " << rostopics.at(k) << "\n";
+  }
   write_text(file, o.str());
 }
 

@@ -32,7 +32,10 @@ BagWriteReport write_mcap(const Dataset &d, const std::string &out, const McapEx
                           const std::function<bool(size_t, size_t)> &progress) {
   const CompressedImageEncoder encoder(opt.image_format, opt.jpeg_quality);
   const bool raw = encoder.raw();
-  const std::string cam_topic = encoder.topic(opt.cam_topic), partial = out + ".partial";
+  const std::string partial = out + ".partial";
+  std::vector<std::string> cam_topics; // the primary's, then each further camera's (a stereo folder's cam1)
+  for (size_t k = 0; k < d.num_cameras(); ++k)
+    cam_topics.push_back(encoder.topic(export_camera_topic(opt.cam_topic, k)));
   BagWriteReport rep;
   {
     McapWriter w(partial, opt.mcap);
@@ -40,7 +43,9 @@ BagWriteReport write_mcap(const Dataset &d, const std::string &out, const McapEx
       const uint16_t schema = w.add_schema(type, "ros2msg", ros2_schema(type));
       return w.add_channel(topic, schema, "cdr", {{"offered_qos_profiles", qos}});
     };
-    const uint16_t cam = channel(cam_topic, raw ? "sensor_msgs/msg/Image" : "sensor_msgs/msg/CompressedImage");
+    std::vector<uint16_t> cams;
+    for (const std::string &topic : cam_topics)
+      cams.push_back(channel(topic, raw ? "sensor_msgs/msg/Image" : "sensor_msgs/msg/CompressedImage"));
     const uint16_t info = channel(opt.info_topic, "sensor_msgs/msg/CameraInfo");
     const uint16_t imu = channel(opt.imu_topic, "sensor_msgs/msg/Imu");
     const uint16_t tf = channel("/tf_static", "tf2_msgs/msg/TFMessage", kTfStaticQos);
@@ -59,21 +64,24 @@ BagWriteReport write_mcap(const Dataset &d, const std::string &out, const McapEx
           w.write(imu, log_time(u.t_imu_ns), encode_ros2_imu(u, "imu0"));
           ++rep.imu;
         },
-        [&](const ImageEntry &e, const cv::Mat &gray) {
+        [&](const ImageEntry &e, const cv::Mat &gray, size_t camera) {
           const uint64_t t = log_time(e.t_cam_ns);
+          const std::string frame = "cam" + std::to_string(camera);
           if (raw) {
-            w.write(cam, t, encode_ros2_image(gray, e.t_cam_ns, "cam0"));
+            w.write(cams[camera], t, encode_ros2_image(gray, e.t_cam_ns, frame));
           } else {
-            w.write(cam, t,
-                    encode_ros2_compressed_image(encoder.encode(gray, e.path), opt.image_format, e.t_cam_ns, "cam0"));
+            w.write(cams[camera], t,
+                    encode_ros2_compressed_image(encoder.encode(gray, e.path), opt.image_format, e.t_cam_ns, frame));
           }
+          if (camera > 0) // the further cameras' calibration is in the Kalibr files beside the export
+            return;
           w.write(info, t, encode_ros2_camera_info(d.cam, e.t_cam_ns, "cam0"));
           ++rep.images;
         },
         progress, partial);
     w.close();
   }
-  finish_export(partial, out, d, opt.kalibr_files, cam_topic, opt.imu_topic, rep);
+  finish_export(partial, out, d, opt.kalibr_files, cam_topics, opt.imu_topic, rep);
   return rep;
 }
 

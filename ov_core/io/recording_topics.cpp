@@ -64,6 +64,20 @@ std::string choose_topic(const std::string &file, const std::map<std::string, st
   throw DataError(file, "several " + wanted + " topics (" + listing + "): choose one with " + flag);
 }
 
+std::vector<ImageEntry> finish_camera_images(const std::string &file, const std::string &topic,
+                                             std::vector<std::pair<ImageEntry, size_t>> &&images,
+                                             const std::shared_ptr<const ImageStore> &store) {
+  sort_and_check(
+      images, [](const ImageEntry &e) { return e.t_cam_ns; }, file, topic);
+  std::vector<ImageEntry> out;
+  out.reserve(images.size());
+  for (auto &[e, index] : images) {
+    e.store = store;
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
 void finish_recording(const std::string &file, const std::string &cam_topic, const std::string &imu_topic,
                       double imu_rate_hz, RecordingMessages &&m, const std::shared_ptr<const ImageStore> &store,
                       Dataset &d) {
@@ -71,24 +85,17 @@ void finish_recording(const std::string &file, const std::string &cam_topic, con
     throw DataError(file, "no message on " + cam_topic);
   if (m.imu.size() < 2)
     throw DataError(file, "fewer than 2 messages on " + imu_topic);
-  sort_and_check(
-      m.images, [](const ImageEntry &e) { return e.t_cam_ns; }, file, cam_topic);
+  d.images = finish_camera_images(file, cam_topic, std::move(m.images), store);
   sort_and_check(
       m.imu, [](const ImuData &u) { return u.t_imu_ns; }, file, imu_topic);
   const size_t bad = scan_imu_gaps(
-      m.imu.size(), [&](size_t i) { return m.imu[i].first.t_imu_ns; }, m.images.front().first.t_cam_ns,
-      m.images.back().first.t_cam_ns, imu_rate_hz, d.imu_gaps);
+      m.imu.size(), [&](size_t i) { return m.imu[i].first.t_imu_ns; }, d.images.front().t_cam_ns,
+      d.images.back().t_cam_ns, imu_rate_hz, d.imu_gaps);
   if (bad < m.imu.size())
     throw DataError(file, message_label(m.imu[bad].second, imu_topic) + ": IMU gap of " +
                               std::to_string((m.imu[bad].first.t_imu_ns - m.imu[bad - 1].first.t_imu_ns) / 1000000) +
                               " ms before it, within the images' span (gaps up to " +
                               std::to_string(static_cast<int>(kMaxImuGapS * 1000)) + " ms are propagated through)");
-  d.images.clear();
-  d.images.reserve(m.images.size());
-  for (auto &[e, index] : m.images) {
-    e.store = store;
-    d.images.push_back(std::move(e));
-  }
   d.imu.clear();
   d.imu.reserve(m.imu.size());
   for (const auto &[u, index] : m.imu)

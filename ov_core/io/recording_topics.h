@@ -33,6 +33,12 @@ struct RecordingMessages {
   std::vector<std::pair<ImuData, size_t>> imu;
 };
 
+/// A camera's images as read, sorted by header stamp and pointing at `store`. Throws DataError naming `file` and the
+/// messages for a duplicate stamp.
+std::vector<ImageEntry> finish_camera_images(const std::string &file, const std::string &topic,
+                                             std::vector<std::pair<ImageEntry, size_t>> &&images,
+                                             const std::shared_ptr<const ImageStore> &store);
+
 /// Fills d.images (each pointing at `store`) and d.imu from `m`, sorted by header stamp. Throws DataError naming
 /// `file` when a topic has no message (the IMU: fewer than 2), for duplicate stamps and for an IMU gap within the
 /// images' span longer than kMaxImuGapS (shorter ones are counted in d.imu_gaps).

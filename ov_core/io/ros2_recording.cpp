@@ -317,13 +317,36 @@ Dataset build_ros2_dataset(const std::string &root, const std::string &kind,
       std::rethrow_exception(tf_error);
     calib = calibration_from_recording(root, topics, cam_topic, imu_topic, tf_static);
   }
-  for (size_t i = 0; i < cam.sizes.size(); ++i)
-    if (static_cast<int>(cam.sizes[i].first) != calib->cam.width ||
-        static_cast<int>(cam.sizes[i].second) != calib->cam.height)
-      throw DataError(files.at(cam.places[i].file)->path(),
-                      cam.labels[i] + ": image is " + std::to_string(cam.sizes[i].first) + "x" +
-                          std::to_string(cam.sizes[i].second) + " px, the camera calibration says " +
-                          std::to_string(calib->cam.width) + "x" + std::to_string(calib->cam.height));
+  // Every image's size against its camera's calibration (from the message headers: no pixel is decoded here).
+  const auto check_sizes = [&](const Topic &t, const CameraCalib &c) {
+    for (size_t i = 0; i < t.sizes.size(); ++i)
+      if (static_cast<int>(t.sizes[i].first) != c.width || static_cast<int>(t.sizes[i].second) != c.height)
+        throw DataError(files.at(t.places[i].file)->path(),
+                        t.labels[i] + ": image is " + std::to_string(t.sizes[i].first) + "x" +
+                            std::to_string(t.sizes[i].second) + " px, the camera calibration says " +
+                            std::to_string(c.width) + "x" + std::to_string(c.height));
+  };
+  check_sizes(cam, calib->cam);
+  // The rig's further cameras whose topics the recording holds (a stereo recording's cam1), each with its own store.
+  std::vector<size_t> further;
+  if (!camera.empty())
+    further = further_cameras(*calib, types, {"sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage"});
+  std::vector<CameraStream> more;
+  std::string further_notes;
+  for (size_t k : further) {
+    const std::string &name = calib->rig[k].rostopic;
+    Topic &t = topics.at(name);
+    if (t.error)
+      std::rethrow_exception(t.error);
+    if (t.msgs.images.empty() || t.encoding != "cdr")
+      continue;
+    check_sizes(t, calib->rig[k].cam);
+    auto s = std::make_shared<Ros2ImageStore>(files, t.kind == Ros2Type::CompressedImage, std::move(t.places),
+                                              std::move(t.labels));
+    more.push_back({calib->rig[k].cam, finish_camera_images(root, name, std::move(t.msgs.images), s)});
+    further_notes +=
+        ", " + name + " (cam" + std::to_string(k) + ", " + std::to_string(more.back().images.size()) + " images)";
+  }
 
   Dataset d;
   d.root = root;
@@ -339,8 +362,9 @@ Dataset build_ros2_dataset(const std::string &root, const std::string &kind,
   m.images = std::move(cam.msgs.images);
   m.imu = std::move(imu.msgs.imu);
   finish_recording(root, cam_topic, imu_topic, d.imu_calib.rate_hz, std::move(m), store, d);
+  d.more_cameras = std::move(more);
   d.notes = "topics " + cam_topic + " (" + std::to_string(d.images.size()) + (compressed ? " compressed" : "") +
-            " images), " + imu_topic + " (" + std::to_string(d.imu.size()) +
+            " images)" + further_notes + ", " + imu_topic + " (" + std::to_string(d.imu.size()) +
             " readings), by header stamp; calibration from " + calib->source +
             (camera.empty() ? "" : ", its " + camera) + extra_notes;
   if (!cut_file.empty()) {

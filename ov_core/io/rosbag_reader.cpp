@@ -75,26 +75,32 @@ cv::Mat read_image(const rosbag::MessageInstance &m, bool compressed, const std:
   return raw_image_to_gray(img.pixels, file, where);
 }
 
-/// The images of one topic, read from the bag when the replay asks for them. rosbag::Bag reads through one file handle
-/// and one chunk buffer, so reads are serialised.
+/// The images of the camera topics (the primary's, then a rig's further cameras'), read from the bag when the replay
+/// asks for them. rosbag::Bag reads through one file handle and one chunk buffer, so reads are serialised.
 class BagImageStore : public ImageStore {
 public:
-  BagImageStore(std::string file, std::string topic, bool compressed, std::unique_ptr<rosbag::Bag> bag)
-      : file_(std::move(file)), topic_(std::move(topic)), compressed_(compressed), bag_(std::move(bag)) {}
+  BagImageStore(std::string file, std::vector<std::string> topics, std::vector<bool> compressed,
+                std::unique_ptr<rosbag::Bag> bag)
+      : file_(std::move(file)), topics_(std::move(topics)), compressed_(std::move(compressed)), bag_(std::move(bag)) {}
 
   rosbag::Bag &bag() const { return *bag_; }
-  /// Images by store index: the message and its position in the bag's time order (for errors).
-  std::vector<std::pair<rosbag::MessageInstance, size_t>> messages;
+  /// Images by store index: the message, its position in the bag's time order (for errors) and its topic's slot.
+  struct Message {
+    rosbag::MessageInstance m;
+    size_t index, slot;
+  };
+  std::vector<Message> messages;
 
   cv::Mat load(const ImageEntry &e) const override {
     std::lock_guard<std::mutex> lock(mutex_);
-    const auto &[m, index] = messages.at(e.store_index);
-    return read_image(m, compressed_, file_, message_label(index, topic_), nullptr, nullptr);
+    const Message &m = messages.at(e.store_index);
+    return read_image(m.m, compressed_.at(m.slot), file_, message_label(m.index, topics_.at(m.slot)), nullptr, nullptr);
   }
 
 private:
-  std::string file_, topic_;
-  bool compressed_;
+  std::string file_;
+  std::vector<std::string> topics_;
+  std::vector<bool> compressed_;
   std::unique_ptr<rosbag::Bag> bag_; ///< the MessageInstances point into it: never moved
   mutable std::mutex mutex_;
 };
@@ -127,20 +133,35 @@ Dataset load_bag(const std::string &file, const BagOptions &opt) {
   const std::string imu_topic =
       choose_topic(file, types, opt.imu_topic, calib.imu_topic_hint, {kImuType}, "/imu0", "--imu-topic");
   const std::string camera = select_topic_camera(calib, cam_topic);
-  const bool compressed = types.at(cam_topic) == kCompressedType;
-  auto store = std::make_shared<BagImageStore>(file, cam_topic, compressed, std::move(bag));
+  // Slot 0 the primary camera, then the rig's further cameras whose topics the bag holds (a stereo bag's cam1).
+  std::vector<std::string> cam_topics = {cam_topic};
+  std::vector<CameraCalib> cams = {calib.cam};
+  const std::vector<size_t> further = further_cameras(calib, types, {kImageType, kCompressedType});
+  for (size_t k : further) {
+    cam_topics.push_back(calib.rig[k].rostopic);
+    cams.push_back(calib.rig[k].cam);
+  }
+  std::vector<bool> compressed;
+  std::map<std::string, size_t> slot_of;
+  for (size_t s = 0; s < cam_topics.size(); ++s) {
+    compressed.push_back(types.at(cam_topics[s]) == kCompressedType);
+    slot_of[cam_topics[s]] = s;
+  }
+  auto store = std::make_shared<BagImageStore>(file, cam_topics, compressed, std::move(bag));
 
   // One pass in the bag's time order over the index of every message (for the message numbers users see in
   // `rosbag info`-style tools); only the two topics' messages are read. Images are read for their header and size and
   // dropped: the pixels are read again when the replay asks.
   RecordingMessages msgs;
+  std::vector<std::vector<std::pair<ImageEntry, size_t>>> more(further.size());
   with_bag_errors(file, "", [&] {
     rosbag::View all(store->bag());
     size_t index = 0;
     for (auto it = all.begin(); it != all.end(); ++it, ++index) {
       const rosbag::MessageInstance &m = *it;
       const std::string &topic = m.getTopic();
-      if (topic != cam_topic && topic != imu_topic)
+      const auto slot = slot_of.find(topic);
+      if (slot == slot_of.end() && topic != imu_topic)
         continue;
       const std::string where = message_label(index, topic);
       if (topic == imu_topic) {
@@ -148,12 +169,13 @@ Dataset load_bag(const std::string &file, const BagOptions &opt) {
         msgs.imu.emplace_back(decode_ros2_imu(b.data(), b.size(), file, where, nullptr, Wire::Ros1), index);
         continue;
       }
+      const size_t s = slot->second;
       ImageEntry e;
-      read_image(m, compressed, file, where, &calib.cam, &e.t_cam_ns);
+      read_image(m, compressed[s], file, where, &cams[s], &e.t_cam_ns);
       e.path = file + ": " + where;
       e.store_index = store->messages.size();
-      store->messages.emplace_back(m, index);
-      msgs.images.emplace_back(std::move(e), index);
+      store->messages.push_back({m, index, s});
+      (s == 0 ? msgs.images : more[s - 1]).emplace_back(std::move(e), index);
     }
   });
 
@@ -166,9 +188,17 @@ Dataset load_bag(const std::string &file, const BagOptions &opt) {
   d.groundtruth = std::move(calib.groundtruth);
   d.td_truth = std::move(calib.td_truth);
   finish_recording(file, cam_topic, imu_topic, calib.imu.rate_hz, std::move(msgs), store, d);
-  d.notes = "topics " + cam_topic + " (" + std::to_string(d.images.size()) + (compressed ? " compressed" : "") +
-            " images), " + imu_topic + " (" + std::to_string(d.imu.size()) + " readings); calibration from " +
-            calib.source + ", its " + camera;
+  std::string further_notes;
+  for (size_t i = 0; i < further.size(); ++i) {
+    if (more[i].empty())
+      continue;
+    d.more_cameras.push_back({cams[i + 1], finish_camera_images(file, cam_topics[i + 1], std::move(more[i]), store)});
+    further_notes += ", " + cam_topics[i + 1] + " (cam" + std::to_string(further[i]) + ", " +
+                     std::to_string(d.more_cameras.back().images.size()) + " images)";
+  }
+  d.notes = "topics " + cam_topic + " (" + std::to_string(d.images.size()) + (compressed[0] ? " compressed" : "") +
+            " images)" + further_notes + ", " + imu_topic + " (" + std::to_string(d.imu.size()) +
+            " readings); calibration from " + calib.source + ", its " + camera;
   return d;
 }
 
