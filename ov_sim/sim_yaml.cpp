@@ -6,7 +6,7 @@
 
 namespace ovton::sim {
 
-std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
+std::string sim_yaml(const SimOptions &opt, const Trajectory &traj, const std::string &imu_bias_source) {
   YAML::Emitter e;
   e.SetDoublePrecision(15); // 0.1 prints as 0.1, and every value still reads back unchanged
   e << YAML::BeginMap;
@@ -25,6 +25,8 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj) {
   e << YAML::EndMap;
   e << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
   e << YAML::Key << "source" << YAML::Value << (opt.imu_from.empty() ? "synthetic" : "real:" + opt.imu_from);
+  if (!opt.imu_from.empty()) // where the ground truth's bias columns come from (real_imu.h)
+    e << YAML::Key << "bias_truth" << YAML::Value << imu_bias_source;
   e << YAML::Key << "calibration" << YAML::Value << opt.imu_source;
   e << YAML::Key << "rate_hz" << YAML::Value << opt.imu.rate_hz;
   e << YAML::Key << "gyroscope_noise_density" << YAML::Value << opt.imu.gyro_noise_density;

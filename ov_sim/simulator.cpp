@@ -7,6 +7,7 @@
 #include "ov_sim/euroc_calib.h"
 #include "ov_sim/gt_alignment.h"
 #include "ov_sim/random.h"
+#include "ov_sim/real_imu.h"
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 namespace fs = std::filesystem;
 
@@ -126,12 +128,7 @@ std::unique_ptr<Trajectory> make_trajectory(const SimOptions &opt) {
   if (!opt.align_gt_to.empty()) {
     if (!(opt.align_blend_hz >= 0.0 && std::isfinite(opt.align_blend_hz)))
       throw ovton::core::UsageError("the ground-truth blend's crossover (--align-blend-hz) must be >= 0 (0: no blend)");
-    ovton::core::LoadOptions lo;
-    lo.check_images_exist = false;
-    const ovton::core::Dataset real = ovton::core::load_dataset(opt.align_gt_to, lo);
-    if (real.imu.empty())
-      throw ovton::core::UsageError(opt.align_gt_to + " has no IMU log (mav0/imu0/data.csv) to align " + opt.gt_file +
-                                    " to");
+    const RealImu real = load_real_imu(opt.align_gt_to);
     if (opt.align_blend_hz > 0.0 && real.groundtruth.empty())
       throw ovton::core::UsageError(opt.align_gt_to + " has no ground truth to blend " + opt.gt_file +
                                     " with (--align-blend-hz 0: the aligned file alone)");
@@ -238,7 +235,16 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   }
   fs::create_directories(mav0);
 
-  write_text(fs::path(opt.out_dir) / "sim.yaml", sim_yaml(opt, *traj));
+  std::optional<RealImu> real;
+  RealImuBiases real_biases;
+  if (!opt.imu_from.empty()) {
+    if (opt.gt_file.empty())
+      throw ovton::core::UsageError("a real IMU log (imu_from) needs the ground truth of the same flight (gt_file)");
+    real = load_real_imu(opt.imu_from);
+    real_biases =
+        real_imu_biases(*real, ovton::core::read_trajectory(opt.gt_file), "--gt " + opt.gt_file, opt.knot_dt_s);
+  }
+  write_text(fs::path(opt.out_dir) / "sim.yaml", sim_yaml(opt, *traj, real_biases.source));
   write_text(mav0 / "cam0" / "sensor.yaml", euroc_camera_yaml(opt.cam, "simulated cam0 (" + opt.cam_source + ")"));
   const bool fitted = declares_fitted_imu_noise(opt);
   write_text(mav0 / "imu0" / "sensor.yaml",
@@ -261,12 +267,9 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     add_imu_errors(*traj, opt.imu_errors, opt.imu_noise ? opt.imu.gyro_noise_density : 0.0,
                    opt.imu_noise ? opt.imu.accel_noise_density : 0.0, derive_seed(opt.seed, kImuErrors), imu.imu,
                    imu.truth);
-  if (!opt.imu_from.empty()) {
-    ovton::core::LoadOptions lo;
-    lo.check_images_exist = false;
-    const ovton::core::Dataset real = ovton::core::load_dataset(opt.imu_from, lo);
+  if (real) {
     std::vector<ovton::core::ImuData> cut;
-    for (const auto &m : real.imu)
+    for (const auto &m : real->imu)
       if (m.t_imu_ns >= traj->t_begin_ns() && m.t_imu_ns <= traj->t_end_ns())
         cut.push_back(m);
     if (cut.empty() || cut.front().t_imu_ns > traj->t_begin_ns() + 50000000 ||
@@ -275,20 +278,9 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
           "the IMU log of " + opt.imu_from +
           " does not cover the simulated time span (use the ground truth of the same sequence)");
     imu.imu = cut;
-    // Ground-truth biases of a real IMU are only known where the ground truth carries them (17-column csv).
+    // A real IMU's biases: what its ground truth, or --gt, says, else measured from the log (real_imu.h).
     for (auto &s : imu.truth)
-      s.bg.setZero(), s.ba.setZero();
-    if (real.has_groundtruth() && real.groundtruth.front().has_velocity) {
-      const auto &g = real.groundtruth;
-      for (auto &s : imu.truth) {
-        auto it = std::lower_bound(g.begin(), g.end(), s.t_ns,
-                                   [](const ovton::core::StateSample &a, int64_t t) { return a.t_ns < t; });
-        if (it == g.end())
-          --it;
-        s.bg = it->bg;
-        s.ba = it->ba;
-      }
-    }
+      real_biases.at(s.t_ns, s.bg, s.ba);
   }
   rep.n_imu = imu.imu.size();
   {

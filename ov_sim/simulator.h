@@ -39,7 +39,7 @@ struct SimOptions {
   std::string cam_source = "builtin EuRoC cam0", imu_source = "builtin EuRoC imu0 (ADIS16448)";
   bool imu_noise = true;
   bool imu_bias_walk = true;
-  std::string imu_from;     ///< semi-real: copy imu0/data.csv of this folder instead of synthesising
+  std::string imu_from;     ///< semi-real: copy this real log (EuRoC folder or imu0 CSV file, real_imu.h) instead
   ImuErrorModel imu_errors; ///< synthetic IMU: errors beyond the datasheet (imu_errors.h); off by default
   /// imu0/sensor.yaml declares the noise the IMU really has: with imu_errors on, the white noise and bias walk fitted
   /// to the synthetic log's Allan variance (fitted_imu_noise); with imu_from (a real EuRoC ADIS16448 log) the same
@@ -120,6 +120,6 @@ bool declares_fitted_imu_noise(const SimOptions &opt);
 ovton::core::ImuCalib declared_imu(const SimOptions &opt);
 
 /// Text of sim.yaml for these options (every parameter and the seed).
-std::string sim_yaml(const SimOptions &opt, const Trajectory &traj);
+std::string sim_yaml(const SimOptions &opt, const Trajectory &traj, const std::string &imu_bias_source = "");
 
 } // namespace ovton::sim

@@ -3,6 +3,7 @@
 #include "ov_core/io/trajectory_io.h"
 #include "ov_core/types/errors.h"
 #include "ov_sim/imu_match.h"
+#include "ov_sim/real_imu.h"
 #include "ov_sim/realism.h"
 #include "ov_sim/simulator.h"
 #include "tools/cli.h"
@@ -143,8 +144,10 @@ int cmd_simulate(const Args &args) {
       ("extrinsic-rot-deg", po::value(&ext_rot)->default_value("0,0,0"),
        "camera-IMU rotation error 'x,y,z': data made with R_BC = Exp(r) R_BC(yaml), r in the body frame [deg]") //
       ("extrinsic-trans-mm", po::value(&ext_trans)->default_value("0,0,0"),
-       "camera-IMU translation error 'x,y,z': data made with p_BC(yaml) + d, body frame [mm]")     //
-      ("imu-from", po::value(&o.imu_from), "semi-real: take imu0/data.csv from this EuRoC folder") //
+       "camera-IMU translation error 'x,y,z': data made with p_BC(yaml) + d, body frame [mm]") //
+      ("imu-from", po::value(&o.imu_from),
+       "semi-real: take the real IMU log of this EuRoC folder (mav0/imu0/data.csv) or of this imu0 CSV file "
+       "(e.g. ../shared/data/euroc_imu0/MH03.csv)") //
       ("realism", po::value(&realism)->default_value("euroc"),
        "clean (blotch texture, instantaneous images, datasheet IMU) | euroc (room texture, auto-exposure with "
        "motion blur, PSF, vignetting, sensor noise; tuned on real V1_01) | harsh")                            //
@@ -190,9 +193,7 @@ int cmd_simulate(const Args &args) {
   if (vm.count("match-imu")) {
     if (gt.empty() || o.imu_from.empty())
       throw ovton::core::UsageError("--match-imu needs --gt and --imu-from (a real log and its ground truth)");
-    ovton::core::LoadOptions lo;
-    lo.check_images_exist = false;
-    const ovton::core::Dataset real = ovton::core::load_dataset(o.imu_from, lo);
+    const ovton::sim::RealImu real = ovton::sim::load_real_imu(o.imu_from);
     ovton::sim::ImuMatchOptions mo;
     mo.knot_dt_s = o.knot_dt_s;
     const std::string yaml =

@@ -464,6 +464,10 @@ double interpolate_td(const std::vector<TdSample> &td_truth, int64_t t_cam_ns) {
   return a.td_s + u * (b.td_s - a.td_s);
 }
 
+std::vector<ImuData> read_euroc_imu_csv(const std::string &csv, double rate_hz) {
+  return read_imu_csv(csv, rate_hz);
+}
+
 Dataset load_euroc(const std::string &dir, const LoadOptions &opt) {
   const std::string mav0 = resolve_mav0(dir);
   Dataset d;

@@ -68,6 +68,10 @@ void select_cameras(Dataset &d, const std::vector<int> &cameras);
 /// "0,1" -> {0, 1}; throws UsageError for anything but comma-separated non-negative integers.
 std::vector<int> parse_camera_list(const std::string &s);
 
+/// An IMU log in EuRoC's imu0/data.csv format (timestamp [ns], gyro xyz, accel xyz), checked as a folder's is
+/// (order, range, spacing against rate_hz); also a flat log outside any folder (`ovton simulate --imu-from FILE`).
+std::vector<ImuData> read_euroc_imu_csv(const std::string &csv, double rate_hz);
+
 /// EuRoC sensor.yaml readers (also used by the simulator to copy calibration).
 CameraCalib load_euroc_camera_yaml(const std::string &file);
 ImuCalib load_euroc_imu_yaml(const std::string &file);

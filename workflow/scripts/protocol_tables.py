@@ -116,6 +116,33 @@ def duration_text(cfg):
     return f"{cfg['duration_s']} s"
 
 
+def imu_text(cfg):
+    if cfg.get("imu_source", "synthetic") == "real":
+        return (f"EuRoC's real imu0 log of each sequence ({cfg['euroc_imu0_dir']}) under images rendered along its "
+                f"ground truth (knots {cfg['real_knot_dt_s']} s)")
+    return "the simulator's IMU"
+
+
+def oracle_gain_checks(cells, rec):
+    """Issue #37's APE bars. Where oracle's APE is >= 10 % below sr's: the share of that gain ton captures,
+    (sr - ton) / (sr - oracle), mean over those cells (bar 0.8). Elsewhere: modes worse than 1.05x sr's APE."""
+    captured, worse, gaining = [], [], []
+    for cell in cells:
+        sr, ton, orc = rec(cell, "sr"), rec(cell, "ton"), rec(cell, "oracle")
+        if not (ok(sr) and ok(orc)):
+            continue
+        if orc["ape_rmse_m"] <= 0.9 * sr["ape_rmse_m"]:
+            gaining.append(cell)
+            if ok(ton):
+                captured.append((cell, (sr["ape_rmse_m"] - ton["ape_rmse_m"]) /
+                                 (sr["ape_rmse_m"] - orc["ape_rmse_m"])))
+        else:
+            for m, r in ((m, rec(cell, m)) for m in ("sir", "ton", "drift", "sr+random_walk", "tpn", "off")):
+                if ok(r) and r["ape_rmse_m"] > 1.05 * sr["ape_rmse_m"]:
+                    worse.append(f"{cell} {m} {r['ape_rmse_m'] / sr['ape_rmse_m']:.2f}×")
+    return gaining, captured, worse
+
+
 def make_tables(runs, out_dir, cfg):
     os.makedirs(out_dir, exist_ok=True)
     recs = load_records(runs)
@@ -126,7 +153,7 @@ def make_tables(runs, out_dir, cfg):
     stamps = [os.path.getmtime(p) for p in glob.glob(os.path.join(runs, "*", "*.json"))]
     span_h = (max(stamps) - min(stamps)) / 3600 if stamps else 0
     src = (f"Made by `snakemake -s workflow/Snakefile` (commit {commit(cfg)}): rendered EuRoC-format folders, "
-           f"{duration_text(cfg)} from {cfg['start_s']} s into each ground truth, simulate args "
+           f"{duration_text(cfg)} from {cfg['start_s']} s into each ground truth, {imu_text(cfg)}, simulate args "
            f"`{cfg['simulate_args'] or '(defaults)'}`, estimator config `{cfg['estimator_config']}`. "
            f"{len(recs)} runs, {wall / 3600:.2f} h of run wall time; records written over {span_h:.2f} h.\n\n")
 
@@ -232,6 +259,13 @@ def make_tables(runs, out_dir, cfg):
         gain = 100 * (1 - mton / msr)
         summary.append(f"- Mean APE over the cells: sr {msr:.4f} m, ton {mton:.4f} m: ton {abs(gain):.1f} % "
                        f"{'below' if gain >= 0 else 'above'} sr (bar: 20 % below; paper 42 %).\n")
+    gaining, captured, worse = oracle_gain_checks(cells3, rec)
+    summary.append(f"- Oracle's APE ≥ 10 % below sr's in {len(gaining)} of {len(cells3)} cells"
+                   + (f"; ton captures {statistics.mean(c for _, c in captured):.2f} of that gain on average (bar: "
+                      f"0.8; per cell: " + ", ".join(f"{c} {q:.2f}" for c, q in captured) + ")" if captured else "")
+                   + ".\n")
+    summary.append("- Where oracle does not gain, modes above 1.05× sr's APE (bar: none): "
+                   + (", ".join(worse) if worse else "none") + ".\n")
     worst = max(best_within, key=lambda x: x[2]) if best_within else None
     n_ok = sum(1 for _, _, q in best_within if q <= 1.2)
     summary.append(f"- Best mode within 1.2× oracle's APE in {n_ok} of {len(best_within)} cells"
