@@ -110,6 +110,12 @@ std::string sim_yaml(const SimOptions &opt, const Trajectory &traj, const std::s
   e << YAML::Key << "noise_s_per_sqrt_s" << YAML::Value << opt.td.noise_s_per_sqrt_s;
   e << YAML::Key << "wander_amplitude_s" << YAML::Value << opt.td.wander_amplitude_s;
   e << YAML::Key << "wander_period_s" << YAML::Value << opt.td.wander_period_s;
+  if (opt.cameras >= 2 && opt.cam1_own_clock) { // only then: every other folder's sim.yaml stays as it was
+    e << YAML::Key << "cam1_own_clock" << YAML::Value << YAML::BeginMap;
+    e << YAML::Key << "td0_s" << YAML::Value << opt.cam1_td0_s;
+    e << YAML::Key << "bias_s_per_s" << YAML::Value << opt.cam1_td_bias_s_per_s;
+    e << YAML::EndMap;
+  }
   e << YAML::EndMap;
   e << YAML::Key << "scene" << YAML::Value << YAML::BeginMap;
   e << YAML::Key << "margin_xy_m" << YAML::Value << opt.scene.margin_xy_m;

@@ -83,6 +83,29 @@ std::vector<int64_t> image_times(const Trajectory &traj, const SimOptions &opt) 
   return t;
 }
 
+/// cam1's IMU-clock instants under its own clock (SimOptions::cam1_own_clock), in integer ns so that the truth file's
+/// t_cam + td1 is the rendered instant exactly. Frames whose cam1 instant (with its exposure and readout) would leave
+/// the trajectory are removed from `frames`.
+std::vector<int64_t> cam1_instants(const Trajectory &traj, const SimOptions &opt, std::vector<TimedImage> &frames) {
+  const int64_t half_exposure = ovton::core::s_to_ns(max_exposure_s(opt) / 2);
+  std::vector<TimedImage> kept;
+  std::vector<int64_t> t1;
+  const int64_t first = frames.empty() ? 0 : frames.front().t_cam_ns;
+  for (const TimedImage &f : frames) {
+    const double age_s = ovton::core::ns_to_s(f.t_cam_ns - first);
+    const int64_t t = f.t_cam_ns + ovton::core::s_to_ns(opt.cam1_td0_s + opt.cam1_td_bias_s_per_s * age_s);
+    if (t - half_exposure < traj.t_begin_ns() ||
+        t + ovton::core::s_to_ns(opt.readout_s) + half_exposure > traj.t_end_ns())
+      continue;
+    kept.push_back(f);
+    t1.push_back(t);
+  }
+  if (kept.empty())
+    throw ovton::core::UsageError("cam1's clock puts every image off the trajectory");
+  frames = std::move(kept);
+  return t1;
+}
+
 /// How far the image moves between two poses of the camera [px]: the rotation angle at the focal length, plus the
 /// translation seen at 1 m (a conservative room-scale depth for sampling the exposure finely enough).
 double image_motion_px(const FramePose &a, const FramePose &b, double focal_px) {
@@ -212,6 +235,9 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
         "rolling-shutter readout must lie in [0, one frame interval = " + std::to_string(frame_s) + " s]");
   if (opt.cameras < 1 || opt.cameras > 2 || (opt.cameras == 2 && opt.features_only))
     throw ovton::core::UsageError("cameras must be 1 or 2 (2: rendered images, not --features-only)");
+  if (opt.cam1_own_clock &&
+      (opt.cameras < 2 || !(std::abs(opt.cam1_td0_s) < 1.0) || !(std::abs(opt.cam1_td_bias_s_per_s) < 0.01)))
+    throw ovton::core::UsageError("cam1's own clock needs cameras 2, |offset| < 1 s and |drift| < 10 ms/s");
   if (!(std::abs(opt.focal_error) < 0.5))
     throw ovton::core::UsageError("focal error must lie in (-0.5, 0.5) (relative)");
   if (!(std::abs(opt.gyro_scale) < 0.5))
@@ -302,14 +328,25 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
   // Image instants (IMU clock) and their camera-clock stamps.
   TdModelOptions tdo = opt.td;
   tdo.seed = derive_seed(opt.seed, kTd);
-  const std::vector<TimedImage> frames = apply_td_model(image_times(*traj, opt), tdo);
-  {
-    std::vector<ovton::core::TdSample> td;
+  std::vector<TimedImage> frames = apply_td_model(image_times(*traj, opt), tdo);
+  // cam1's instants (IMU clock) by frame: cam0's, or its own clock's (cam1_own_clock), where frames whose cam1
+  // instant leaves the trajectory are dropped for both cameras.
+  std::vector<int64_t> t_imu1;
+  if (opt.cameras >= 2 && opt.cam1_own_clock)
+    t_imu1 = cam1_instants(*traj, opt, frames);
+  else
     for (const auto &f : frames)
-      td.push_back(ovton::core::TdSample{f.t_cam_ns, f.td_s()});
-    fs::create_directories(mav0 / "td_truth");
-    ovton::core::write_td_truth((mav0 / "td_truth" / "data.csv").string(), td);
-  }
+      t_imu1.push_back(f.t_imu_ns);
+  const auto write_truth = [&](const std::string &dir, const auto &td_ns_of) {
+    std::vector<ovton::core::TdSample> td;
+    for (size_t k = 0; k < frames.size(); ++k)
+      td.push_back(ovton::core::TdSample{frames[k].t_cam_ns, 1e-9 * static_cast<double>(td_ns_of(k))});
+    fs::create_directories(mav0 / dir);
+    ovton::core::write_td_truth((mav0 / dir / "data.csv").string(), td);
+  };
+  write_truth("td_truth", [&](size_t k) { return frames[k].td_ns; });
+  if (opt.cameras >= 2 && opt.cam1_own_clock)
+    write_truth("td_truth_cam1", [&](size_t k) { return t_imu1[k] - frames[k].t_cam_ns; });
   rep.n_images = frames.size();
 
   // Images (or features), listed in cam0/data.csv as they are written.
@@ -408,9 +445,9 @@ SimReport write_simulation(const SimOptions &opt, const SimProgress &progress) {
     }
     if (renderer1) {
       if (effects1)
-        rep.n_renderings += render_exposed(*renderer1, *effects1, *traj, opt1, fr.t_imu_ns, k, acc1, img1);
+        rep.n_renderings += render_exposed(*renderer1, *effects1, *traj, opt1, t_imu1[k], k, acc1, img1);
       else
-        renderer1->render(frame_pose(*traj, opt1, fr.t_imu_ns), derive_seed(opt.seed, kRenderNoiseCam1) + k, img1);
+        renderer1->render(frame_pose(*traj, opt1, t_imu1[k]), derive_seed(opt.seed, kRenderNoiseCam1) + k, img1);
       const fs::path file = mav0 / "cam1" / "data" / name;
       if (!ovton::core::write_image(file.string(), img1, png_params))
         throw ovton::core::DataError(file.string(), "cannot write image");

@@ -35,7 +35,13 @@ struct SimOptions {
   /// 2: render cam1 too (a stereo rig, triggered with cam0: the same stamps), with calibration `cam1`.
   int cameras = 1;
   ovton::core::CameraCalib cam1; ///< defaults to euroc_cam1_calib()
-  ovton::core::ImuCalib imu;     ///< defaults to euroc_imu0_calib()
+  /// cam1 on a clock of its own: its image stamped t_cam (cam0's stamp: the driver pairs them) shows the scene at
+  /// t_imu = t_cam + td1, td1 = cam1_td0_s + cam1_td_bias_s_per_s·(t_cam − first stamp), whatever cam0's offset does;
+  /// written to mav0/td_truth_cam1/data.csv. Off: cam1 is triggered with cam0 (td1 = cam0's t_d).
+  bool cam1_own_clock = false;
+  double cam1_td0_s = 0.010;
+  double cam1_td_bias_s_per_s = 0.0;
+  ovton::core::ImuCalib imu; ///< defaults to euroc_imu0_calib()
   std::string cam_source = "builtin EuRoC cam0", imu_source = "builtin EuRoC imu0 (ADIS16448)";
   bool imu_noise = true;
   bool imu_bias_walk = true;

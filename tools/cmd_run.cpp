@@ -179,6 +179,10 @@ int cmd_run(const Args &args) {
   if (!r.traj.empty())
     std::cout << "final t_d " << r.traj.back().td_s * 1e3 << " ms (sigma " << r.traj.back().td_sigma_s * 1e3
               << " ms)\n";
+  if (!r.traj.empty())
+    for (size_t k = 0; k < r.traj.back().cam_td_s.size(); ++k)
+      std::cout << "final t_d of cam" << k + 1 << " " << r.traj.back().cam_td_s[k] * 1e3 << " ms (sigma "
+                << r.traj.back().cam_td_sigma_s[k] * 1e3 << " ms)\n";
   if (r.report.td_search && r.report.td_search->weak_excitation)
     std::cout << r.report.td_search->caution() << "\n";
   if (!nees_log.empty()) {

@@ -119,7 +119,12 @@ int cmd_simulate(const Args &args) {
       ("seed", po::value(&o.seed)->default_value(1), "random seed (same seed, same bytes)")                   //
       ("cameras", po::value(&o.cameras)->default_value(1),
        "1: cam0 alone; 2: a stereo rig, cam1 rendered too with EuRoC's stereo extrinsics (same stamps, own sensor "
-       "noise)")                                                                                              //
+       "noise)") //
+      ("cam1-td-ms", po::value<double>(),
+       "--cameras 2: cam1 on a clock of its own: its image with cam0's stamp shows t_cam + this at the first image "
+       "[ms] (whatever cam0's offset does; truth in mav0/td_truth_cam1). Absent: cam1 is triggered with cam0") //
+      ("cam1-td-bias-ms-per-s", po::value<double>(),
+       "--cameras 2: cam1's own offset grows by this [ms/s] (with --cam1-td-ms; alone: from --td0-ms)")       //
       ("td-model", po::value(&td_model)->default_value("constant"), "constant | drift | wander")              //
       ("td0-ms", po::value(&td0_ms)->default_value(10.0), "offset at the first image [ms]")                   //
       ("td-bias-ms-per-s", po::value(&td_bias)->default_value(0.1), "drift: growth [ms/s]")                   //
@@ -297,6 +302,9 @@ int cmd_simulate(const Args &args) {
   o.imu_noise = o.imu_bias_walk = vm.count("no-imu-noise") == 0;
   o.td.kind = ovton::sim::parse_td_model(td_model);
   o.td.td0_s = td0_ms * 1e-3;
+  o.cam1_own_clock = vm.count("cam1-td-ms") > 0 || vm.count("cam1-td-bias-ms-per-s") > 0;
+  o.cam1_td0_s = vm.count("cam1-td-ms") ? vm["cam1-td-ms"].as<double>() * 1e-3 : o.td.td0_s;
+  o.cam1_td_bias_s_per_s = vm.count("cam1-td-bias-ms-per-s") ? vm["cam1-td-bias-ms-per-s"].as<double>() * 1e-3 : 0.0;
   o.td.bias_s_per_s = td_bias * 1e-3;
   o.td.noise_s_per_sqrt_s = td_noise * 1e-3;
   o.td.wander_amplitude_s = td_wander_ms * 1e-3;

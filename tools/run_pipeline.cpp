@@ -12,8 +12,10 @@ RunResult run_dataset(const ovton::core::Dataset &data, const RunRequest &req) {
   Estimator est(std::move(setup));
   std::unique_ptr<ovton::core::TrajectoryWriter> writer;
   if (!req.output.empty())
-    writer = std::make_unique<ovton::core::TrajectoryWriter>(req.output, req.tum ? ovton::core::TrajectoryFormat::Tum
-                                                                                 : ovton::core::TrajectoryFormat::Csv);
+    writer = std::make_unique<ovton::core::TrajectoryWriter>(
+        req.output, req.tum ? ovton::core::TrajectoryFormat::Tum : ovton::core::TrajectoryFormat::Csv,
+        req.opt.td.per_camera && ovton::msckf::estimates_td(req.opt.td.mode) ? static_cast<int>(est.camera_count()) - 1
+                                                                             : 0);
   std::unique_ptr<ovton::eval::NeesAccumulator> nees;
   if (req.opt.init.mode == ovton::msckf::InitMode::GroundTruth)
     nees = std::make_unique<ovton::eval::NeesAccumulator>(data.groundtruth, data.td_truth);

@@ -11,10 +11,17 @@ namespace ovton::core {
 void select_cameras(Dataset &d, const std::vector<int> &cameras) {
   if (cameras.empty())
     throw UsageError("no camera selected");
+  // A camera on a clock of its own has its own true offset: it goes where the camera goes, and the primary's is the
+  // rig's (Dataset::td_truth). Without one, every camera has the rig's.
+  const bool own_clocks =
+      std::any_of(d.more_cameras.begin(), d.more_cameras.end(), [](const auto &c) { return !c.td_truth.empty(); });
   std::vector<CameraStream> all;
-  all.push_back({d.cam, std::move(d.images)});
-  for (auto &c : d.more_cameras)
+  all.push_back({d.cam, std::move(d.images), own_clocks ? d.td_truth : std::vector<TdSample>{}});
+  for (auto &c : d.more_cameras) {
+    if (own_clocks && c.td_truth.empty())
+      c.td_truth = d.td_truth;
     all.push_back(std::move(c));
+  }
   std::vector<bool> used(all.size(), false);
   for (const int k : cameras) {
     if (k < 0 || static_cast<size_t>(k) >= all.size())
@@ -26,6 +33,8 @@ void select_cameras(Dataset &d, const std::vector<int> &cameras) {
   }
   d.cam = all[static_cast<size_t>(cameras.front())].cam;
   d.images = std::move(all[static_cast<size_t>(cameras.front())].images);
+  if (own_clocks)
+    d.td_truth = all[static_cast<size_t>(cameras.front())].td_truth;
   d.more_cameras.clear();
   for (size_t i = 1; i < cameras.size(); ++i)
     d.more_cameras.push_back(std::move(all[static_cast<size_t>(cameras[i])]));

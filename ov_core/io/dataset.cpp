@@ -492,6 +492,8 @@ Dataset load_euroc(const std::string &dir, const LoadOptions &opt) {
       CameraStream c;
       c.cam = load_euroc_camera_yaml(join_path(cam, "sensor.yaml"));
       c.images = read_further_camera(join_path(cam, "data.csv"), join_path(cam, "data"), list_opt, c.cam.rate_hz);
+      if (auto td = optional_file(join_path(mav0, "td_truth_cam" + std::to_string(k) + "/data.csv")); !td.empty())
+        c.td_truth = read_td_truth(td);
       d.more_cameras.push_back(std::move(c));
     }
   std::vector<long> imu_lines;

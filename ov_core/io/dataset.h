@@ -9,11 +9,14 @@
 
 namespace ovton::core {
 
-/// A camera of a rig beyond cam0 (cam1, cam2, ...): its calibration and its own image list, camera clock. The rig
-/// shares one clock offset t_d; an image pairs with the cam0 image of the same stamp.
+/// A camera of a rig beyond cam0 (cam1, cam2, ...): its calibration and its own image list, camera clock. An image
+/// pairs with the cam0 image of the same stamp.
 struct CameraStream {
   CameraCalib cam;
   std::vector<ImageEntry> images;
+  /// Its own true offset (mav0/td_truth_camK/data.csv: a simulated camera on a clock of its own): its image stamped
+  /// t_cam shows t_imu = t_cam + this. Empty: the rig's td_truth holds for it too.
+  std::vector<TdSample> td_truth;
 };
 
 struct Dataset {

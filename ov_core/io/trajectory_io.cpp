@@ -54,14 +54,18 @@ void check_order(const TextTableReader &r, const std::vector<StateSample> &out, 
 
 } // namespace
 
-TrajectoryWriter::TrajectoryWriter(const std::string &file, TrajectoryFormat fmt) : file_(file), fmt_(fmt) {
+TrajectoryWriter::TrajectoryWriter(const std::string &file, TrajectoryFormat fmt, int camera_tds)
+    : file_(file), fmt_(fmt), camera_tds_(fmt == TrajectoryFormat::Csv ? camera_tds : 0) {
   out_.open(file, std::ios::out | std::ios::trunc);
   if (!out_)
     throw DataError(file, "cannot open for writing");
   out_ << std::setprecision(9);
-  if (fmt_ == TrajectoryFormat::Csv)
-    out_ << kTrajectoryCsvHeader << "\n";
-  else
+  if (fmt_ == TrajectoryFormat::Csv) {
+    out_ << kTrajectoryCsvHeader;
+    for (int k = 1; k <= camera_tds_; ++k)
+      out_ << ",td_cam" << k << "_s,td_cam" << k << "_sigma_s";
+    out_ << "\n";
+  } else
     out_ << "# timestamp(s) tx ty tz qx qy qz qw\n";
   out_.flush();
 }
@@ -74,7 +78,13 @@ void TrajectoryWriter::write(const StateSample &s) {
     out_ << s.t_ns << ',' << s.p.x() << ',' << s.p.y() << ',' << s.p.z() << ',' << q.w() << ',' << q.x() << ',' << q.y()
          << ',' << q.z() << ',' << s.v.x() << ',' << s.v.y() << ',' << s.v.z() << ',' << s.bg.x() << ',' << s.bg.y()
          << ',' << s.bg.z() << ',' << s.ba.x() << ',' << s.ba.y() << ',' << s.ba.z() << ',' << std::setprecision(12)
-         << s.td_s << ',' << std::setprecision(7) << s.td_sigma_s << std::setprecision(9) << "\n";
+         << s.td_s << ',' << std::setprecision(7) << s.td_sigma_s;
+    for (size_t k = 0; k < static_cast<size_t>(camera_tds_); ++k) {
+      const bool has = k < s.cam_td_s.size();
+      out_ << ',' << std::setprecision(12) << (has ? s.cam_td_s[k] : std::nan("")) << ',' << std::setprecision(7)
+           << (has ? s.cam_td_sigma_s[k] : std::nan(""));
+    }
+    out_ << std::setprecision(9) << "\n";
   } else {
     // Sign and magnitude apart: -1.5 s is "-1.500000000", not "-1.-500000000".
     const unsigned long long mag =
@@ -114,10 +124,12 @@ std::vector<StateSample> read_trajectory(const std::string &file) {
   while (r.next(f)) {
     if (ncols == 0) {
       ncols = f.size();
-      const bool ok = sep == ' ' ? ncols == 8 : (ncols == 17 || ncols == 19 || ncols == 8 || ncols == 4);
+      const bool ok =
+          sep == ' ' ? ncols == 8 : (ncols == 17 || (ncols >= 19 && ncols % 2 == 1) || ncols == 8 || ncols == 4);
       if (!ok)
         r.fail("unrecognised trajectory layout with " + std::to_string(ncols) +
-               " columns (expected CSV with 4, 8, 17 or 19 columns, or 8 space-separated TUM columns)");
+               " columns (expected CSV with 4, 8, 17 or 19 (+2 per further camera's offset) columns, or 8 "
+               "space-separated TUM columns)");
     } else if (f.size() != ncols) {
       r.fail("expected " + std::to_string(ncols) + " columns like the first row, found " + std::to_string(f.size()));
     }
@@ -143,10 +155,14 @@ std::vector<StateSample> read_trajectory(const std::string &file) {
         s.ba = Eigen::Vector3d(v[14], v[15], v[16]);
         s.has_velocity = true;
       }
-      if (ncols == 19) {
+      if (ncols >= 19) {
         s.td_s = v[17];
         s.td_sigma_s = v[18];
         s.has_td = true;
+      }
+      for (size_t i = 19; i + 1 < ncols; i += 2) {
+        s.cam_td_s.push_back(v[i]);
+        s.cam_td_sigma_s.push_back(v[i + 1]);
       }
     }
     check_order(r, out, s.t_ns);

@@ -59,6 +59,9 @@ struct StateSample {
   Eigen::Vector3d ba = Eigen::Vector3d::Zero();
   double td_s = 0.0;
   double td_sigma_s = 0.0;
+  /// A rig's further cameras' own offsets and sigmas (cam1, cam2, ...) when the estimator keeps one per camera
+  /// (time_offset.per_camera); empty otherwise.
+  std::vector<double> cam_td_s, cam_td_sigma_s;
   /// Covariance of the pose error [δθ δp] (world-frame rotation error R = Exp(δθ)·R̂, p = p̂ + δp), for NEES;
   /// only an estimator's samples carry it.
   Eigen::Matrix<double, 6, 6> P_pose = Eigen::Matrix<double, 6, 6>::Zero();

@@ -200,6 +200,15 @@ bool VioManager::try_initialize(int64_t t_cam_ns) {
   if (s.estimates_td()) {
     s.P(s.td_index, s.td_index) = sq(opt_.td.sigma_init_s);
     td_model_->initialize(s);
+    // A further camera's own offset, and its rate when asked for (a clock drifting against cam0's).
+    const bool rates = opt_.td.per_camera_rate;
+    const auto prior = [&](double sigma) { return Eigen::MatrixXd::Constant(1, 1, sq(sigma)); };
+    for (int cam = 1; opt_.td.per_camera && cam < updater_.num_cameras(); ++cam) {
+      CameraTdState c;
+      c.index = s.add_variable(prior(opt_.td.per_camera_sigma_init_s));
+      c.rate_index = rates ? s.add_variable(prior(opt_.td.rate_sigma_init)) : -1;
+      s.cam_td.push_back(c);
+    }
   }
   add_calibration_variables();
   // A track-error model for the reported covariance: from here on P_report follows P's gains (State::P_report).
@@ -335,6 +344,11 @@ void VioManager::propagate_to_image(int64_t t_cam_ns) {
   if (!propagator_.propagate(s, t_imu))
     throw ovton::core::UsageError("IMU data does not reach image " + std::to_string(t_cam_ns));
   td_model_->propagate(s, td_end, dt_imu);
+  for (CameraTdState &c : s.cam_td) {
+    c.delta += c.rate * dt_imu;
+    propagate_offset_covariance(s, c.index, c.rate_index, opt_.td.per_camera_random_walk, opt_.td.rate_random_walk,
+                                dt_imu);
+  }
 }
 
 template <typename UpdateFn> void VioManager::td_tracked_update(UpdateFn &&fn) {
@@ -521,6 +535,10 @@ ovton::core::StateSample VioManager::snapshot() const {
   o.td_s = s.td;
   // The sigmas a user sees are the reported covariance's (the filter's own P unless a track-error model is set).
   o.td_sigma_s = s.reported_td_sigma();
+  for (int cam = 1; s.has_camera_td(cam); ++cam) {
+    o.cam_td_s.push_back(s.td_of_camera(cam));
+    o.cam_td_sigma_s.push_back(s.reported_td_sigma_of_camera(cam));
+  }
   o.has_velocity = true;
   o.has_td = true;
   const auto block = [&](int r, int c) { return s.reported_block(r, c, 3, 3); };

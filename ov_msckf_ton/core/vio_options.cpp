@@ -138,6 +138,10 @@ std::vector<Field> fields(VioOptions &o) {
       field(T, "velocity_debias", up.msckf.td_velocity_debias),
       field(T, "clone_trend", td.clone_trend),
       field(T, "clone_trend_tau_s", td.clone_trend_tau_s),
+      field(T, "per_camera", td.per_camera),
+      field(T, "per_camera_sigma_init_s", td.per_camera_sigma_init_s),
+      field(T, "per_camera_random_walk", td.per_camera_random_walk),
+      field(T, "per_camera_rate", td.per_camera_rate),
       field(T, "search", td.search.enabled),
       field(T, "search_range_s", td.search.range_s),
       field(N, "fvon_max_labels", ton.fvon.max_labels),
@@ -272,6 +276,8 @@ void validate_vio_options(const VioOptions &o) {
   require(td.random_walk >= 0 && td.random_walk_tpn >= 0 && td.rate_random_walk >= 0,
           "time_offset random walks must be >= 0");
   require(td.rate_sigma_init > 0, "time_offset.rate_sigma_init must be > 0");
+  require(td.per_camera_sigma_init_s > 0 && td.per_camera_random_walk >= 0,
+          "time_offset.per_camera_sigma_init_s must be > 0 and per_camera_random_walk >= 0");
   require(o.ton.tpn.td_rate_max >= 0, "time_offset.rate_max must be >= 0");
   require(td.adaptive_block_s >= 0 && td.adaptive_block_s <= 60, "time_offset.adaptive_block_s must lie in [0, 60] s");
   require(td.jacobian_rate_window_s >= 0 && td.jacobian_rate_window_s <= 1.0,

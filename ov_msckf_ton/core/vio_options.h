@@ -63,6 +63,17 @@ struct TimeOffsetOptions {
   bool clone_trend = false;
   /// clone_trend's rate: TPN's, averaged over this time constant (0: the last one, which feeds back on itself).
   double clone_trend_tau_s = 10.0;
+  /// A rig's further cameras each get an offset of their own (State::CameraTdState: camera k's t_d is t_d + Δ_k)
+  /// instead of sharing cam0's: for cameras whose images the driver pairs under one stamp although they are not
+  /// triggered together. Only in the modes that estimate t_d. Δ_k follows a random walk, and per_camera_rate gives
+  /// it a rate of its own; cam0's model (constant, random walk, drift, TPN) stays cam0's, which camera k's t_d
+  /// inherits. docs/stereo.md.
+  bool per_camera = false;
+  double per_camera_sigma_init_s = 0.01; ///< prior sigma of Δ_k (which starts at 0: camera k at cam0's t_d)
+  double per_camera_random_walk = 1e-4;  ///< s/sqrt(s): Δ_k's noise
+  /// Δ_k's rate Δ̇_k in the state (prior rate_sigma_init, random walk rate_random_walk, as t_d's drift state): a
+  /// camera whose clock drifts against cam0's, followed without the random walk's lag.
+  bool per_camera_rate = false;
   TdSearchOptions search; ///< the coarse search before the filter starts (init/init_options.h)
 };
 

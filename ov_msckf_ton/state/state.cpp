@@ -40,6 +40,10 @@ void State::remove_block(int idx, int size) {
   };
   shift(td_index);
   shift(td_rate_index);
+  for (auto &c : cam_td) {
+    shift(c.index);
+    shift(c.rate_index);
+  }
   shift(calib.extrinsics_index);
   shift(calib.intrinsics_index);
   shift(calib.readout_index);
@@ -60,6 +64,11 @@ void State::boxplus(const Eigen::VectorXd &dx) {
     td += dx(td_index);
   if (td_rate_index >= 0)
     td_rate += dx(td_rate_index);
+  for (auto &c : cam_td) {
+    c.delta += dx(c.index);
+    if (c.rate_index >= 0)
+      c.rate += dx(c.rate_index);
+  }
   for (auto &[key, c] : clones) {
     c.R = ovton::core::so3_exp(dx.segment<3>(c.index)) * c.R;
     c.p += dx.segment<3>(c.index + 3);

@@ -8,6 +8,9 @@
 //   b_g = b̂_g + δb_g,  b_a = b̂_a + δb_a
 //   t_d = t̂_d + δt_d               t_imu = t_cam + t_d
 //   ṫ_d = ṫ̂_d + δṫ_d               rate of t_d [s/s], only with the drift-state model (td/td_drift.cpp)
+//   Δ_k = Δ̂_k + δΔ_k               camera k ≥ 1's own offset, only with time_offset.per_camera: its images are at
+//                                  t_imu = t_cam + t_d + Δ_k (t_d is cam0's; CameraTdState says why a difference)
+//   Δ̇_k = Δ̇̂_k + δΔ̇_k               its rate [s/s], only with time_offset.per_camera_rate as well
 // Online calibration (each only when estimated, calibration.* options):
 //   R_BC = Exp(δθ_BC) · R̂_BC       camera–IMU rotation, error on the body side; p_BC = p̂_BC + δp_BC
 //   k = k̂ + δk                     intrinsics [fu fv cu cv d0 d1 d2 d3] (radtan k1 k2 p1 p2 / equidistant k1..k4)
@@ -26,6 +29,7 @@
 #include <cstdint>
 #include <map>
 #include <type_traits>
+#include <vector>
 
 namespace ovton::msckf {
 
@@ -109,6 +113,17 @@ struct LandmarkState {
   int updates = 0;       ///< observations that updated it
 };
 
+/// Camera k ≥ 1's own time offset (time_offset.per_camera): its t_d is cam0's plus Δ_k. Why a difference rather
+/// than an absolute offset: every mode's treatment of cam0's t_d (sr's clone placement, the image-plane shift, the
+/// drift and TPN models) then carries over to camera k's rows unchanged, and camera k's rows gain one column, V·Δ_k,
+/// in every mode; with Δ_k = 0 and no variable the rig shares one t_d exactly as before.
+struct CameraTdState {
+  double delta = 0.0; ///< Δ_k [s]
+  int index = -1;     ///< covariance index of δΔ_k
+  double rate = 0.0;  ///< Δ̇_k [s/s], a state variable only with per_camera_rate (rate_index >= 0)
+  int rate_index = -1;
+};
+
 /// The scalar of the covariance a State::for_each_covariance function receives.
 template <class M> using covariance_scalar = typename std::decay_t<M>::Scalar;
 
@@ -123,6 +138,8 @@ public:
   int td_index = -1;    ///< -1 when t_d is not estimated
   double td_rate = 0.0; ///< ṫ_d [s/s]; a state variable only when td_rate_index >= 0 (drift-state model)
   int td_rate_index = -1;
+  /// Cameras 1, 2, ... by cam − 1 (time_offset.per_camera); empty: the rig shares t_d.
+  std::vector<CameraTdState> cam_td;
   std::map<int64_t, CloneState> clones;
   std::map<size_t, LandmarkState> landmarks; ///< by feature id
   CalibState calib;
@@ -162,6 +179,20 @@ public:
     return std::sqrt(std::max(0.0, P_report(td_index, td_index)));
   }
   double td_variance() const { return estimates_td() ? P(td_index, td_index) : 0.0; }
+  /// Whether camera `cam`'s rows carry a Δ column of their own (cam ≥ 1 with time_offset.per_camera).
+  bool has_camera_td(int cam) const { return cam > 0 && static_cast<size_t>(cam) <= cam_td.size(); }
+  /// Camera `cam`'s t_d: t_d + Δ_cam, or the rig's t_d.
+  double td_of_camera(int cam) const { return has_camera_td(cam) ? td + cam_td[cam - 1].delta : td; }
+  /// Its sigma in the covariance the run reports: var(t_d) + var(Δ) + 2 cov(t_d, Δ).
+  double reported_td_sigma_of_camera(int cam) const {
+    if (!has_camera_td(cam))
+      return reported_td_sigma();
+    const int d = cam_td[cam - 1].index;
+    const auto var = [&](const auto &C) {
+      return static_cast<double>(C(td_index, td_index) + C(d, d) + 2.0 * C(td_index, d));
+    };
+    return std::sqrt(std::max(0.0, separate_report() ? var(P_report) : var(P)));
+  }
   /// t_d at clone c's image minus the t̂_d the clone was placed with (td_ref): an image-plane observation is shifted
   /// by V times this. Where a model drives t_d at td_rate without a state for the rate (TPN with
   /// time_offset.clone_trend), an older image was taken when t_d was td_rate·age smaller; otherwise the whole window

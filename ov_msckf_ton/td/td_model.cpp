@@ -24,9 +24,13 @@ std::unique_ptr<TdModel> make_td_model(const VioOptions &opt, std::function<doub
 }
 
 void propagate_td_covariance(State &s, double q_td, double q_rate, double dt_s) {
-  if (!s.estimates_td() || !(dt_s > 0))
+  if (s.estimates_td())
+    propagate_offset_covariance(s, s.td_index, s.td_rate_index, q_td, q_rate, dt_s);
+}
+
+void propagate_offset_covariance(State &s, int d, int r, double q_td, double q_rate, double dt_s) {
+  if (d < 0 || !(dt_s > 0))
     return;
-  const int d = s.td_index, r = s.td_rate_index;
   s.for_each_covariance([&](auto &P) {
     using T = covariance_scalar<decltype(P)>;
     if (r >= 0) {

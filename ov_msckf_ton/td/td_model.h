@@ -62,4 +62,8 @@ std::unique_ptr<TdModel> make_td_model(const VioOptions &opt, std::function<doub
 /// acceleration model Q = q_r² [[dt³/3, dt²/2], [dt²/2, dt]] on top.
 void propagate_td_covariance(State &s, double q_td, double q_rate, double dt_s);
 
+/// The same for any offset at covariance index `d` with its rate at `r` (−1: none): t_d, or a further camera's Δ
+/// (time_offset.per_camera).
+void propagate_offset_covariance(State &s, int d, int r, double q_td, double q_rate, double dt_s);
+
 } // namespace ovton::msckf

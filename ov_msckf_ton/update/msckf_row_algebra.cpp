@@ -176,6 +176,12 @@ double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ovt
   return D.trace() - (Q1.transpose() * D * Q1).trace();
 }
 
+double UpdaterMSCKF::td_bias_to_remove(const FeatureLinearization &lin, const ovton::core::Feature &feature,
+                                       const VelocityProvider &velocities, const FeatureQR &qr) const {
+  return opt_.td_velocity_debias != 0.0 ? opt_.td_velocity_debias * td_velocity_bias(lin, feature, velocities, qr)
+                                        : 0.0;
+}
+
 double UpdaterMSCKF::remove_td_bias(State &state, double bias) {
   if (bias == 0.0)
     return 0.0;

@@ -98,7 +98,8 @@ void UpdaterMSCKF::usable_observations(const State &state, const ovton::core::Fe
     const auto &obs = feature.more[k].obs;
     for (size_t i = 0; i < obs.size(); ++i) {
       const auto it = state.clones.find(obs[i].t_cam_ns);
-      if (it != state.clones.end() && (td_obs != TdObservation::ImagePlane || obs[i].vel_valid))
+      const bool needs_vel = td_obs == TdObservation::ImagePlane || state.has_camera_td(static_cast<int>(k + 1));
+      if (it != state.clones.end() && (!needs_vel || obs[i].vel_valid))
         out.push_back({i, &it->second, static_cast<int>(k + 1)});
     }
   }
@@ -175,6 +176,8 @@ TriangulationResult UpdaterMSCKF::triangulate_feature(const State &state, const 
     const bool has_v = velocity_of(velocities, feature, u, v, src);
     if (td_obs == TdObservation::ImagePlane && has_v)
       z -= v * state.td_offset_at(*c);
+    if (state.has_camera_td(u.cam) && has_v)
+      z -= v * state.cam_td[u.cam - 1].delta;
     if (view.readout_s != 0.0 && has_v)
       z -= v * (view.readout_s * row_factor(view, o));
     xy_.push_back(z);
@@ -246,8 +249,18 @@ bool UpdaterMSCKF::linearize(const State &state, const ovton::core::Feature &fea
   const bool readout_col = all_readout && view.est_readout;
   for (int k = 0; k < m; ++k)
     out.obs[k].td_column = any_td;
-  // Columns: six per clone, then t_d, the extrinsics, the intrinsics and the readout where they are estimated.
-  const int c_td = 6 * m, c_ext = c_td + (any_td ? 1 : 0), c_intr = c_ext + (view.est_ext ? 6 : 0),
+  // A further camera's own offset Δ_k (time_offset.per_camera): a column on every row of that camera, whatever the
+  // mode, since those rows all have a velocity (usable_observations) and cam0's rows do not depend on Δ_k.
+  std::vector<int> &delta_col = delta_col_; // by cam: this feature's Δ column, −1 without
+  delta_col.assign(1 + more_cam_.size(), -1);
+  const int c_delta = 6 * m + (any_td ? 1 : 0);
+  int n_delta = 0;
+  for (const FeatureLinearization::Obs &o : out.obs)
+    if (state.has_camera_td(o.cam) && o.vel_source != kVelocityNone && delta_col[o.cam] < 0)
+      delta_col[o.cam] = c_delta + n_delta++;
+  // Columns: six per clone, then t_d, the cameras' Δ, the extrinsics, the intrinsics and the readout where they are
+  // estimated.
+  const int c_td = 6 * m, c_ext = c_delta + n_delta, c_intr = c_ext + (view.est_ext ? 6 : 0),
             c_ro = c_intr + (view.est_intr ? 8 : 0), nc = c_ro + (readout_col ? 1 : 0);
   out.cols.resize(nc);
   for (int k = 0; k < m; ++k)
@@ -255,6 +268,9 @@ bool UpdaterMSCKF::linearize(const State &state, const ovton::core::Feature &fea
       out.cols[6 * k + j] = out.obs[k].clone->index + j;
   if (any_td)
     out.cols[c_td] = state.td_index;
+  for (size_t cam = 1; cam < delta_col.size(); ++cam)
+    if (delta_col[cam] >= 0)
+      out.cols[delta_col[cam]] = state.cam_td[cam - 1].index;
   for (int j = 0; view.est_ext && j < 6; ++j)
     out.cols[c_ext + j] = state.calib.extrinsics_index + j;
   for (int j = 0; view.est_intr && j < 8; ++j)
@@ -284,6 +300,10 @@ bool UpdaterMSCKF::linearize(const State &state, const ovton::core::Feature &fea
     Eigen::Vector2d shift = Eigen::Vector2d::Zero();
     if (td_obs == TdObservation::ImagePlane && o.vel_source != kVelocityNone)
       shift += o.vel_xy * state.td_offset_at(c);
+    // Camera k's image was taken Δ_k after cam0's at the same stamp: z = h(clone) + V·(shift of cam0's t_d) + V·Δ_k.
+    const int c_own = delta_col[o.cam];
+    if (c_own >= 0)
+      shift += o.vel_xy * state.cam_td[o.cam - 1].delta;
     const double rho = row_factor(view, obs);
     const bool readout_shift = view.readout_s != 0.0 && o.has_readout_vel;
     if (readout_shift) {
@@ -310,6 +330,8 @@ bool UpdaterMSCKF::linearize(const State &state, const ovton::core::Feature &fea
     out.H_f.block<2, 3>(2 * k, 0) = Jd * J.H_f;
     if (o.td_column)
       out.H_x.block<2, 1>(2 * k, c_td) = Jd * o.vel_xy;
+    if (c_own >= 0)
+      out.H_x.block<2, 1>(2 * k, c_own) = Jd * o.vel_xy;
     o.Jd = Jd;
     if (ext_cols) {
       out.H_x.block<2, 3>(2 * k, c_ext) = Jd * J.H_ext_theta;
@@ -345,12 +367,6 @@ bool UpdaterMSCKF::readout_velocity(const CameraView &view, const CloneState &c,
     return false;
   Eigen::Vector2d at_lin;
   return !J || predicted_image_velocity(c.R_lin(), c.p_lin(), view.R_BC, view.p_BC, p_lin_f, c.motion, at_lin, J);
-}
-
-double UpdaterMSCKF::td_bias_to_remove(const FeatureLinearization &lin, const ovton::core::Feature &feature,
-                                       const VelocityProvider &velocities, const FeatureQR &qr) const {
-  return opt_.td_velocity_debias != 0.0 ? opt_.td_velocity_debias * td_velocity_bias(lin, feature, velocities, qr)
-                                        : 0.0;
 }
 
 void UpdaterMSCKF::append_records(const State &state, const ovton::core::Feature &feature,

@@ -42,8 +42,8 @@ struct UpdateStats {
 };
 
 /// The stacked measurement of one feature before nullspace projection. H_x is compact: its columns are the state
-/// indices in `cols` (six per observing clone, then t_d when a row carries it), so the cost does not grow with the
-/// window.
+/// indices in `cols` (six per observing clone, then t_d when a row carries it, then each further camera's own Δ with
+/// time_offset.per_camera), so the cost does not grow with the window.
 struct FeatureLinearization {
   struct Obs {
     size_t obs_index = 0; ///< in the track of camera `cam` (ovton::core::Feature::more for cam > 0)
@@ -89,6 +89,8 @@ public:
   ///   r_i = z_i − h(clone_i, p_f) − V_i·(t̂_d − td_ref_i)     (the V term only in ImagePlane mode with a velocity)
   ///   H_x: [∂h/∂δθ_i  ∂h/∂δp_i] per clone (feature_jacobians.h), and +V_i in the t_d column (paper eq. 1: the
   ///        shifted measurement z − V·(t_d − td_ref) has Jacobian −V, so the model z = h + V·(t_d − td_ref) has +V).
+  ///   A further camera k with its own offset (State::cam_td) adds V_i·Δ_k to the model of its rows in every mode
+  ///   (its image came Δ_k after cam0's of the same stamp): +V_i in Δ_k's column.
   /// Returns false when the point is behind a camera.
   bool linearize(const State &state, const ovton::core::Feature &feature, const Eigen::Vector3d &p_f,
                  TdObservation td_obs, const VelocityProvider &velocities, FeatureLinearization &out) const;
@@ -142,6 +144,8 @@ public:
   /// d(distorted pixel)/d(normalised point) at xy: residual rows are scaled by it (noise is isotropic in pixels).
   Eigen::Matrix2d distortion_jacobian(const Eigen::Vector2d &xy) const;
   const UpdaterMSCKFOptions &options() const { return opt_; }
+  /// The rig's cameras: the primary and the further ones.
+  int num_cameras() const { return 1 + static_cast<int>(more_cam_.size()); }
 
   /// The camera calibration an update uses: the state's estimate where it is estimated (calibration.* options),
   /// the configured calibration elsewhere.
@@ -177,7 +181,8 @@ public:
 private:
   /// Observations of `feature` that have a clone: the primary camera's first, then each further camera's. In the
   /// image-plane mode a further camera's observation needs its own velocity (eq. 2): without one its rows would
-  /// deny t_d's shift of the others (the all-or-nothing rule of linearize), so it is left out.
+  /// deny t_d's shift of the others (the all-or-nothing rule of linearize), so it is left out; so it is in every mode
+  /// when the camera has its own offset (its rows need V for Δ's column).
   void usable_observations(const State &state, const ovton::core::Feature &feature, TdObservation td_obs,
                            std::vector<Usable> &out) const;
   /// The velocity of a usable observation: `velocities` for the primary camera, eq. 2 for the others.
@@ -214,7 +219,8 @@ private:
     Eigen::MatrixXd dR; ///< the projected rows' extra noise for the reported covariance (covariance_track_correlation)
   };
   std::vector<Accepted> accepted_;
-  std::vector<int> cols_, where_; ///< the stacked system's state columns, and each state column's place in it
+  std::vector<int> cols_, where_;      ///< the stacked system's state columns, and each state column's place in it
+  mutable std::vector<int> delta_col_; ///< linearize: each camera's Δ column in the feature's H_x (per_camera)
 };
 
 } // namespace ovton::msckf

@@ -1,0 +1,146 @@
+// A time offset per camera (time_offset.per_camera, issue 40): a further camera's rows carry its own Δ (its t_d is
+// cam0's plus Δ) checked against finite differences in both t_d observation modes, and stereo renders whose cam1 runs
+// on a clock of its own (constant and drifting): each camera's t_d is recovered with the option, and the rig's one
+// shared t_d cannot fit both cameras without it.
+#include "estimator_test_util.h"
+#include "fd_check.h"
+#include "ov_core/io/dataset.h"
+#include "ov_sim/euroc_calib.h"
+#include "sim_fixture.h"
+#include "test_util.h"
+#include "update_test_util.h"
+
+#include <gtest/gtest.h>
+
+using namespace updtest;
+
+namespace {
+
+/// The further camera's track of feature `id` (EuRoC cam1), seen at the clones' poses moved by `delta` seconds of the
+/// scene's motion: a camera whose images come `delta` after cam0's at the same stamp.
+ovton::core::CameraCalib add_cam1_track(const Scene &sc, ovton::core::FeatureDatabase &db, size_t id, double delta) {
+  ovton::core::CameraCalib cal1 = ovton::sim::euroc_cam1_calib();
+  const Eigen::Quaterniond q(Eigen::Matrix3d(cal1.T_BC.topLeftCorner<3, 3>()));
+  cal1.T_BC.topLeftCorner<3, 3>() = q.normalized().toRotationMatrix();
+  const ovton::core::CameraModel cam1(cal1);
+  for (int64_t t : sc.stamps) {
+    const Pose P = sc.pose_at(sc.t_of(t) + sc.td_true + delta);
+    Eigen::Vector2d xy;
+    EXPECT_TRUE(project_in_clone(P.R, P.p, cal1.T_BC.topLeftCorner<3, 3>(), cal1.T_BC.topRightCorner<3, 1>(),
+                                 sc.points[id], xy));
+    const Eigen::Vector2d uv = cam1.distort(xy);
+    db.add_observation(id, t, uv, cam1.undistort(uv), 1);
+  }
+  return cal1;
+}
+
+} // namespace
+
+// Camera 1's rows w.r.t. its own Δ (and everything else) against central differences, in the clone-time mode (sr:
+// cam1's image is Δ after the clone) and the image-plane mode (sir: its shift is V·(t_d − td_ref) + V·Δ).
+TEST(StereoTdJacobians, OwnOffsetColumnMatchesFiniteDifferences) {
+  const Scene sc = make_scene(5, 5, 2.0, 0.0, 21);
+  ASSERT_EQ(sc.points.size(), 5u);
+  for (const TdObservation td_obs : {TdObservation::StateRelevant, TdObservation::ImagePlane}) {
+    State s = make_state(sc, 0.0, 0.01, 0.02, 0.02);
+    s.td = 0.004;
+    s.cam_td.push_back({0.003, s.add_variable(Eigen::MatrixXd::Constant(1, 1, 1e-4))});
+    ovton::core::FeatureDatabase db;
+    observe(sc, db, 0.0, 1);
+    const size_t id = 3;
+    const ovton::core::CameraCalib cal1 = add_cam1_track(sc, db, id, 0.004);
+    const ovton::core::Feature &f = *db.get(id);
+    UpdaterMSCKF up(sc.calib, {}, {cal1});
+    const Eigen::Vector3d p_f = sc.points[id] + Eigen::Vector3d(0.02, 0.01, -0.03);
+    // The next observation's velocity for the first ones: every cam0 row then carries t_d in the image-plane mode.
+    const VelocityProvider base;
+    const NextForFirstVelocityProvider vp(base);
+    FeatureLinearization lin;
+    ASSERT_TRUE(up.linearize(s, f, p_f, td_obs, vp, lin));
+    const int m = static_cast<int>(sc.stamps.size());
+    // cam1's first observation has no eq. 2 velocity: with its own Δ it cannot say where it was, so it is left out.
+    ASSERT_EQ(static_cast<int>(lin.obs.size()), 2 * m - 1);
+    const auto delta_col = std::find(lin.cols.begin(), lin.cols.end(), s.cam_td[0].index);
+    ASSERT_NE(delta_col, lin.cols.end());
+    const Eigen::Index j = delta_col - lin.cols.begin();
+    for (int k = 0; k < static_cast<int>(lin.obs.size()); ++k) {
+      const bool zero = lin.H_x.block(2 * k, j, 2, 1).isZero();
+      EXPECT_EQ(zero, lin.obs[k].cam == 0) << "row block " << k;
+    }
+    EXPECT_EQ(std::count(lin.cols.begin(), lin.cols.end(), s.td_index), td_obs == TdObservation::ImagePlane ? 1 : 0);
+    UpdaterMSCKF::merge_repeated_columns(lin);
+    expect_linearization_matches_fd(up, s, f, p_f, td_obs, vp, lin);
+  }
+}
+
+namespace {
+
+/// A stereo render of the built-in flight (clean images, agility 1: on the gentle flight t_d's sigma stays ~1.5 ms
+/// after 12 s) with cam1 on its own clock; 1.5 s of rows after the 10 s mark.
+ovton::core::Dataset cam1_clock_render(const std::string &dir, double td0_s, double td1_s, double td1_bias) {
+  ovton::sim::SimOptions so;
+  so.out_dir = dir;
+  so.duration_s = 11.6;
+  so.agility = 1.0;
+  so.seed = 5;
+  so.cameras = 2;
+  so.td.td0_s = td0_s;
+  so.cam1_own_clock = true;
+  so.cam1_td0_s = td1_s;
+  so.cam1_td_bias_s_per_s = td1_bias;
+  ovton::sim::write_simulation(so);
+  return ovton::core::load_dataset(dir);
+}
+
+/// The largest error of each camera's t_d over the rows 10 s and more after the first [s]: cam0's t_d, and cam1's
+/// (its own column with per_camera, the rig's t_d without).
+std::array<double, 2> td_errors_after_10s(const ovton::core::Dataset &d,
+                                          const std::vector<ovton::core::StateSample> &t) {
+  std::array<double, 2> worst{0.0, 0.0};
+  for (const auto &s : t) {
+    if (s.t_ns - t.front().t_ns < ovton::core::s_to_ns(10.0))
+      continue;
+    const int64_t t_cam = s.t_ns - ovton::core::s_to_ns(s.td_s);
+    const double td1 = s.cam_td_s.empty() ? s.td_s : s.cam_td_s[0];
+    worst[0] = std::max(worst[0], std::abs(s.td_s - d.td_truth_at(t_cam)));
+    worst[1] = std::max(worst[1], std::abs(td1 - ovton::core::interpolate_td(d.more_cameras[0].td_truth, t_cam)));
+  }
+  return worst;
+}
+
+void expect_each_camera_recovered(const ovton::core::Dataset &d, bool rate) {
+  ovton::msckf::VioOptions opt = ovtest::gt_run_options(ovton::msckf::TdMode::Sr, 1.0);
+  opt.td.per_camera_rate = rate;
+  std::array<double, 2> err[2];
+  for (int per_camera = 0; per_camera <= 1; ++per_camera) {
+    opt.td.per_camera = per_camera == 1;
+    const ovtest::EstimatorRun r = ovtest::run_estimator(d, opt);
+    ASSERT_GT(r.traj.size(), 220u);
+    ASSERT_EQ(r.traj.back().cam_td_s.size(), per_camera == 1 ? 1u : 0u);
+    err[per_camera] = td_errors_after_10s(d, r.traj);
+    std::cout << (per_camera ? "per camera" : "shared") << ": worst t_d error after 10 s, cam0 "
+              << err[per_camera][0] * 1e3 << " ms, cam1 " << err[per_camera][1] * 1e3 << " ms\n";
+  }
+  EXPECT_LT(err[1][0], 0.5e-3);
+  EXPECT_LT(err[1][1], 0.5e-3);
+  // One t_d for both cameras: at least one of them is off by more than the bar.
+  EXPECT_GT(std::max(err[0][0], err[0][1]), 0.5e-3);
+}
+
+} // namespace
+
+// cam0 at 10 ms, cam1 at 14 ms, both constant.
+TEST(StereoTdRun, EachCameraOffsetRecoveredWhenCam1HasItsOwn) {
+  ovtest::TempDir dir;
+  const ovton::core::Dataset d = cam1_clock_render(dir.str(), 0.010, 0.014, 0.0);
+  ASSERT_EQ(d.num_cameras(), 2u);
+  ASSERT_FALSE(d.more_cameras[0].td_truth.empty());
+  expect_each_camera_recovered(d, false);
+}
+
+// cam0 at 10 ms, cam1 from 14 ms drifting by 0.1 ms/s on its own clock: cam1's offset with a rate of its own.
+TEST(StereoTdRun, DriftingCam1OffsetRecovered) {
+  ovtest::TempDir dir;
+  const ovton::core::Dataset d = cam1_clock_render(dir.str(), 0.010, 0.014, 1e-4);
+  expect_each_camera_recovered(d, true);
+}
