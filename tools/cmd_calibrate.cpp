@@ -160,7 +160,7 @@ int cmd_calibrate(const Args &args) {
   cam.T_BC.block<3, 3>(0, 0) = c.R_IC;
   const std::string note = "estimated by ovton calibrate from " + fs::absolute(dir).string();
   write_text(files[0], ovton::sim::euroc_camera_yaml(cam, note));
-  write_text(files[1], ovton::sim::euroc_imu_yaml(noise.calib, note + " (noise: see calibration.txt)"));
+  write_text(files[1], ovton::sim::euroc_imu_yaml(noise.calib, note + ", noise figures in calibration.txt"));
   write_text(files[2], config_text(c, fs::absolute(dir).string()));
   fs::create_directories(root / "kalibr");
   ovton::core::write_kalibr_camchain(files[3].string(), cam, c.td_s, "/cam0/image_raw");
