@@ -20,5 +20,6 @@ int cmd_velocities(const Args &args);
 int cmd_track(const Args &args);
 int cmd_trackstats(const Args &args);
 int cmd_export(const Args &args);
+int cmd_calibrate(const Args &args);
 
 } // namespace ovton::cli

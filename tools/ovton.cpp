@@ -19,6 +19,8 @@ const std::map<std::string, Command> &commands() {
   static const std::map<std::string, Command> cmds = {
       {"run", {ovton::cli::cmd_run, "replay a dataset through the MSCKF and write a trajectory CSV"}},
       {"compare", {ovton::cli::cmd_compare, "run a dataset under several time-offset modes: tables and plots"}},
+      {"calibrate",
+       {ovton::cli::cmd_calibrate, "estimate camera-IMU rotation, focal, t_d, readout of a recording without them"}},
       {"info", {ovton::cli::cmd_info, "load a dataset folder, validate it and print what it holds"}},
       {"eval", {ovton::cli::cmd_eval, "APE/ARE/RPE/TPE/CIT of a trajectory against ground truth"}},
       {"simulate", {ovton::cli::cmd_simulate, "write a synthetic EuRoC-format folder with a known time offset"}},

@@ -473,6 +473,12 @@ Dataset load_euroc(const std::string &dir, const LoadOptions &opt) {
   Dataset d;
   d.root = dir;
   d.kind = "euroc";
+  // A recording that never had a calibration (a phone's): say how to get one rather than only what is missing.
+  if (optional_file(join_path(mav0, "cam0/sensor.yaml")).empty() &&
+      !optional_file(join_path(mav0, "cam0/data.csv")).empty())
+    throw DataError(join_path(mav0, "cam0/sensor.yaml"),
+                    "file not found: a recording without calibration? `ovton calibrate --dataset " + dir +
+                        " --out DIR` estimates one from its images and gyro");
   d.cam = load_euroc_camera_yaml(join_path(mav0, "cam0/sensor.yaml"));
   d.imu_calib = load_euroc_imu_yaml(join_path(mav0, "imu0/sensor.yaml"));
   // Feature-level folders (ovton simulate --features-only) list stamps whose images were never rendered.
@@ -504,6 +510,42 @@ Dataset load_euroc(const std::string &dir, const LoadOptions &opt) {
     d.groundtruth = read_trajectory(gt);
   if (auto td = optional_file(join_path(mav0, "td_truth/data.csv")); !td.empty())
     d.td_truth = read_td_truth(td);
+  return d;
+}
+
+/// Median spacing of time-ordered stamps [s] (0 for fewer than two).
+static double median_spacing_s(const std::vector<int64_t> &t) {
+  if (t.size() < 2)
+    return 0.0;
+  std::vector<int64_t> dt(t.size() - 1);
+  for (size_t i = 1; i < t.size(); ++i)
+    dt[i - 1] = t[i] - t[i - 1];
+  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
+  return ns_to_s(dt[dt.size() / 2]);
+}
+
+Dataset load_euroc_streams(const std::string &dir, const LoadOptions &opt) {
+  const std::string mav0 = resolve_mav0(dir);
+  Dataset d;
+  d.root = dir;
+  d.kind = "euroc";
+  const std::string cam_csv = join_path(mav0, "cam0/data.csv"), imu_csv = join_path(mav0, "imu0/data.csv");
+  // No stated rate to check the stamps against: the lists' own median spacing stands for it (rate 0 skips the
+  // check), so that arrival-time stamps with jitter are read as they are.
+  d.images = read_image_list(cam_csv, join_path(mav0, "cam0/data"), opt, 0.0);
+  std::vector<long> imu_lines;
+  d.imu = read_imu_csv(imu_csv, 0.0, &imu_lines);
+  std::vector<int64_t> t(d.images.size());
+  for (size_t i = 0; i < t.size(); ++i)
+    t[i] = d.images[i].t_cam_ns;
+  d.cam.rate_hz = 1.0 / std::max(median_spacing_s(t), 1e-6);
+  t.resize(d.imu.size());
+  for (size_t i = 0; i < t.size(); ++i)
+    t[i] = d.imu[i].t_imu_ns;
+  d.imu_calib.rate_hz = 1.0 / std::max(median_spacing_s(t), 1e-6);
+  check_overlap(d.images, d.imu, cam_csv, imu_csv);
+  check_imu_gaps(d, imu_csv, imu_lines);
+  d.notes = "no calibration read: rates from the stamps' median spacing";
   return d;
 }
 

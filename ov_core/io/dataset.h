@@ -63,6 +63,11 @@ struct LoadOptions {
 /// Throws DataError naming the file and line of the first problem found.
 Dataset load_dataset(const std::string &dir, const LoadOptions &opt = {});
 Dataset load_euroc(const std::string &dir, const LoadOptions &opt = {});
+/// The streams of an EuRoC folder without its calibration (cam0/data.csv, imu0/data.csv; no sensor.yaml read): for
+/// `ovton calibrate`. cam.rate_hz and imu_calib.rate_hz are the stamps' median rates; the camera's size, intrinsics and
+/// extrinsics and the IMU's noise are left at their defaults for the caller to fill. The same checks of the lists as
+/// load_euroc (order, overlap, IMU gaps) except the rate check. Throws DataError naming the file.
+Dataset load_euroc_streams(const std::string &dir, const LoadOptions &opt = {});
 Dataset load_scube(const std::string &dir, const LoadOptions &opt = {});
 
 /// Keeps the cameras listed (indices into cam0, cam1, ... as loaded; the first becomes the primary camera, whose
