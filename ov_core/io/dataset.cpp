@@ -544,7 +544,7 @@ Dataset load_euroc_streams(const std::string &dir, const LoadOptions &opt) {
     t[i] = d.imu[i].t_imu_ns;
   d.imu_calib.rate_hz = 1.0 / std::max(median_spacing_s(t), 1e-6);
   check_overlap(d.images, d.imu, cam_csv, imu_csv);
-  check_imu_gaps(d, imu_csv, imu_lines);
+  check_imu_gaps(d, imu_csv, imu_lines, "the stamps' median spacing");
   d.notes = "no calibration read: rates from the stamps' median spacing";
   return d;
 }
