@@ -153,6 +153,18 @@ int64_t read_stamp(const TextTableReader &r, const std::string &field, bool has_
   return t;
 }
 
+/// Median spacing of time-ordered stamps [ns] (0 for fewer than two): the rate checks and the rates of a folder
+/// without calibration.
+int64_t median_spacing_ns(const std::vector<int64_t> &t) {
+  if (t.size() < 2)
+    return 0;
+  std::vector<int64_t> dt(t.size() - 1);
+  for (size_t i = 1; i < t.size(); ++i)
+    dt[i - 1] = t[i] - t[i - 1];
+  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
+  return dt[dt.size() / 2];
+}
+
 /// The stated rate must match the stamps: a list stamped in ms or us (or a sensor.yaml with the wrong rate) shows as a
 /// median spacing far from 1/rate. Reported at the first row whose spacing is off by the same factor.
 void check_spacing(const std::string &file, const std::vector<int64_t> &t, const std::vector<long> &lines,
@@ -162,9 +174,7 @@ void check_spacing(const std::string &file, const std::vector<int64_t> &t, const
   std::vector<int64_t> dt(t.size() - 1);
   for (size_t i = 1; i < t.size(); ++i)
     dt[i - 1] = t[i] - t[i - 1];
-  std::vector<int64_t> sorted = dt;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double median = static_cast<double>(sorted[sorted.size() / 2]);
+  const double median = static_cast<double>(median_spacing_ns(t));
   const double expected = 1e9 / rate_hz;
   if (median > expected / 3 && median < expected * 3)
     return;
@@ -513,17 +523,6 @@ Dataset load_euroc(const std::string &dir, const LoadOptions &opt) {
   return d;
 }
 
-/// Median spacing of time-ordered stamps [s] (0 for fewer than two).
-static double median_spacing_s(const std::vector<int64_t> &t) {
-  if (t.size() < 2)
-    return 0.0;
-  std::vector<int64_t> dt(t.size() - 1);
-  for (size_t i = 1; i < t.size(); ++i)
-    dt[i - 1] = t[i] - t[i - 1];
-  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
-  return ns_to_s(dt[dt.size() / 2]);
-}
-
 Dataset load_euroc_streams(const std::string &dir, const LoadOptions &opt) {
   const std::string mav0 = resolve_mav0(dir);
   Dataset d;
@@ -538,11 +537,11 @@ Dataset load_euroc_streams(const std::string &dir, const LoadOptions &opt) {
   std::vector<int64_t> t(d.images.size());
   for (size_t i = 0; i < t.size(); ++i)
     t[i] = d.images[i].t_cam_ns;
-  d.cam.rate_hz = 1.0 / std::max(median_spacing_s(t), 1e-6);
+  d.cam.rate_hz = 1.0 / std::max(ns_to_s(median_spacing_ns(t)), 1e-6);
   t.resize(d.imu.size());
   for (size_t i = 0; i < t.size(); ++i)
     t[i] = d.imu[i].t_imu_ns;
-  d.imu_calib.rate_hz = 1.0 / std::max(median_spacing_s(t), 1e-6);
+  d.imu_calib.rate_hz = 1.0 / std::max(ns_to_s(median_spacing_ns(t)), 1e-6);
   check_overlap(d.images, d.imu, cam_csv, imu_csv);
   check_imu_gaps(d, imu_csv, imu_lines, "the stamps' median spacing");
   d.notes = "no calibration read: rates from the stamps' median spacing";
