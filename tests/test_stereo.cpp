@@ -107,21 +107,10 @@ TEST(StereoJacobians, SecondCameraRowsMatchFiniteDifferences) {
   ASSERT_EQ(sc.points.size(), 5u);
   State s = make_state(sc, 0.0, 0.01, 0.02, 0.02);
   s.td = 0.004;
-  ovton::core::CameraCalib cal1 = ovton::sim::euroc_cam1_calib();
-  const Eigen::Quaterniond q(Eigen::Matrix3d(cal1.T_BC.topLeftCorner<3, 3>()));
-  cal1.T_BC.topLeftCorner<3, 3>() = q.normalized().toRotationMatrix();
-  const ovton::core::CameraModel cam1(cal1);
   ovton::core::FeatureDatabase db;
   observe(sc, db, 0.0, 1);
   const size_t id = 3;
-  for (int64_t t : sc.stamps) {
-    const Pose P = sc.pose_at(sc.t_of(t));
-    Eigen::Vector2d xy;
-    ASSERT_TRUE(project_in_clone(P.R, P.p, cal1.T_BC.topLeftCorner<3, 3>(), cal1.T_BC.topRightCorner<3, 1>(),
-                                 sc.points[id], xy));
-    const Eigen::Vector2d uv = cam1.distort(xy);
-    db.add_observation(id, t, uv, cam1.undistort(uv), 1);
-  }
+  const ovton::core::CameraCalib cal1 = add_cam1_track(sc, db, id, 0.0);
   const ovton::core::Feature &f = *db.get(id);
   ASSERT_EQ(f.more.size(), 1u);
   UpdaterMSCKF up(sc.calib, {}, {cal1});

@@ -14,28 +14,6 @@
 
 using namespace updtest;
 
-namespace {
-
-/// The further camera's track of feature `id` (EuRoC cam1), seen at the clones' poses moved by `delta` seconds of the
-/// scene's motion: a camera whose images come `delta` after cam0's at the same stamp.
-ovton::core::CameraCalib add_cam1_track(const Scene &sc, ovton::core::FeatureDatabase &db, size_t id, double delta) {
-  ovton::core::CameraCalib cal1 = ovton::sim::euroc_cam1_calib();
-  const Eigen::Quaterniond q(Eigen::Matrix3d(cal1.T_BC.topLeftCorner<3, 3>()));
-  cal1.T_BC.topLeftCorner<3, 3>() = q.normalized().toRotationMatrix();
-  const ovton::core::CameraModel cam1(cal1);
-  for (int64_t t : sc.stamps) {
-    const Pose P = sc.pose_at(sc.t_of(t) + sc.td_true + delta);
-    Eigen::Vector2d xy;
-    EXPECT_TRUE(project_in_clone(P.R, P.p, cal1.T_BC.topLeftCorner<3, 3>(), cal1.T_BC.topRightCorner<3, 1>(),
-                                 sc.points[id], xy));
-    const Eigen::Vector2d uv = cam1.distort(xy);
-    db.add_observation(id, t, uv, cam1.undistort(uv), 1);
-  }
-  return cal1;
-}
-
-} // namespace
-
 // Camera 1's rows w.r.t. its own Δ (and everything else) against central differences, in the clone-time mode (sr:
 // cam1's image is Δ after the clone) and the image-plane mode (sir: its shift is V·(t_d − td_ref) + V·Δ).
 TEST(StereoTdJacobians, OwnOffsetColumnMatchesFiniteDifferences) {

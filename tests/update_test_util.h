@@ -34,6 +34,14 @@ inline ovton::core::CameraCalib euroc_cam0() {
   return c;
 }
 
+/// EuRoC cam1, its rotation re-orthonormalised as euroc_cam0's.
+inline ovton::core::CameraCalib euroc_cam1() {
+  ovton::core::CameraCalib c = ovton::sim::euroc_cam1_calib();
+  const Eigen::Quaterniond q(Eigen::Matrix3d(c.T_BC.topLeftCorner<3, 3>()));
+  c.T_BC.topLeftCorner<3, 3>() = q.normalized().toRotationMatrix();
+  return c;
+}
+
 struct Pose {
   Eigen::Matrix3d R;
   Eigen::Vector3d p;
@@ -164,6 +172,27 @@ inline void observe_ar1(const Scene &sc, ovton::core::FeatureDatabase &db, doubl
     }
     first = false;
   }
+}
+
+/// Camera 1's track of point `id` (EuRoC cam1, euroc_cam1()) in every image, seen at the poses `delta` seconds of
+/// motion after cam0's (a camera whose images come `delta` after cam0's at the same stamp), Gaussian pixel noise of
+/// noise_px from `rng`. Returns cam1's calibration.
+inline ovton::core::CameraCalib add_cam1_track(const Scene &sc, ovton::core::FeatureDatabase &db, size_t id,
+                                               double delta, double noise_px = 0.0, std::mt19937 *rng = nullptr) {
+  const ovton::core::CameraCalib cal1 = euroc_cam1();
+  const ovton::core::CameraModel cam1(cal1);
+  std::normal_distribution<double> n(0.0, noise_px);
+  for (int64_t t : sc.stamps) {
+    const Pose P = sc.pose_at(sc.t_of(t) + sc.td_true + delta);
+    Eigen::Vector2d xy;
+    EXPECT_TRUE(project_in_clone(P.R, P.p, cal1.T_BC.topLeftCorner<3, 3>(), cal1.T_BC.topRightCorner<3, 1>(),
+                                 sc.points[id], xy));
+    Eigen::Vector2d uv = cam1.distort(xy);
+    if (rng)
+      uv += Eigen::Vector2d(n(*rng), n(*rng));
+    db.add_observation(id, t, uv, cam1.undistort(uv), 1);
+  }
+  return cal1;
 }
 
 inline std::vector<const ovton::core::Feature *> all_features(const ovton::core::FeatureDatabase &db) {

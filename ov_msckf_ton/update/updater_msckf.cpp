@@ -115,6 +115,7 @@ bool UpdaterMSCKF::velocity_of(const VelocityProvider &velocities, const ovton::
 UpdaterMSCKF::CameraView UpdaterMSCKF::camera_view(const State &state, int cam) const {
   const CalibState &c = state.calib;
   CameraView v;
+  v.index = cam;
   if (cam > 0) {
     const ovton::core::CameraCalib &k = more_calib_.at(static_cast<size_t>(cam - 1));
     v.R_BC = k.T_BC.topLeftCorner<3, 3>();

@@ -157,6 +157,7 @@ public:
     double readout_s = 0.0;
     int height = 0;
     bool est_ext = false, est_intr = false, est_readout = false;
+    int index = 0; ///< the camera in the rig (0: the primary)
   };
   /// Camera `cam` of the rig (0: the primary). The further cameras' calibration is fixed; the readout is the rig's.
   CameraView camera_view(const State &state, int cam = 0) const;

@@ -160,10 +160,17 @@ bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &s
   const bool predicted = motion && opt_.state_velocity && td_obs == TdObservation::ImagePlane &&
                          predicted_image_velocity(c.R, c.p, view.R_BC, view.p_BC, l.p_W, *motion, vel);
   const bool has_vel = predicted || velocities.velocity(feature, obs_index, vel, src);
+  // A further camera's row without a velocity would deny the shift t_d (or its own Δ) gives the others: left out.
+  const bool own_delta = state.has_camera_td(view.index);
+  if (view.index > 0 && !has_vel && (td_obs == TdObservation::ImagePlane || own_delta))
+    return false;
   out.td_column = td_obs == TdObservation::ImagePlane && state.estimates_td() && has_vel;
   Eigen::Vector2d shift = Eigen::Vector2d::Zero();
   if (out.td_column)
     shift += vel * state.td_offset_at(c);
+  out.delta_index = own_delta ? state.cam_td[static_cast<size_t>(view.index - 1)].index : -1;
+  if (own_delta)
+    shift += vel * state.cam_td[static_cast<size_t>(view.index - 1)].delta;
   // The rolling shutter's shift, with the velocity UpdaterMSCKF::readout_velocity chooses (the state's prediction at
   // this clone's own motion, by default).
   const double rho = UpdaterMSCKF::row_factor(view, o);
@@ -188,6 +195,7 @@ bool UpdaterSLAM::linearize(const UpdaterMSCKF::CameraView &view, const State &s
   out.H_clone.rightCols<3>() = Jd * J.H_p;
   out.H_f = Jd * J.H_f;
   out.H_td = out.td_column ? Eigen::Vector2d(Jd * vel) : Eigen::Vector2d::Zero();
+  out.H_delta = own_delta ? Eigen::Vector2d(Jd * vel) : Eigen::Vector2d::Zero();
   const double tr = has_ro ? view.readout_s * rho : 0.0; // the shift's dependence on the state, through V
   if (tr != 0.0) {
     out.H_clone.leftCols<3>() += tr * Jd * Jv.H_theta;
@@ -234,13 +242,14 @@ bool UpdaterSLAM::difference_previous(const UpdaterMSCKF::CameraView &view, cons
   if (it == state.clones.end() || !linearize(view, state, l, it->second, f, i, td_obs, velocities, prev))
     return false;
   // The same columns on both sides (t_d and the readout follow the velocity's availability): else not differenced.
-  if (prev.td_column != lin.td_column || prev.calib_cols != lin.calib_cols)
+  if (prev.td_column != lin.td_column || prev.delta_index != lin.delta_index || prev.calib_cols != lin.calib_cols)
     return false;
   const double s = 1.0 / std::sqrt(1.0 - rho * rho);
   lin.r = (lin.r - rho * prev.r) * s;
   lin.H_clone *= s;
   lin.H_f = (lin.H_f - rho * prev.H_f) * s;
   lin.H_td = (lin.H_td - rho * prev.H_td) * s;
+  lin.H_delta = (lin.H_delta - rho * prev.H_delta) * s;
   lin.H_calib = (lin.H_calib - rho * prev.H_calib) * s;
   prev.H_clone *= -rho * s;
   prev_clone_index = it->second.index;
@@ -265,20 +274,20 @@ void UpdaterSLAM::update(State &state, const ovton::core::FeatureDatabase &db, i
   LandmarkLinearization lin, lin_prev;
   std::vector<int> cols;
   const double rho = opt_.track_correlation;
-  for (auto &[id, l] : state.landmarks) {
-    const ovton::core::Feature *f = db.get(id);
-    if (!f || f->obs.empty() || f->newest().t_cam_ns != t_cam_ns)
-      continue; // not seen in this image: the caller marginalises it
-    if (!linearize(view, state, l, c, *f, f->obs.size() - 1, td_obs, velocities, lin, motion)) {
-      drop.push_back(id);
-      continue;
-    }
-    // Correlated track errors (AR(1), ρ): the observation is differenced against the landmark's previous one,
+  // The rig's further cameras: their calibration views, and eq. 2 for their tracks' velocities (as in the MSCKF).
+  std::vector<UpdaterMSCKF::CameraView> others;
+  for (int cam = 1; cam < msckf_.num_cameras(); ++cam)
+    others.push_back(msckf_.camera_view(state, cam));
+  const VelocityProvider eq2;
+  // One observation's row pair, after its chi-square test, into the stacked system. `track`: the camera's track.
+  const auto add_row = [&](const UpdaterMSCKF::CameraView &v, LandmarkState &l, const ovton::core::Feature &track,
+                           const VelocityProvider &vel) {
+    // Correlated track errors (AR(1), ρ): the observation is differenced against the same camera's previous one,
     // z_k − ρ z_{k−1} = h_k(x) − ρ h_{k−1}(x) + w_k, whose noise w_k = e_k − ρ e_{k−1} is independent of every
     // earlier error (variance σ²(1 − ρ²)): the exact treatment while the previous image's clone is in the state.
     int prev_index = 0;
-    const bool differenced = rho != 0.0 && f->obs.size() >= 2 &&
-                             difference_previous(view, state, l, *f, td_obs, velocities, lin, lin_prev, prev_index);
+    const bool differenced = rho != 0.0 && track.obs.size() >= 2 &&
+                             difference_previous(v, state, l, track, td_obs, vel, lin, lin_prev, prev_index);
     cols.clear();
     for (int j = 0; j < 6; ++j)
       cols.push_back(c.index + j);
@@ -286,6 +295,8 @@ void UpdaterSLAM::update(State &state, const ovton::core::FeatureDatabase &db, i
       cols.push_back(l.index + j);
     if (lin.td_column)
       cols.push_back(state.td_index);
+    if (lin.delta_index >= 0)
+      cols.push_back(lin.delta_index);
     cols.insert(cols.end(), lin.calib_cols.begin(), lin.calib_cols.end());
     if (differenced)
       for (int j = 0; j < 6; ++j)
@@ -296,6 +307,8 @@ void UpdaterSLAM::update(State &state, const ovton::core::FeatureDatabase &db, i
     int k = 9;
     if (lin.td_column)
       H.col(k++) = lin.H_td;
+    if (lin.delta_index >= 0)
+      H.col(k++) = lin.H_delta;
     H.middleCols(k, lin.H_calib.cols()) = lin.H_calib;
     if (differenced)
       H.rightCols<6>() = lin_prev.H_clone; // already −ρ/√(1 − ρ²) times the previous clone's block
@@ -304,12 +317,31 @@ void UpdaterSLAM::update(State &state, const ovton::core::FeatureDatabase &db, i
     const double chi2 = lin.r.dot(S.ldlt().solve(lin.r));
     if (!std::isfinite(chi2) || chi2 > thr) {
       ++stats.gated;
-      continue;
+      return;
     }
     rows_H.push_back(H);
     rows_cols.push_back(cols);
     rows_r.push_back(lin.r);
     ++l.updates;
+  };
+  for (auto &[id, l] : state.landmarks) {
+    const ovton::core::Feature *f = db.get(id);
+    if (!f || f->obs.empty() || f->newest().t_cam_ns != t_cam_ns)
+      continue; // not seen in this image: the caller marginalises it
+    if (!linearize(view, state, l, c, *f, f->obs.size() - 1, td_obs, velocities, lin, motion)) {
+      drop.push_back(id);
+      continue;
+    }
+    add_row(view, l, *f, velocities);
+    // The same landmark in the further cameras' images of this instant (their stamp is the primary's). A row that
+    // cannot be linearised there is left out; the landmark stays (the primary camera decides).
+    for (size_t k = 0; k < f->more.size() && k < others.size(); ++k) {
+      const ovton::core::Feature &track = f->more[k];
+      if (track.obs.empty() || track.newest().t_cam_ns != t_cam_ns ||
+          !linearize(others[k], state, l, c, track, track.obs.size() - 1, td_obs, eq2, lin, motion))
+        continue;
+      add_row(others[k], l, track, eq2);
+    }
   }
   if (rows_r.empty())
     return;

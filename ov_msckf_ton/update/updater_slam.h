@@ -30,6 +30,10 @@ struct LandmarkLinearization {
   Eigen::Matrix<double, 2, 3> H_f = Eigen::Matrix<double, 2, 3>::Zero();
   Eigen::Vector2d H_td = Eigen::Vector2d::Zero();
   bool td_column = false;
+  /// A further camera with its own offset Δ_k (time_offset.per_camera): the column +Jd·V of δΔ_k, state index
+  /// delta_index (−1: no such column).
+  Eigen::Vector2d H_delta = Eigen::Vector2d::Zero();
+  int delta_index = -1;
   std::vector<int> calib_cols;                      ///< state indices of H_calib's columns
   Eigen::Matrix<double, 2, Eigen::Dynamic> H_calib; ///< extrinsics, intrinsics, readout where estimated
   double depth = 0.0;
@@ -49,8 +53,10 @@ public:
   void initialize(State &state, const std::vector<const ovton::core::Feature *> &features, int64_t t_cam_ns,
                   TdObservation td_obs, const VelocityProvider &velocities, SlamStats &stats);
 
-  /// Updates every landmark observed at t_cam_ns (the newest clone) with that observation: one chi-square test per
-  /// landmark (2 dof), the passing ones stacked into one EKF update. Landmarks that can no longer be linearised
+  /// Updates every landmark observed at t_cam_ns (the newest clone) with that observation in each camera of the rig:
+  /// one chi-square test per observation (2 dof), the passing ones stacked into one EKF update. A further camera's
+  /// observation follows the MSCKF's rule (UpdaterMSCKF::usable_observations): in image-plane modes, or with an offset
+  /// of its own, it needs its eq. 2 velocity, else it is left out. Landmarks that can no longer be linearised
   /// (behind the camera, outside the depth range) are appended to `drop` for the caller to marginalise. `motion`:
   /// the body's motion at t_cam_ns, for the predicted velocities of image-plane modes (state_velocity).
   void update(State &state, const ovton::core::FeatureDatabase &db, int64_t t_cam_ns, TdObservation td_obs,
