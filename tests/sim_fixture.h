@@ -34,4 +34,21 @@ inline ovton::msckf::VioOptions gt_run_options(ovton::msckf::TdMode mode, double
   return opt;
 }
 
+/// A stereo render of the built-in flight (clean images, agility 1: on the gentle flight t_d's sigma stays ~1.5 ms
+/// after 12 s) with cam1 on its own clock; 1.5 s of rows after the 10 s mark.
+inline ovton::core::Dataset cam1_clock_render(const std::string &dir, double td0_s, double td1_s, double td1_bias) {
+  ovton::sim::SimOptions so;
+  so.out_dir = dir;
+  so.duration_s = 11.6;
+  so.agility = 1.0;
+  so.seed = 5;
+  so.cameras = 2;
+  so.td.td0_s = td0_s;
+  so.cam1_own_clock = true;
+  so.cam1_td0_s = td1_s;
+  so.cam1_td_bias_s_per_s = td1_bias;
+  ovton::sim::write_simulation(so);
+  return ovton::core::load_dataset(dir);
+}
+
 } // namespace ovtest

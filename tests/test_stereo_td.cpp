@@ -53,23 +53,6 @@ TEST(StereoTdJacobians, OwnOffsetColumnMatchesFiniteDifferences) {
 
 namespace {
 
-/// A stereo render of the built-in flight (clean images, agility 1: on the gentle flight t_d's sigma stays ~1.5 ms
-/// after 12 s) with cam1 on its own clock; 1.5 s of rows after the 10 s mark.
-ovton::core::Dataset cam1_clock_render(const std::string &dir, double td0_s, double td1_s, double td1_bias) {
-  ovton::sim::SimOptions so;
-  so.out_dir = dir;
-  so.duration_s = 11.6;
-  so.agility = 1.0;
-  so.seed = 5;
-  so.cameras = 2;
-  so.td.td0_s = td0_s;
-  so.cam1_own_clock = true;
-  so.cam1_td0_s = td1_s;
-  so.cam1_td_bias_s_per_s = td1_bias;
-  ovton::sim::write_simulation(so);
-  return ovton::core::load_dataset(dir);
-}
-
 /// The largest error of each camera's t_d over the rows 10 s and more after the first [s]: cam0's t_d, and cam1's
 /// (its own column with per_camera, the rig's t_d without).
 std::array<double, 2> td_errors_after_10s(const ovton::core::Dataset &d,
@@ -110,7 +93,7 @@ void expect_each_camera_recovered(const ovton::core::Dataset &d, bool rate) {
 // cam0 at 10 ms, cam1 at 14 ms, both constant.
 TEST(StereoTdRun, EachCameraOffsetRecoveredWhenCam1HasItsOwn) {
   ovtest::TempDir dir;
-  const ovton::core::Dataset d = cam1_clock_render(dir.str(), 0.010, 0.014, 0.0);
+  const ovton::core::Dataset d = ovtest::cam1_clock_render(dir.str(), 0.010, 0.014, 0.0);
   ASSERT_EQ(d.num_cameras(), 2u);
   ASSERT_FALSE(d.more_cameras[0].td_truth.empty());
   expect_each_camera_recovered(d, false);
@@ -119,6 +102,6 @@ TEST(StereoTdRun, EachCameraOffsetRecoveredWhenCam1HasItsOwn) {
 // cam0 at 10 ms, cam1 from 14 ms drifting by 0.1 ms/s on its own clock: cam1's offset with a rate of its own.
 TEST(StereoTdRun, DriftingCam1OffsetRecovered) {
   ovtest::TempDir dir;
-  const ovton::core::Dataset d = cam1_clock_render(dir.str(), 0.010, 0.014, 1e-4);
+  const ovton::core::Dataset d = ovtest::cam1_clock_render(dir.str(), 0.010, 0.014, 1e-4);
   expect_each_camera_recovered(d, true);
 }

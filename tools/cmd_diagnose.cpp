@@ -14,6 +14,7 @@ namespace po = boost::program_options;
 int ovton::cli::cmd_diagnose(const ovton::cli::Args &args) {
   std::string log_file, dataset_dir, out_dir, calib_file;
   bool nominal = false;
+  int camera = -1;
   ovton::eval::DiagnoseOptions opt;
   po::options_description desc(
       "usage: ovton diagnose --log FILE [--dataset DIR] [--out DIR]\n\n"
@@ -24,7 +25,8 @@ int ovton::cli::cmd_diagnose(const ovton::cli::Args &args) {
       "them on the residuals (lower bounds). Ranks them by the share of their data they explain and says\n"
       "which are significant; what the log cannot resolve (too short, too few independent clusters, a platform\n"
       "that did not move) is reported as not testable on it. Writes diagnose.md, diagnose.json and PNG plots\n"
-      "(docs/diagnose.md).\n\noptions");
+      "(docs/diagnose.md). A rig's further cameras have logs of their own (res_cam1.csv beside res.csv), each\n"
+      "diagnosed with that camera's calibration.\n\noptions");
   // clang-format off
   desc.add_options()
     ("help,h", "print this help")
@@ -32,6 +34,9 @@ int ovton::cli::cmd_diagnose(const ovton::cli::Args &args) {
     ("dataset", po::value(&dataset_dir),
      "dataset folder the log was made from: camera (intrinsics, distortion, camera-body rotation, height) and "
      "raw IMU (default: height and intrinsics from the log; time candidates on the residual)")
+    ("camera", po::value(&camera),
+     "the rig's camera whose rows the log holds (default: K for a log named *_camK.csv, else 0, the primary); "
+     "its calibration is taken from --dataset")
     ("calibration-log", po::value(&calib_file),
      "the filter's calibration per update (default: <log>_calib.csv beside the log when it exists, which `ovton run "
      "--residual-log` writes); the rates compare the images with the IMU through it")
@@ -57,14 +62,28 @@ int ovton::cli::cmd_diagnose(const ovton::cli::Args &args) {
     throw ovton::core::UsageError("--min-sigma must be > 0, --min-explained in [0, 1), --time-bins >= 1");
   if (!(opt.gravity_mag > 9.7 && opt.gravity_mag < 9.9))
     throw ovton::core::UsageError("--gravity must be between 9.7 and 9.9 m/s^2 (Earth's surface)");
+  if (camera < 0)
+    camera = ovton::core::camera_of_residual_log(log_file);
+  if (camera > 0) {
+    std::cout << "camera " << camera << "'s rows" << (vm.count("camera") ? "" : " (from the log's file name)") << "\n";
+    // The calibration log is the filter's primary camera's (its extrinsics and intrinsics): not this camera's.
+    if (!calib_file.empty())
+      throw ovton::core::UsageError("--calibration-log holds the primary camera's calibration: not for camera " +
+                                    std::to_string(camera) + "'s log (leave it out)");
+    nominal = true;
+  }
   if (!dataset_dir.empty()) {
     ovton::core::LoadOptions lo;
     lo.check_images_exist = false;
     const ovton::core::Dataset data = ovton::core::load_dataset(dataset_dir, lo);
-    opt.image_height = data.cam.height;
-    opt.fu = data.cam.intrinsics(0), opt.fv = data.cam.intrinsics(1);
-    opt.cu = data.cam.intrinsics(2), opt.cv = data.cam.intrinsics(3);
-    opt.camera = data.cam;
+    if (static_cast<size_t>(camera) >= data.num_cameras())
+      throw ovton::core::UsageError("camera " + std::to_string(camera) + ": the dataset " + dataset_dir + " has " +
+                                    std::to_string(data.num_cameras()) + " camera(s)");
+    const ovton::core::CameraCalib &cam = camera == 0 ? data.cam : data.more_cameras[camera - 1].cam;
+    opt.image_height = cam.height;
+    opt.fu = cam.intrinsics(0), opt.fv = cam.intrinsics(1);
+    opt.cu = cam.intrinsics(2), opt.cv = cam.intrinsics(3);
+    opt.camera = cam;
     opt.have_camera = true;
     opt.imu = data.imu;
   }

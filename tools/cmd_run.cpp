@@ -43,8 +43,9 @@ int cmd_run(const Args &args) {
       ("format", po::value(&format), "csv (default) or tum")                       //
       ("cameras", po::value(&cameras),
        "the rig's cameras to use, e.g. 0 or 0,1 (the first is the primary; default: every camera the recording has, "
-       "up to rig.max_cameras)")                                                                          //
-      ("residual-log", po::value(&req.residual_log), "write every feature residual of every update here") //
+       "up to rig.max_cameras)") //
+      ("residual-log", po::value(&req.residual_log),
+       "write every feature residual of every update here (a rig's further cameras: FILE_camK.csv beside it)") //
       ("velocity-log", po::value(&req.velocity_log),
        "write each observation's image velocity by every rule and network here (for `ovton velocities`)") //
       ("init", po::value(&init),

@@ -261,11 +261,41 @@ constexpr size_t kStateCount = 8;
 
 } // namespace
 
-std::string calibration_log_path(const std::string &residual_log) {
-  const size_t slash = residual_log.find_last_of('/');
-  const size_t dot = residual_log.find_last_of('.');
+namespace {
+
+/// The path split before its extension (none when the last component has no dot after its first character).
+std::pair<std::string, std::string> stem_and_extension(const std::string &path) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
   const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
-  return (has_ext ? residual_log.substr(0, dot) : residual_log) + "_calib.csv";
+  return has_ext ? std::make_pair(path.substr(0, dot), path.substr(dot)) : std::make_pair(path, std::string());
+}
+
+} // namespace
+
+std::string calibration_log_path(const std::string &residual_log) {
+  return stem_and_extension(residual_log).first + "_calib.csv";
+}
+
+std::string residual_log_path_of_camera(const std::string &path, int cam) {
+  if (cam == 0)
+    return path;
+  const auto [stem, ext] = stem_and_extension(path);
+  return stem + "_cam" + std::to_string(cam) + ext;
+}
+
+int camera_of_residual_log(const std::string &path) {
+  const std::string stem = stem_and_extension(path).first;
+  const size_t at = stem.rfind("_cam");
+  if (at == std::string::npos || at + 4 >= stem.size() || stem.find('/', at) != std::string::npos)
+    return 0;
+  int cam = 0;
+  for (size_t i = at + 4; i < stem.size(); ++i) {
+    if (stem[i] < '0' || stem[i] > '9' || cam > 1000)
+      return 0;
+    cam = 10 * cam + (stem[i] - '0');
+  }
+  return cam;
 }
 
 std::string calibration_log_header(bool with_state) {

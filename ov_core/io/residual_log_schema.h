@@ -23,6 +23,9 @@ enum class ResidualStatus : int {
 struct ResidualLogRow {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   long line = 0; ///< 1-based line in the file it was read from (0 when not read from a file), for messages
+  /// The rig's camera that made the observation (0: the primary). Not a column: each camera's rows go to a file of
+  /// their own (residual_log_path_of_camera), so that a track's rows in one file are one camera's.
+  int cam = 0;
   uint64_t update_id = 0;
   int64_t t_cam_ns = 0;
   uint64_t feature_id = 0;
@@ -54,6 +57,12 @@ struct ResidualLog {
 std::string residual_log_header();
 /// One row as a CSV line (without newline): integers exactly, reals with 10 significant digits, NaN as "nan".
 std::string format_residual_row(const ResidualLogRow &r);
+
+/// Where camera `cam`'s rows of the residual log `path` go: `path` itself for the primary camera (0), else the path
+/// with "_cam<cam>" before its extension (res.csv -> res_cam1.csv).
+std::string residual_log_path_of_camera(const std::string &path, int cam);
+/// The camera a residual log's file name says it holds: K for a name ending in "_camK" before the extension, else 0.
+int camera_of_residual_log(const std::string &path);
 
 /// Reads a residual log. Columns are found by header name, so a reader of this version reads the logs of earlier
 /// ones as long as they have the columns it requires (every column but depth_m, td_column, td_ref_s, chi2,

@@ -66,11 +66,38 @@ void ResidualLogWriter::write(const std::vector<ResidualRecord> &records, const 
     throw ovton::core::DataError(calib_path_, "write failed (disk full?)");
 }
 
+std::ofstream &ResidualLogWriter::stream_of_camera(int cam) {
+  if (cam <= 0)
+    return out_;
+  if (more_out_.size() < static_cast<size_t>(cam))
+    more_out_.resize(static_cast<size_t>(cam));
+  std::unique_ptr<std::ofstream> &o = more_out_[static_cast<size_t>(cam - 1)];
+  if (!o) {
+    const std::string p = ovton::core::residual_log_path_of_camera(path_, cam);
+    o = std::make_unique<std::ofstream>(p, std::ios::trunc);
+    if (!*o || !(*o << header() << '\n'))
+      throw ovton::core::DataError(p, "cannot open camera " + std::to_string(cam) + "'s residual log for writing");
+  }
+  return *o;
+}
+
+std::vector<std::string> ResidualLogWriter::camera_paths() const {
+  std::vector<std::string> out;
+  for (size_t k = 0; k < more_out_.size(); ++k)
+    if (more_out_[k])
+      out.push_back(ovton::core::residual_log_path_of_camera(path_, static_cast<int>(k + 1)));
+  return out;
+}
+
 void ResidualLogWriter::write(const std::vector<ResidualRecord> &records) {
   for (const ResidualRecord &r : records)
-    out_ << format(r) << '\n';
+    stream_of_camera(r.cam) << format(r) << '\n';
   out_.flush();
-  if (!out_)
+  for (auto &o : more_out_)
+    if (o)
+      o->flush();
+  const bool ok = out_ && std::all_of(more_out_.begin(), more_out_.end(), [](const auto &o) { return !o || *o; });
+  if (!ok)
     throw ovton::core::DataError(path_, "write failed after " + std::to_string(rows_) + " rows (disk full?)");
   rows_ += records.size();
 }

@@ -7,6 +7,7 @@
 #include "ov_msckf_ton/state/state.h"
 
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -21,8 +22,10 @@ using ResidualRecord = ovton::core::ResidualLogRow;
 ovton::core::CalibrationLogRow calibration_row(const State &state, const std::vector<ResidualRecord> &records);
 
 /// Writes ResidualRecords as CSV: one header line, then one line per record; and beside it the calibration log
-/// (ovton::core::calibration_log_path), one row per update with records. Each batch is flushed so that an interrupted
-/// run leaves every finished update on disk.
+/// (ovton::core::calibration_log_path), one row per update with records. A rig's further cameras' records go to files
+/// of their own (ovton::core::residual_log_path_of_camera: res_cam1.csv, ...; opened at their first record), so that
+/// `diagnose` reads one camera's tracks at a time. Each batch is flushed so that an interrupted run leaves every
+/// finished update on disk.
 class ResidualLogWriter {
 public:
   /// Opens (truncates) both files and writes their headers; throws ovton::core::DataError when they cannot be written.
@@ -32,7 +35,10 @@ public:
   /// Records only (no calibration row).
   void write(const std::vector<ResidualRecord> &records);
   const std::string &path() const { return path_; }
+  /// Rows written, every camera's.
   size_t rows_written() const { return rows_; }
+  /// The further cameras' files written so far.
+  std::vector<std::string> camera_paths() const;
 
   /// The header line (without newline): ovton::core::residual_log_header().
   static std::string header() { return ovton::core::residual_log_header(); }
@@ -40,8 +46,11 @@ public:
   static std::string format(const ResidualRecord &r) { return ovton::core::format_residual_row(r); }
 
 private:
+  std::ofstream &stream_of_camera(int cam);
+
   std::string path_, calib_path_;
   std::ofstream out_, calib_out_;
+  std::vector<std::unique_ptr<std::ofstream>> more_out_; ///< by cam − 1; null until the camera's first record
   size_t rows_ = 0;
 };
 
