@@ -1,0 +1,100 @@
+#include "ov_msckf_ton/td/td_model_check.h"
+#include "ov_msckf_ton/td/td_models.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+namespace ovton::msckf {
+
+namespace {
+
+class CheckedTdModel : public TdModel {
+public:
+  CheckedTdModel(std::unique_ptr<TdModel> inner, const TimeOffsetOptions &o)
+      : inner_(std::move(inner)), opt_(o), window_(2.0 * o.model_check_window_s) {}
+
+  TdProcess kind() const override { return active().kind(); }
+  void initialize(State &s) override { inner_->initialize(s); }
+  double td_at_image(const State &s, int64_t t_cam_ns, int64_t last_image_ns) const override {
+    return active().td_at_image(s, t_cam_ns, last_image_ns);
+  }
+  void propagate(State &s, double td_end, double dt_s) override {
+    // The interval ends where the model that predicted td_end moves the mean; the switch takes the next one.
+    active().propagate(s, td_end, dt_s);
+    now_ns_ = s.t_imu_ns; // the image's updates follow: their corrections are stamped here
+    if (pending_ && !drift_)
+      switch_to_drift(s);
+  }
+  void after_update(double td0, double v0, double td1, double v1) override {
+    active().after_update(td0, v0, td1, v1);
+    if (!drift_)
+      window_.add(now_ns_, td0, v0, td1, v1);
+  }
+  void after_image(const State &s, int64_t t_cam_ns) override {
+    active().after_image(s, t_cam_ns);
+    stats_ = active().stats();
+    stats_.switched_ns = switched_ns_;
+    stats_.check_z = check_z_;
+    stats_.check_moved_s = check_moved_s_;
+    if (drift_ || pending_ || window_.empty())
+      return;
+    const int64_t end = window_.last_ns();
+    const TdCorrectionWindow::Sum now = window_.sum(end, opt_.model_check_window_s);
+    const TdCorrectionWindow::Sum before =
+        window_.sum(end - static_cast<int64_t>(opt_.model_check_window_s * 1e9), opt_.model_check_window_s);
+    if (std::getenv("OVTON_DEBUG_CHECK"))
+      std::fprintf(stderr, "CHECK %.3f z %.2f zb %.2f moved %.3f ms cov %d %d\n", s.t_imu_ns * 1e-9, now.z(),
+                   before.z(), now.moved * 1e3, now.covered, before.covered);
+    const auto contradicts = [&](const TdCorrectionWindow::Sum &w) {
+      return w.covered && w.z() > opt_.model_check_z && std::abs(w.moved) > opt_.model_check_min_step_s;
+    };
+    // Same sign in both stretches: a trend, not a filter converging by a jump or an outlier's kick.
+    if (contradicts(now) && contradicts(before) && (now.moved > 0) == (before.moved > 0)) {
+      pending_ = true;
+      check_z_ = std::min(now.z(), before.z());
+      check_moved_s_ = now.moved + before.moved;
+    }
+  }
+
+  const TdModel &inner() const { return *inner_; }
+
+private:
+  const TdModel &active() const { return drift_ ? *drift_ : *inner_; }
+  TdModel &active() { return drift_ ? *drift_ : *inner_; }
+
+  void switch_to_drift(State &s) {
+    drift_ = make_drift_model(opt_);
+    drift_->initialize(s);
+    // What the corrections moved t_d by over the two stretches is how far the estimate trailed; it still trails by
+    // about half of one stretch's worth, and the rate starts at that trend with its prior sigma around it.
+    const double span_s = 2.0 * opt_.model_check_window_s;
+    s.td_rate = check_moved_s_ / span_s;
+    const double lag = 0.5 * check_moved_s_;
+    const int d = s.td_index;
+    s.for_each_covariance([&](auto &P) { P(d, d) += lag * lag; });
+    switched_ns_ = s.t_imu_ns;
+    pending_ = false;
+  }
+
+  std::unique_ptr<TdModel> inner_, drift_;
+  TimeOffsetOptions opt_;
+  TdCorrectionWindow window_;
+  int64_t now_ns_ = 0;
+  bool pending_ = false;
+  int64_t switched_ns_ = -1;
+  double check_z_ = 0.0, check_moved_s_ = 0.0;
+};
+
+} // namespace
+
+std::unique_ptr<TdModel> make_checked_model(std::unique_ptr<TdModel> inner, const TimeOffsetOptions &o) {
+  return std::make_unique<CheckedTdModel>(std::move(inner), o);
+}
+
+const TdModel &unchecked_model(const TdModel &m) {
+  const auto *c = dynamic_cast<const CheckedTdModel *>(&m);
+  return c ? c->inner() : m;
+}
+
+} // namespace ovton::msckf

@@ -1,0 +1,22 @@
+#pragma once
+// The time offset's model checks itself. Under a right model the corrections the updates make to t_d sum, over any
+// stretch, to about the sigma the updates' information allows (td_correction_window.h). A constant (or TPN's) model
+// on an offset that drifts faster than it allows is corrected the same way image after image: the sum grows
+// linearly with the stretch while its sigma shrinks, the estimate trails the offset and the filter's sigma says it
+// does not. When the sums over two stretches in a row exceed time_offset.model_check_z sigmas, the check hands t_d
+// to the drift state (td_drift.cpp: the rate becomes a state variable, so the updates estimate how fast t_d moves)
+// and widens t_d's variance by what the corrections showed the estimate trails by. It says so once: the run's
+// summary names the time and the sums (TdModelStats::switched_ns).
+#include "ov_msckf_ton/td/td_correction_window.h"
+#include "ov_msckf_ton/td/td_model.h"
+
+#include <memory>
+
+namespace ovton::msckf {
+
+/// `inner` with the check around it; the inner model runs unchanged until the check fires.
+std::unique_ptr<TdModel> make_checked_model(std::unique_ptr<TdModel> inner, const TimeOffsetOptions &o);
+/// The model a checked model wraps (itself for any other model).
+const TdModel &unchecked_model(const TdModel &m);
+
+} // namespace ovton::msckf
