@@ -188,7 +188,8 @@ int cmd_run(const Args &args) {
               << ovton::core::ns_to_s(tm_stats.switched_ns - r.traj.front().t_ns) << " s; the updates had moved t_d by "
               << tm_stats.check_moved_s * 1e3 << " ms in two stretches of " << req.opt.td.model_check_window_s
               << " s, each more than " << tm_stats.check_z
-              << " sigma of what they allowed: the offset moves faster than mode " << ovton::msckf::to_string(req.opt.td.mode)
+              << " sigma of what they allowed: the offset moves faster than mode "
+              << ovton::msckf::to_string(req.opt.td.mode)
               << "'s model lets it (from there t_d's rate is estimated; its sigma includes how far it trailed)\n";
   if (r.report.td_search && r.report.td_search->weak_excitation)
     std::cout << r.report.td_search->caution() << "\n";

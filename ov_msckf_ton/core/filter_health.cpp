@@ -120,7 +120,8 @@ void FilterHealth::check_td(const State &s) const {
   const int64_t now_ns = corrections_.last_ns();
   const TdCorrectionWindow::Sum now = corrections_.sum(now_ns, opt_.td_window_s);
   // The same a second earlier: a sustained walk, not the one-off jump of a filter converging from far off.
-  if (!runaway(now) || !runaway(corrections_.sum(now_ns - static_cast<int64_t>(opt_.td_persist_s * 1e9), opt_.td_window_s)))
+  if (!runaway(now) ||
+      !runaway(corrections_.sum(now_ns - static_cast<int64_t>(opt_.td_persist_s * 1e9), opt_.td_window_s)))
     return;
   // Both readings are named: the paper's modes diverging on a fast start look like this, and so does `sr` following an
   // offset that really wanders (diagnose_sizing.sh's wandering offset stopped two of four flights here).

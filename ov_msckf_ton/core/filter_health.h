@@ -76,7 +76,7 @@ private:
     UpdateTally tally;
   };
   FilterHealthOptions opt_;
-  std::deque<Tally> recent_;             ///< the last window_s seconds of MSCKF updates
+  std::deque<Tally> recent_;                                             ///< the last window_s seconds of MSCKF updates
   TdCorrectionWindow corrections_{opt_.td_window_s + opt_.td_persist_s}; ///< t_d's corrections, as far back as read
   UpdateTally total_;
 };

@@ -1,18 +1,41 @@
 #include "ov_msckf_ton/td/td_model_check.h"
 #include "ov_msckf_ton/td/td_models.h"
 
+#include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 namespace ovton::msckf {
+
+TdTrendTest::TdTrendTest(double window_s, double z, double min_step_s)
+    : window_s_(window_s), z_(z), min_step_s_(min_step_s), window_(2.0 * window_s) {}
+
+void TdTrendTest::add(int64_t t_ns, double td_prior, double var_prior, double td_post, double var_post) {
+  window_.add(t_ns, td_prior, var_prior, td_post, var_post);
+}
+
+TdTrendTest::Verdict TdTrendTest::evaluate() const {
+  Verdict v;
+  if (window_.empty())
+    return v;
+  const int64_t end = window_.last_ns();
+  const TdCorrectionWindow::Sum now = window_.sum(end, window_s_);
+  const TdCorrectionWindow::Sum before = window_.sum(end - static_cast<int64_t>(window_s_ * 1e9), window_s_);
+  const auto contradicts = [&](const TdCorrectionWindow::Sum &w) {
+    return w.covered && w.z() > z_ && std::abs(w.moved) > min_step_s_;
+  };
+  // Same sign in both stretches: a trend, not a filter converging by a jump or an outlier's kick.
+  v.contradicted = contradicts(now) && contradicts(before) && (now.moved > 0) == (before.moved > 0);
+  v.z = std::min(now.z(), before.z());
+  v.moved_s = now.moved + before.moved;
+  return v;
+}
 
 namespace {
 
 class CheckedTdModel : public TdModel {
 public:
   CheckedTdModel(std::unique_ptr<TdModel> inner, const TimeOffsetOptions &o)
-      : inner_(std::move(inner)), opt_(o), window_(2.0 * o.model_check_window_s) {}
+      : inner_(std::move(inner)), opt_(o), test_(o.model_check_window_s, o.model_check_z, o.model_check_min_step_s) {}
 
   TdProcess kind() const override { return active().kind(); }
   void initialize(State &s) override { inner_->initialize(s); }
@@ -29,7 +52,7 @@ public:
   void after_update(double td0, double v0, double td1, double v1) override {
     active().after_update(td0, v0, td1, v1);
     if (!drift_)
-      window_.add(now_ns_, td0, v0, td1, v1);
+      test_.add(now_ns_, td0, v0, td1, v1);
   }
   void after_image(const State &s, int64_t t_cam_ns) override {
     active().after_image(s, t_cam_ns);
@@ -37,23 +60,12 @@ public:
     stats_.switched_ns = switched_ns_;
     stats_.check_z = check_z_;
     stats_.check_moved_s = check_moved_s_;
-    if (drift_ || pending_ || window_.empty())
+    if (drift_ || pending_)
       return;
-    const int64_t end = window_.last_ns();
-    const TdCorrectionWindow::Sum now = window_.sum(end, opt_.model_check_window_s);
-    const TdCorrectionWindow::Sum before =
-        window_.sum(end - static_cast<int64_t>(opt_.model_check_window_s * 1e9), opt_.model_check_window_s);
-    if (std::getenv("OVTON_DEBUG_CHECK"))
-      std::fprintf(stderr, "CHECK %.3f z %.2f zb %.2f moved %.3f ms cov %d %d\n", s.t_imu_ns * 1e-9, now.z(),
-                   before.z(), now.moved * 1e3, now.covered, before.covered);
-    const auto contradicts = [&](const TdCorrectionWindow::Sum &w) {
-      return w.covered && w.z() > opt_.model_check_z && std::abs(w.moved) > opt_.model_check_min_step_s;
-    };
-    // Same sign in both stretches: a trend, not a filter converging by a jump or an outlier's kick.
-    if (contradicts(now) && contradicts(before) && (now.moved > 0) == (before.moved > 0)) {
+    if (const TdTrendTest::Verdict v = test_.evaluate(); v.contradicted) {
       pending_ = true;
-      check_z_ = std::min(now.z(), before.z());
-      check_moved_s_ = now.moved + before.moved;
+      check_z_ = v.z;
+      check_moved_s_ = v.moved_s;
     }
   }
 
@@ -79,7 +91,7 @@ private:
 
   std::unique_ptr<TdModel> inner_, drift_;
   TimeOffsetOptions opt_;
-  TdCorrectionWindow window_;
+  TdTrendTest test_;
   int64_t now_ns_ = 0;
   bool pending_ = false;
   int64_t switched_ns_ = -1;

@@ -14,6 +14,25 @@
 
 namespace ovton::msckf {
 
+/// The test alone, apart from the state it guards (so that a sequence of corrections can be tested by itself).
+class TdTrendTest {
+public:
+  struct Verdict {
+    bool contradicted = false; ///< both stretches beyond z sigmas and min_step, with one sign
+    double z = 0.0;            ///< the smaller of the two stretches' sums in sigmas
+    double moved_s = 0.0;      ///< what the corrections moved t_d by over both stretches [s]
+  };
+  TdTrendTest(double window_s, double z, double min_step_s);
+  /// One update's t_d mean and variance before and after, at IMU time t_ns.
+  void add(int64_t t_ns, double td_prior, double var_prior, double td_post, double var_post);
+  /// The two stretches of window_s ending at the last correction.
+  Verdict evaluate() const;
+
+private:
+  double window_s_, z_, min_step_s_;
+  TdCorrectionWindow window_;
+};
+
 /// `inner` with the check around it; the inner model runs unchanged until the check fires.
 std::unique_ptr<TdModel> make_checked_model(std::unique_ptr<TdModel> inner, const TimeOffsetOptions &o);
 /// The model a checked model wraps (itself for any other model).
