@@ -5,6 +5,7 @@
 #include "ov_core/types/errors.h"
 #include "ov_eval/init_check.h"
 #include "ov_eval/metrics.h"
+#include "ov_msckf_ton/td/td_model_check.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/progress.h"
@@ -183,14 +184,10 @@ int cmd_run(const Args &args) {
     for (size_t k = 0; k < r.traj.back().cam_td_s.size(); ++k)
       std::cout << "final t_d of cam" << k + 1 << " " << r.traj.back().cam_td_s[k] * 1e3 << " ms (sigma "
                 << r.traj.back().cam_td_sigma_s[k] * 1e3 << " ms)\n";
-  if (const auto &tm_stats = r.report.td_model; tm_stats.switched_ns >= 0 && !r.traj.empty())
-    std::cout << "t_d model check: switched to the drift state at "
-              << ovton::core::ns_to_s(tm_stats.switched_ns - r.traj.front().t_ns) << " s; the updates had moved t_d by "
-              << tm_stats.check_moved_s * 1e3 << " ms in two stretches of " << req.opt.td.model_check_window_s
-              << " s, each more than " << tm_stats.check_z
-              << " sigma of what they allowed: the offset moves faster than mode "
-              << ovton::msckf::to_string(req.opt.td.mode)
-              << "'s model lets it (from there t_d's rate is estimated; its sigma includes how far it trailed)\n";
+  if (!r.traj.empty())
+    if (const std::string sw = ovton::msckf::describe_model_check(r.report.td_model, r.traj.front().t_ns, req.opt.td);
+        !sw.empty())
+      std::cout << sw << "\n";
   if (r.report.td_search && r.report.td_search->weak_excitation)
     std::cout << r.report.td_search->caution() << "\n";
   if (!nees_log.empty()) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 namespace ovton::msckf {
 
@@ -107,6 +108,18 @@ std::unique_ptr<TdModel> make_checked_model(std::unique_ptr<TdModel> inner, cons
 const TdModel &unchecked_model(const TdModel &m) {
   const auto *c = dynamic_cast<const CheckedTdModel *>(&m);
   return c ? c->inner() : m;
+}
+
+std::string describe_model_check(const TdModelStats &st, int64_t first_ns, const TimeOffsetOptions &o) {
+  if (st.switched_ns < 0)
+    return "";
+  std::ostringstream s;
+  s << "t_d model check: switched to the drift state at " << (st.switched_ns - first_ns) * 1e-9
+    << " s; the updates had moved t_d by " << st.check_moved_s * 1e3 << " ms in two stretches of "
+    << o.model_check_window_s << " s, each more than " << st.check_z
+    << " sigma of what they allowed: the offset moves faster than mode " << to_string(o.mode)
+    << "'s model lets it (from there t_d's rate is estimated; its sigma includes how far it trailed)";
+  return s.str();
 }
 
 } // namespace ovton::msckf

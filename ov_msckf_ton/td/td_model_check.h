@@ -10,7 +10,9 @@
 #include "ov_msckf_ton/td/td_correction_window.h"
 #include "ov_msckf_ton/td/td_model.h"
 
+#include <cstdint>
 #include <memory>
+#include <string>
 
 namespace ovton::msckf {
 
@@ -37,5 +39,8 @@ private:
 std::unique_ptr<TdModel> make_checked_model(std::unique_ptr<TdModel> inner, const TimeOffsetOptions &o);
 /// The model a checked model wraps (itself for any other model).
 const TdModel &unchecked_model(const TdModel &m);
+/// The line a run's summary (ovton run, ovton compare's notes) says the switch with: "t_d model check: switched to the
+/// drift state at T s; ..." with T from `first_ns` (the run's first row); "" when the check did not switch.
+std::string describe_model_check(const TdModelStats &st, int64_t first_ns, const TimeOffsetOptions &o);
 
 } // namespace ovton::msckf
