@@ -49,10 +49,9 @@ struct TimeOffsetOptions {
   /// The model check (td/td_model_check.h): t_d goes to the drift state when its corrections over two stretches of
   /// model_check_window_s in a row each sum to more than model_check_z sigmas of what the updates allowed, with the
   /// same sign and more than model_check_min_step_s. Not for the drift state itself, nor where t_d is not estimated.
-  /// The values are docs/robustness.md's "The model check": 1-s stretches are the shortest that sr's convergence from
-  /// 40 ms off (search off) does not pass for a trend; the largest sum on a constant offset there, on the real cut and
-  /// on 40-s renders stayed below 1.3 sigmas, where 2 lets sr under 2-3 ms/s switch after ~3.3 s of the 4.45-s cut;
-  /// the 0.1 ms floor keeps a long flight's tight sigma from calling a drift of no consequence a trend.
+  /// Why these values (measured in docs/robustness.md, "The model check"): shorter stretches take a filter converging
+  /// from far off (search off) for a trend; a higher z misses the real cut's fast drifts in the time it has; the floor
+  /// keeps a long flight's tight sigma from calling a drift of no consequence a trend.
   bool model_check = true;
   double model_check_window_s = 1.0;
   double model_check_z = 2.0;
