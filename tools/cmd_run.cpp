@@ -5,6 +5,7 @@
 #include "ov_core/types/errors.h"
 #include "ov_eval/init_check.h"
 #include "ov_eval/metrics.h"
+#include "ov_msckf_ton/td/td_model_check.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/progress.h"
@@ -184,6 +185,10 @@ int cmd_run(const Args &args) {
     for (size_t k = 0; k < r.traj.back().cam_td_s.size(); ++k)
       std::cout << "final t_d of cam" << k + 1 << " " << r.traj.back().cam_td_s[k] * 1e3 << " ms (sigma "
                 << r.traj.back().cam_td_sigma_s[k] * 1e3 << " ms)\n";
+  if (!r.traj.empty())
+    if (const std::string sw = ovton::msckf::describe_model_check(r.report.td_model, r.traj.front().t_ns, req.opt.td);
+        !sw.empty())
+      std::cout << sw << "\n";
   if (r.report.td_search && r.report.td_search->weak_excitation)
     std::cout << r.report.td_search->caution() << "\n";
   if (!nees_log.empty()) {

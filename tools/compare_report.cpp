@@ -1,5 +1,6 @@
 #include "tools/compare_report.h"
 #include "ov_core/types/errors.h"
+#include "ov_msckf_ton/td/td_model_check.h"
 #include "tools/progress.h"
 #include "tools/run_pipeline.h"
 
@@ -99,6 +100,7 @@ CompareResult run_compare(const ovton::core::Dataset &data, const CompareRequest
   // report quotes the first one's outcome.
   std::mutex search_mutex;
   std::optional<ovton::msckf::TdSearchResult> search;
+  std::map<std::string, std::string> switched; // per mode, the t_d model check's line (guarded by search_mutex)
   const auto run_one = [&](const std::string &name) {
     RunRequest rr;
     const ovton::msckf::ModeSpec &spec = spec_of.at(name);
@@ -112,10 +114,14 @@ CompareResult run_compare(const ovton::core::Dataset &data, const CompareRequest
     // A diverged filter (EstimatorFailure) or a run without a single pose (DataError) throws: run_parallel makes
     // that the mode's status, "failed: <why>".
     RunResult r = run_dataset(data, rr);
-    if (r.report.td_search) {
+    {
       const std::lock_guard<std::mutex> lock(search_mutex);
-      if (!search)
+      if (r.report.td_search && !search)
         search = r.report.td_search;
+      if (!r.traj.empty())
+        if (std::string sw = ovton::msckf::describe_model_check(r.report.td_model, r.traj.front().t_ns, rr.opt.td);
+            !sw.empty())
+          switched[name] = std::move(sw);
     }
     ovton::eval::RunRecord rec;
     rec.name = name;
@@ -156,6 +162,13 @@ CompareResult run_compare(const ovton::core::Dataset &data, const CompareRequest
         *req.log << "compare: " << info.notes.back() << "\n" << std::flush;
     }
   }
+  // A mode whose t_d model went to the drift state ran another model from there: its row says what it ended as.
+  for (const auto &spec : req.modes)
+    if (auto it = switched.find(spec.name); it != switched.end()) {
+      info.notes.push_back(spec.name + ": " + it->second);
+      if (req.log)
+        *req.log << "compare: " << info.notes.back() << "\n" << std::flush;
+    }
   res.rows = ovton::eval::evaluate_runs(res.runs, data, req.report);
   res.files = ovton::eval::write_report(req.out_dir, res.runs, res.rows, data, info, req.report);
   return res;

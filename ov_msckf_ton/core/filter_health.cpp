@@ -19,7 +19,7 @@ std::string where(const State &s) {
 
 } // namespace
 
-FilterHealth::FilterHealth(const VioOptions &o) {
+FilterHealth::FilterHealth(const VioOptions &o) : FilterHealth() {
   opt_.enabled = o.health.enabled;
 }
 
@@ -39,12 +39,7 @@ void FilterHealth::on_update(int64_t t_ns, const UpdateStats &st) {
 }
 
 void FilterHealth::on_td_update(int64_t t_ns, double td_prior, double var_prior, double td_post, double var_post) {
-  if (first_correction_ns_ < 0)
-    first_correction_ns_ = t_ns;
-  corrections_.push_back({t_ns, td_post - td_prior, std::max(0.0, var_prior - var_post)});
-  const double keep_ns = (opt_.td_window_s + opt_.td_persist_s) * 1e9;
-  while (!corrections_.empty() && static_cast<double>(t_ns - corrections_.front().t_ns) > keep_ns)
-    corrections_.pop_front();
+  corrections_.add(t_ns, td_prior, var_prior, td_post, var_post);
 }
 
 UpdateTally FilterHealth::window() const {
@@ -115,29 +110,18 @@ void FilterHealth::check_rates(const State &s) const {
   }
 }
 
-FilterHealth::TdSum FilterHealth::td_sum(int64_t end_ns) const {
-  TdSum r;
-  const int64_t begin_ns = end_ns - static_cast<int64_t>(opt_.td_window_s * 1e9);
-  r.covered = first_correction_ns_ >= 0 && first_correction_ns_ <= begin_ns;
-  for (const auto &c : corrections_)
-    if (c.t_ns > begin_ns && c.t_ns <= end_ns) {
-      r.moved += c.delta;
-      r.allowed_var += c.var_drop;
-    }
-  return r;
-}
-
 void FilterHealth::check_td(const State &s) const {
   if (!s.estimates_td() || corrections_.empty())
     return;
-  const auto runaway = [&](const TdSum &t) {
+  const auto runaway = [&](const TdCorrectionWindow::Sum &t) {
     const double moved = std::abs(t.moved);
     return t.covered && moved > opt_.td_min_step_s && moved > opt_.td_max_z * std::sqrt(t.allowed_var);
   };
-  const int64_t now_ns = corrections_.back().t_ns;
-  const TdSum now = td_sum(now_ns);
+  const int64_t now_ns = corrections_.last_ns();
+  const TdCorrectionWindow::Sum now = corrections_.sum(now_ns, opt_.td_window_s);
   // The same a second earlier: a sustained walk, not the one-off jump of a filter converging from far off.
-  if (!runaway(now) || !runaway(td_sum(now_ns - static_cast<int64_t>(opt_.td_persist_s * 1e9))))
+  if (!runaway(now) ||
+      !runaway(corrections_.sum(now_ns - static_cast<int64_t>(opt_.td_persist_s * 1e9), opt_.td_window_s)))
     return;
   // Both readings are named: the paper's modes diverging on a fast start look like this, and so does `sr` following an
   // offset that really wanders (diagnose_sizing.sh's wandering offset stopped two of four flights here).

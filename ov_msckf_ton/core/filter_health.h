@@ -15,6 +15,7 @@
 //    noise) is not an update's correction and does not count.
 #include "ov_msckf_ton/core/vio_options.h"
 #include "ov_msckf_ton/state/state.h"
+#include "ov_msckf_ton/td/td_correction_window.h"
 #include "ov_msckf_ton/update/updater_msckf.h"
 
 #include <cstdint>
@@ -67,12 +68,6 @@ public:
   static std::string nonfinite_part(const State &s);
 
 private:
-  /// Corrections to t_d over the td_window_s ending at end_ns: their sum and the variance the updates took off.
-  struct TdSum {
-    double moved = 0, allowed_var = 0;
-    bool covered = false; ///< the history reaches back over the whole window
-  };
-  TdSum td_sum(int64_t end_ns) const;
   void check_rates(const State &s) const;
   void check_td(const State &s) const;
 
@@ -80,14 +75,9 @@ private:
     int64_t t_ns;
     UpdateTally tally;
   };
-  struct TdCorrection {
-    int64_t t_ns;
-    double delta, var_drop;
-  };
   FilterHealthOptions opt_;
-  std::deque<Tally> recent_;             ///< the last window_s seconds of MSCKF updates
-  std::deque<TdCorrection> corrections_; ///< the last td_window_s + td_persist_s seconds of t_d corrections
-  int64_t first_correction_ns_ = -1;
+  std::deque<Tally> recent_;                                             ///< the last window_s seconds of MSCKF updates
+  TdCorrectionWindow corrections_{opt_.td_window_s + opt_.td_persist_s}; ///< t_d's corrections, as far back as read
   UpdateTally total_;
 };
 

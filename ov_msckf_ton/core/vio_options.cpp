@@ -132,6 +132,10 @@ std::vector<Field> fields(VioOptions &o) {
       field(T, "rate_max", ton.tpn.td_rate_max),
       field(T, "adaptive_noise", td.adaptive_noise),
       field(T, "adaptive_block_s", td.adaptive_block_s),
+      field(T, "model_check", td.model_check),
+      field(T, "model_check_window_s", td.model_check_window_s),
+      field(T, "model_check_z", td.model_check_z),
+      field(T, "model_check_min_step_s", td.model_check_min_step_s),
       field(T, "jacobian_rate_window_s", td.jacobian_rate_window_s),
       enum_field<SirVelocity>(T, "sir_velocity", td.sir_velocity, parser(kSirVelocity), namer(kSirVelocity)),
       enum_field<FirstVelocity>(T, "first_velocity", td.first_velocity, parser(kFirstVelocity), namer(kFirstVelocity)),
@@ -280,6 +284,10 @@ void validate_vio_options(const VioOptions &o) {
           "time_offset.per_camera_sigma_init_s must be > 0 and per_camera_random_walk >= 0");
   require(o.ton.tpn.td_rate_max >= 0, "time_offset.rate_max must be >= 0");
   require(td.adaptive_block_s >= 0 && td.adaptive_block_s <= 60, "time_offset.adaptive_block_s must lie in [0, 60] s");
+  require(td.model_check_window_s > 0 && td.model_check_window_s <= 30,
+          "time_offset.model_check_window_s must lie in (0, 30] s");
+  require(td.model_check_z > 0 && td.model_check_min_step_s >= 0,
+          "time_offset.model_check_z must be > 0 and model_check_min_step_s >= 0");
   require(td.jacobian_rate_window_s >= 0 && td.jacobian_rate_window_s <= 1.0,
           "time_offset.jacobian_rate_window_s must lie in [0, 1] s");
   const auto &u = o.update.msckf;

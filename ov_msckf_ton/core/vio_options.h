@@ -46,6 +46,16 @@ struct TimeOffsetOptions {
   /// prediction that trails the offset corrects it by many small steps of one sign that no single image shows.
   /// docs/ton.md, "t_d noise over blocks", has what it does on the protocol cells and the Monte-Carlo renders.
   double adaptive_block_s = 6.0;
+  /// The model check (td/td_model_check.h): t_d goes to the drift state when its corrections over two stretches of
+  /// model_check_window_s in a row each sum to more than model_check_z sigmas of what the updates allowed, with the
+  /// same sign and more than model_check_min_step_s. Not for the drift state itself, nor where t_d is not estimated.
+  /// Why these values (measured in docs/robustness.md, "The model check"): shorter stretches take a filter converging
+  /// from far off (search off) for a trend; a higher z misses the real cut's fast drifts in the time it has; the floor
+  /// keeps a long flight's tight sigma from calling a drift of no consequence a trend.
+  bool model_check = true;
+  double model_check_window_s = 1.0;
+  double model_check_z = 2.0;
+  double model_check_min_step_s = 0.1e-3;
   /// The body rate in the clone's t_d Jacobian: 0 = the gyro reading at the image time; > 0 = the mean reading over
   /// this window centred on it (the replay then hands over half of it past the image: latency in a live system). A
   /// vibrating IMU otherwise makes t_d look observable on a gentle flight (docs/robustness.md, "Weak excitation"),

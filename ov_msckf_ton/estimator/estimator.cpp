@@ -271,6 +271,7 @@ EstimatorReport Estimator::Impl::report() const {
     r.counters = vio_->counters();
     r.times = vio_->times();
     r.acceptance = vio_->health().total();
+    r.td_model = vio_->td_model().stats();
   }
   (setup_.threaded ? r.times.tracking_thread : r.times.tracking) += tracking_ms_;
   r.init_message = status_.init_message;

@@ -79,6 +79,8 @@ struct EstimatorReport {
   std::string init_message;
   std::optional<msckf::TdSearchResult> td_search;
   long images_skipped = 0;
+  /// What the time offset's model did (td/td_model.h): its process noise, TPN's learning, the model check's switch.
+  msckf::TdModelStats td_model;
   /// Per image the filter processed: from its feed_image call to its state leaving the filter [ms].
   std::vector<double> latency_ms;
 };

@@ -1,10 +1,13 @@
 #include "ov_msckf_ton/td/td_model.h"
 #include "ov_core/types/errors.h"
+#include "ov_msckf_ton/td/td_model_check.h"
 #include "ov_msckf_ton/td/td_models.h"
 
 namespace ovton::msckf {
 
-std::unique_ptr<TdModel> make_td_model(const VioOptions &opt, std::function<double(int64_t)> truth) {
+namespace {
+
+std::unique_ptr<TdModel> make_unchecked_model(const VioOptions &opt, std::function<double(int64_t)> truth) {
   const TimeOffsetOptions &o = opt.td;
   if (o.mode == TdMode::Oracle) {
     if (!truth)
@@ -21,6 +24,16 @@ std::unique_ptr<TdModel> make_td_model(const VioOptions &opt, std::function<doub
   default: // a constant stays a constant (OpenVINS' model): adaptive noise would make it a random walk
     return make_random_walk_model(0.0, false);
   }
+}
+
+} // namespace
+
+std::unique_ptr<TdModel> make_td_model(const VioOptions &opt, std::function<double(int64_t)> truth) {
+  std::unique_ptr<TdModel> m = make_unchecked_model(opt, std::move(truth));
+  const bool estimated = opt.td.mode != TdMode::Off && opt.td.mode != TdMode::Oracle;
+  if (opt.td.model_check && estimated && m->kind() != TdProcess::Drift)
+    return make_checked_model(std::move(m), opt.td);
+  return m;
 }
 
 void propagate_td_covariance(State &s, double q_td, double q_rate, double dt_s) {

@@ -21,6 +21,10 @@ struct TdModelStats {
   long rate_clamped = 0;      ///< propagations whose rate hit time_offset.rate_max (tpn)
   long learning_steps = 0;    ///< TPN trainings
   double process_sigma = 0.0; ///< current process noise [s/sqrt(s)] on t_d (adaptive models change it)
+  /// The model check (td_model_check.h): IMU time at which t_d went to the drift state (-1: never), the smaller of
+  /// the two stretches' sums in sigmas, and what the corrections moved t_d by over both [s].
+  int64_t switched_ns = -1;
+  double check_z = 0.0, check_moved_s = 0.0;
 };
 
 class TdModel {

@@ -4,6 +4,7 @@
 // ton.tpn_label_images M > 1 a label is the mean of M images' estimates and J_td = (t_d^TPN − last label) / the
 // labels' spacing, held until the next label.
 #include "ov_core/types/sensor_data.h"
+#include "ov_msckf_ton/td/td_model_check.h"
 #include "ov_msckf_ton/td/td_models.h"
 #include "ov_msckf_ton/td/td_noise_adapter.h"
 
@@ -133,7 +134,7 @@ std::unique_ptr<TdModel> make_tpn_model(const TimeOffsetOptions &o, const TonOpt
 }
 
 const TpnDriver *tpn_driver_of(const TdModel &m) {
-  const auto *t = dynamic_cast<const TpnTdModel *>(&m);
+  const auto *t = dynamic_cast<const TpnTdModel *>(&unchecked_model(m));
   return t ? &t->driver() : nullptr;
 }
 
