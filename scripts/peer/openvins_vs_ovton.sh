@@ -301,6 +301,9 @@ def fmt(x, d):
 groups = collections.OrderedDict()
 for r in rows:
     groups.setdefault((r["folder"], r["system"], r["variant"]), []).append(r)
+# a folder's rows together even when a later run (--resume with more modes or variants) appended some
+folder_order = {f: i for i, f in reversed(list(enumerate(r["folder"] for r in rows)))}
+groups = collections.OrderedDict(sorted(groups.items(), key=lambda kv: folder_order[kv[0][0]]))
 L = []
 L.append(f"Commit {commit}; {repeats} run(s) per system and folder, alternating; load average at the end: {load}.")
 L.append("")
