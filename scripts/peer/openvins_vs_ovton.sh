@@ -13,7 +13,9 @@
 #                          matched = max_clones=20 sigma_px=0.5 (ovton's simulation config)
 #                        VARIANT@imuK (e.g. matched@imu4) runs VARIANT on a view of the folder whose imu0/sensor.yaml
 #                        noise densities and random walks are K times the folder's (as ovton's imu.noise_multiplier);
-#                        VARIANT@imufit: the ADIS16448's measured values that config/euroc_mav declares instead
+#                        VARIANT@imufit: the ADIS16448's measured values that config/euroc_mav declares instead;
+#                        VARIANT@ptsN (e.g. noslam@pts400) gives OpenVINS num_pts=N (default 200; OpenVINS divides it by
+#                        the number of cameras: 100 per camera in stereo)
 #   --ovton-modes LIST   ovton modes (MODE[+PROCESS]), comma separated (default sr,drift)
 #   --ovton-config-sim F / --ovton-config-real F
 #                        ovton configs for simulated folders (those with mav0/td_truth) and real ones
@@ -119,7 +121,8 @@ HS=$BUILD/peer/ov_euroc_harness
 has_cam1() { [ -f "$1/mav0/cam1/data.csv" ] && [ -f "$1/mav0/cam1/sensor.yaml" ]; }
 
 ov_args() {
-  case "${1%@imu*}" in
+  if [[ $1 == *@pts* ]]; then local n=${1##*@pts}; echo -n "num_pts=${n%%@*} "; fi
+  case "${1%%@*}" in
   noslam) echo "" ;;
   default) echo "max_slam=50 calib_ext=1 calib_int=1" ;;
   matched) echo "max_clones=20 sigma_px=0.5" ;;
@@ -202,8 +205,9 @@ run_ov() { # folder variant repeat [stereo]
   if [ "$st" = stereo ]; then label="$var stereo"; hb=$HS; extra=(stereo=1); fi
   if have_row "$f" OpenVINS "$label" "$rep"; then return 0; fi
   name=$(basename "$f")
-  pre=$OUT/$name/ov_${var/@/_}${st:+_$st}_r$rep
+  pre=$OUT/$name/ov_${var//@/_}${st:+_$st}_r$rep
   mkdir -p "$OUT/$name"
+  if [[ $var == *@imu*@pts* ]]; then echo "give @ptsN before @imuK ($var)" >&2; return 0; fi
   if [[ $var == *@imu* ]]; then src=$(imu_view "$f" "${var##*@imu}"); fi
   # shellcheck disable=SC2046
   OV_ROOT=$OV_ROOT nice -n 10 /usr/bin/time -f "%U %S" -o "$pre.time" "$hb" "$src" "$pre" threads=1 $(ov_args "$var") \
