@@ -222,7 +222,7 @@ run_ov() { # folder variant repeat [stereo]
 run_ovton() { # folder mode repeat [stereo]
   local f=$1 mode=$2 rep=$3 st=${4:-} name pre cfg init=() cams=() label=$2
   # a folder with cam1: mono rows say --cameras 0 (ovton's default is every camera the recording has)
-  if [ "$st" = stereo ]; then label="$mode stereo"; cams=(--cameras 0,1); elif has_cam1 "$f"; then cams=(--cameras 0); fi
+  if [ "$st" = stereo ]; then label="$mode stereo"; cams=(--cameras "0,1"); elif has_cam1 "$f"; then cams=(--cameras 0); fi
   if have_row "$f" ovton "$label" "$rep"; then return 0; fi
   name=$(basename "$f")
   pre=$OUT/$name/ovton_${mode//+/_}${st:+_$st}_r$rep
