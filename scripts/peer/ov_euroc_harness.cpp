@@ -21,6 +21,8 @@
 #include "utils/print.h"
 #include "utils/quat_ops.h"
 
+#include "euroc_folder_io.h"
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -54,28 +56,7 @@ static double ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-static std::vector<std::vector<std::string>> read_csv(const std::string &path) {
-  std::ifstream f(path);
-  if (!f) {
-    std::cerr << "cannot open " << path << "\n";
-    std::exit(2);
-  }
-  std::vector<std::vector<std::string>> rows;
-  std::string line;
-  while (std::getline(f, line)) {
-    if (!line.empty() && line.back() == '\r')
-      line.pop_back();
-    if (line.empty() || line[0] == '#')
-      continue;
-    std::vector<std::string> cols;
-    std::stringstream ss(line);
-    std::string c;
-    while (std::getline(ss, c, ','))
-      cols.push_back(c);
-    rows.push_back(cols);
-  }
-  return rows;
-}
+using peer_io::read_csv;
 
 static Eigen::Matrix4d read_TBS(cv::FileStorage &fs) {
   cv::FileNode d = fs["T_BS"]["data"];
@@ -259,39 +240,15 @@ int main(int argc, char **argv) {
   auto sys = std::make_shared<VM>(params);
 
   // ---- data
-  auto imu_rows = read_csv(mav0 + "imu0/data.csv");
-  auto cam_rows = read_csv(mav0 + "cam0/data.csv");
+  const std::vector<ov_core::ImuData> imu = peer_io::load_imu(mav0);
   auto gt_rows = read_csv(mav0 + "state_groundtruth_estimate0/data.csv");
-  std::vector<ov_core::ImuData> imu;
-  for (auto &r : imu_rows) {
-    ov_core::ImuData d;
-    d.timestamp = std::stoll(r[0]) * 1e-9;
-    d.wm << std::stod(r[1]), std::stod(r[2]), std::stod(r[3]);
-    d.am << std::stod(r[4]), std::stod(r[5]), std::stod(r[6]);
-    imu.push_back(d);
-  }
-  struct Img {
-    int64_t t;
-    std::string path;
-  };
-  std::vector<Img> imgs;
-  for (auto &r : cam_rows) {
-    std::string fn = r[1];
-    while (!fn.empty() && (fn.front() == ' '))
-      fn.erase(fn.begin());
-    imgs.push_back({std::stoll(r[0]), mav0 + "cam0/data/" + fn});
-  }
+  const std::vector<peer_io::Image> imgs = peer_io::load_images(mav0, "cam0");
   // stereo: cam1's image of each cam0 stamp (EuRoC's cameras are triggered together: same stamps); a stamp cam1
   // lacks is fed to OpenVINS as a monocular frame of cam0 (its tracker takes one image or a stereo pair)
   std::map<int64_t, std::string> cam1_of;
-  if (stereo) {
-    for (auto &r : read_csv(mav0 + "cam1/data.csv")) {
-      std::string fn = r[1];
-      while (!fn.empty() && (fn.front() == ' '))
-        fn.erase(fn.begin());
-      cam1_of[std::stoll(r[0])] = mav0 + "cam1/data/" + fn;
-    }
-  }
+  if (stereo)
+    for (const peer_io::Image &im : peer_io::load_images(mav0, "cam1"))
+      cam1_of[im.t] = im.path;
   int n_pairs = 0;
   // ground truth at the first image (camera clock = IMU clock under the initial guess t_d = 0), linear interpolation
   const int64_t t0 = imgs.front().t;

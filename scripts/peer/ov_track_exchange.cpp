@@ -17,6 +17,8 @@
 #include "utils/print.h"
 #include "utils/quat_ops.h"
 
+#include "euroc_folder_io.h"
+
 #include <opencv2/imgcodecs.hpp>
 
 #include <chrono>
@@ -44,28 +46,7 @@ struct VM : ov_msckf::VioManager {
   }
 };
 
-std::vector<std::vector<std::string>> read_csv(const std::string &path) {
-  std::ifstream f(path);
-  if (!f) {
-    std::cerr << "cannot open " << path << "\n";
-    std::exit(2);
-  }
-  std::vector<std::vector<std::string>> rows;
-  std::string line;
-  while (std::getline(f, line)) {
-    if (!line.empty() && line.back() == '\r')
-      line.pop_back();
-    if (line.empty() || line[0] == '#' || !std::isdigit(static_cast<unsigned char>(line[0])))
-      continue;
-    std::vector<std::string> cols;
-    std::stringstream ss(line);
-    std::string c;
-    while (std::getline(ss, c, ','))
-      cols.push_back(c);
-    rows.push_back(cols);
-  }
-  return rows;
-}
+using peer_io::read_csv;
 
 } // namespace
 
@@ -105,25 +86,8 @@ int main(int argc, char **argv) {
   }
   auto sys = std::make_shared<VM>(params);
   const std::string mav0 = ds + "/mav0/";
-  std::vector<ov_core::ImuData> imu;
-  for (auto &r : read_csv(mav0 + "imu0/data.csv")) {
-    ov_core::ImuData d;
-    d.timestamp = std::stoll(r[0]) * 1e-9;
-    d.wm << std::stod(r[1]), std::stod(r[2]), std::stod(r[3]);
-    d.am << std::stod(r[4]), std::stod(r[5]), std::stod(r[6]);
-    imu.push_back(d);
-  }
-  struct Img {
-    int64_t t;
-    std::string path;
-  };
-  std::vector<Img> imgs;
-  for (auto &r : read_csv(mav0 + "cam0/data.csv")) {
-    std::string fn = r[1];
-    while (!fn.empty() && fn.front() == ' ')
-      fn.erase(fn.begin());
-    imgs.push_back({std::stoll(r[0]), mav0 + "cam0/data/" + fn});
-  }
+  const std::vector<ov_core::ImuData> imu = peer_io::load_imu(mav0);
+  const std::vector<peer_io::Image> imgs = peer_io::load_images(mav0, "cam0");
   std::map<int64_t, std::vector<std::pair<size_t, Eigen::VectorXf>>> fed;
   if (!feed.empty())
     for (auto &r : read_csv(feed)) {
