@@ -15,6 +15,14 @@
 #include <functional>
 #include <optional>
 
+/// Skips (with a message) where ../shared or its real moving cut is absent.
+#define OVTEST_REQUIRE_MOVING_CUT()                                                                                    \
+  do {                                                                                                                 \
+    OVTEST_REQUIRE_SHARED_DATA();                                                                                      \
+    if (!std::filesystem::is_directory(ovtest::shared_data() + "/euroc_v1_01_moving"))                                 \
+      GTEST_SKIP() << "../shared/data/euroc_v1_01_moving not found";                                                   \
+  } while (0)
+
 namespace {
 
 struct RealRun {
@@ -103,9 +111,7 @@ double shipped_ape(const std::filesystem::path &folder, ovtest::EstimatorRun *ru
 class RealMovingCut : public ::testing::TestWithParam<double> {};
 
 TEST_P(RealMovingCut, SrRecoversAPlantedConstantOffsetWithinOneMs) {
-  OVTEST_REQUIRE_SHARED_DATA();
-  if (!std::filesystem::is_directory(ovtest::shared_data() + "/euroc_v1_01_moving"))
-    GTEST_SKIP() << "../shared/data/euroc_v1_01_moving not found";
+  OVTEST_REQUIRE_MOVING_CUT();
   const double planted_ms = GetParam();
   ovton::sim::TdModelOptions td;
   td.kind = ovton::sim::TdModelKind::Constant;
@@ -126,9 +132,7 @@ INSTANTIATE_TEST_SUITE_P(PlusMinus20ms, RealMovingCut, ::testing::Values(20.0, -
 // within a second (t_d's sigma printed as 0 on 25 of 72 rows). Every row must carry a positive t_d sigma and
 // P_report must stay positive semi-definite to rounding.
 TEST(RealMovingCut, ReportedCovarianceStaysPositiveAfterDynamicInit) {
-  OVTEST_REQUIRE_SHARED_DATA();
-  if (!std::filesystem::is_directory(ovtest::shared_data() + "/euroc_v1_01_moving"))
-    GTEST_SKIP() << "../shared/data/euroc_v1_01_moving not found";
+  OVTEST_REQUIRE_MOVING_CUT();
   const ovton::core::Dataset d = ovton::core::load_dataset(ovtest::shared_data() + "/euroc_v1_01_moving");
   ovton::msckf::VioOptions opt =
       ovton::msckf::load_vio_options(std::string(OVTON_SOURCE_DIR) + "/config/euroc_mav/estimator_config.yaml");
@@ -159,9 +163,7 @@ TEST(RealMovingCut, ReportedCovarianceStaysPositiveAfterDynamicInit) {
 // of the truth. `sr` ended 4.5-4.8 ms behind at sigma 0.46 ms here (~10 sigma, exit 0) before the shipped mode became
 // drift (docs/robustness.md, "An offset that moves"); the same check on sr shows the test can fail.
 TEST(RealMovingCut, ShippedConfigStaysHonestUnderAnUndeclaredDrift) {
-  OVTEST_REQUIRE_SHARED_DATA();
-  if (!std::filesystem::is_directory(ovtest::shared_data() + "/euroc_v1_01_moving"))
-    GTEST_SKIP() << "../shared/data/euroc_v1_01_moving not found";
+  OVTEST_REQUIRE_MOVING_CUT();
   ovton::sim::TdModelOptions td;
   td.kind = ovton::sim::TdModelKind::Drift;
   td.td0_s = 10e-3;
@@ -188,9 +190,7 @@ TEST(RealMovingCut, ShippedConfigStaysHonestUnderAnUndeclaredDrift) {
 // the drift state and end within 2 of its own sigmas. On the cut at 0 ms (the offset does not move) it must not switch,
 // in sr nor ton (docs/robustness.md, "The model check").
 TEST(RealMovingCut, ModelCheckSwitchesSrToTheDriftStateUnderAnUndeclaredDrift) {
-  OVTEST_REQUIRE_SHARED_DATA();
-  if (!std::filesystem::is_directory(ovtest::shared_data() + "/euroc_v1_01_moving"))
-    GTEST_SKIP() << "../shared/data/euroc_v1_01_moving not found";
+  OVTEST_REQUIRE_MOVING_CUT();
   ovton::sim::TdModelOptions td;
   td.kind = ovton::sim::TdModelKind::Drift;
   td.td0_s = 10e-3;
@@ -206,9 +206,7 @@ TEST(RealMovingCut, ModelCheckSwitchesSrToTheDriftStateUnderAnUndeclaredDrift) {
 }
 
 TEST(RealMovingCut, ModelCheckStaysQuietOnAConstantOffset) {
-  OVTEST_REQUIRE_SHARED_DATA();
-  if (!std::filesystem::is_directory(ovtest::shared_data() + "/euroc_v1_01_moving"))
-    GTEST_SKIP() << "../shared/data/euroc_v1_01_moving not found";
+  OVTEST_REQUIRE_MOVING_CUT();
   ovton::sim::TdModelOptions td;
   td.kind = ovton::sim::TdModelKind::Constant;
   td.td0_s = 0.0;
@@ -295,9 +293,7 @@ TEST(RealMovingCut, ShortImuGapsArePropagatedThroughAndLongOnesNamed) {
 // at the edge, the filter starts at 0 and the health check stops the run. The stop must pass on what the search saw, so
 // that the user learns where to look (an initial t_d or a wider range), not only that the estimate diverged.
 TEST(RealMovingCut, AnOffsetBeyondTheSearchSaysSoWhenTheRunStops) {
-  OVTEST_REQUIRE_SHARED_DATA();
-  if (!std::filesystem::is_directory(ovtest::shared_data() + "/euroc_v1_01_moving"))
-    GTEST_SKIP() << "../shared/data/euroc_v1_01_moving not found";
+  OVTEST_REQUIRE_MOVING_CUT();
   ovton::sim::TdModelOptions td;
   td.kind = ovton::sim::TdModelKind::Constant;
   td.td0_s = 0.25;

@@ -12,17 +12,13 @@ using namespace updtest;
 
 // Camera 1's landmark row w.r.t. the newest clone, the landmark, t_d and cam1's own Δ: r = z − h, so H = −∂r/∂x.
 TEST(StereoSlamJacobians, FurtherCameraRowMatchesFiniteDifferences) {
-  const Scene sc = make_scene(5, 5, 2.0, 0.0, 21);
-  ASSERT_EQ(sc.points.size(), 5u);
   for (const TdObservation td_obs : {TdObservation::StateRelevant, TdObservation::ImagePlane}) {
-    State s = make_state(sc, 0.0, 0.01, 0.02, 0.02);
-    s.td = 0.004;
-    s.cam_td.push_back({0.003, s.add_variable(Eigen::MatrixXd::Constant(1, 1, 1e-4))});
-    ovton::core::FeatureDatabase db;
-    observe(sc, db, 0.0, 1);
-    const size_t id = 3;
-    const ovton::core::CameraCalib cal1 = add_cam1_track(sc, db, id, 0.004);
-    const ovton::core::Feature &f = *db.get(id);
+    Cam1Case rig;
+    const Scene &sc = rig.sc;
+    State &s = rig.s;
+    const size_t id = rig.id;
+    const ovton::core::CameraCalib &cal1 = rig.cal1;
+    const ovton::core::Feature &f = *rig.db.get(id);
     ASSERT_EQ(f.more.size(), 1u);
     const ovton::core::Feature &track = f.more[0];
     LandmarkState l;

@@ -17,17 +17,13 @@ using namespace updtest;
 // Camera 1's rows w.r.t. its own Δ (and everything else) against central differences, in the clone-time mode (sr:
 // cam1's image is Δ after the clone) and the image-plane mode (sir: its shift is V·(t_d − td_ref) + V·Δ).
 TEST(StereoTdJacobians, OwnOffsetColumnMatchesFiniteDifferences) {
-  const Scene sc = make_scene(5, 5, 2.0, 0.0, 21);
-  ASSERT_EQ(sc.points.size(), 5u);
   for (const TdObservation td_obs : {TdObservation::StateRelevant, TdObservation::ImagePlane}) {
-    State s = make_state(sc, 0.0, 0.01, 0.02, 0.02);
-    s.td = 0.004;
-    s.cam_td.push_back({0.003, s.add_variable(Eigen::MatrixXd::Constant(1, 1, 1e-4))});
-    ovton::core::FeatureDatabase db;
-    observe(sc, db, 0.0, 1);
-    const size_t id = 3;
-    const ovton::core::CameraCalib cal1 = add_cam1_track(sc, db, id, 0.004);
-    const ovton::core::Feature &f = *db.get(id);
+    Cam1Case rig;
+    const Scene &sc = rig.sc;
+    const State &s = rig.s;
+    const size_t id = rig.id;
+    const ovton::core::Feature &f = *rig.db.get(id);
+    const ovton::core::CameraCalib &cal1 = rig.cal1;
     UpdaterMSCKF up(sc.calib, {}, {cal1});
     const Eigen::Vector3d p_f = sc.points[id] + Eigen::Vector3d(0.02, 0.01, -0.03);
     // The next observation's velocity for the first ones: every cam0 row then carries t_d in the image-plane mode.

@@ -195,6 +195,24 @@ inline ovton::core::CameraCalib add_cam1_track(const Scene &sc, ovton::core::Fea
   return cal1;
 }
 
+/// The further camera's Jacobian case: a state at the truth of make_scene(5, 5, 2.0, 0.0, 21) with t_d 4 ms and camera
+/// 1's own Δ of 3 ms in it, every point seen by cam0 and point `id` by cam1 with its images 4 ms after cam0's.
+struct Cam1Case {
+  Scene sc = make_scene(5, 5, 2.0, 0.0, 21);
+  State s = make_state(sc, 0.0, 0.01, 0.02, 0.02);
+  ovton::core::FeatureDatabase db;
+  ovton::core::CameraCalib cal1;
+  size_t id = 3;
+
+  Cam1Case() {
+    EXPECT_EQ(sc.points.size(), 5u);
+    s.td = 0.004;
+    s.cam_td.push_back({0.003, s.add_variable(Eigen::MatrixXd::Constant(1, 1, 1e-4))});
+    observe(sc, db, 0.0, 1);
+    cal1 = add_cam1_track(sc, db, id, 0.004);
+  }
+};
+
 inline std::vector<const ovton::core::Feature *> all_features(const ovton::core::FeatureDatabase &db) {
   std::vector<const ovton::core::Feature *> out;
   db.features_older_than(std::numeric_limits<int64_t>::max(), out);
