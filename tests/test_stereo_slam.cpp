@@ -80,6 +80,7 @@ LandmarkTrials landmark_trials(int cameras) {
   mo.chi2_multiplier = 100; // the covariance is tested here, not the gate
   UpdaterSlamOptions so;
   so.chi2_multiplier = 100;
+  so.further_cameras = true;
   const UpdaterMSCKF msckf(sc.calib, mo,
                            cameras == 2 ? std::vector<ovton::core::CameraCalib>{cal1}
                                         : std::vector<ovton::core::CameraCalib>{});

@@ -181,6 +181,7 @@ std::vector<Field> fields(VioOptions &o) {
       field(L, "track_correlation", o.slam.updater.track_correlation),
       field(L, "covariance_sigma_px", o.slam.updater.covariance_sigma_px),
       field(L, "state_velocity", o.slam.updater.state_velocity),
+      field(L, "further_cameras", o.slam.updater.further_cameras),
       field(C, "extrinsics", cal.extrinsics),
       field(C, "sigma_ext_rot", cal.sigma_ext_rot),
       field(C, "sigma_ext_pos", cal.sigma_ext_pos),

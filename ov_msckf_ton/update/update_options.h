@@ -63,6 +63,11 @@ struct UpdaterSlamOptions {
   /// observation, where the tracked velocity is the backward difference of eq. 2, whose pixel noise is also the
   /// row's own (errors in variables): with 25 landmarks that bias drove TPN's t_d 5-9 ms ahead of a 0.5 ms/s drift.
   bool state_velocity = true;
+  /// A rig's further cameras update the landmarks they see in the newest image too (one row pair per camera). Off by
+  /// default: on the eight stereo peer renders it cost +3.7 % APE on average (docs/stereo.md), probably because a
+  /// further camera's observation is found by KLT from the primary's at the same instant, so the two rows' errors are
+  /// correlated while the update takes them as independent.
+  bool further_cameras = false;
 };
 
 } // namespace ovton::msckf

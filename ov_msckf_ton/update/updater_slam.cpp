@@ -335,7 +335,7 @@ void UpdaterSLAM::update(State &state, const ovton::core::FeatureDatabase &db, i
     add_row(view, l, *f, velocities);
     // The same landmark in the further cameras' images of this instant (their stamp is the primary's). A row that
     // cannot be linearised there is left out; the landmark stays (the primary camera decides).
-    for (size_t k = 0; k < f->more.size() && k < others.size(); ++k) {
+    for (size_t k = 0; opt_.further_cameras && k < f->more.size() && k < others.size(); ++k) {
       const ovton::core::Feature &track = f->more[k];
       if (track.obs.empty() || track.newest().t_cam_ns != t_cam_ns ||
           !linearize(others[k], state, l, c, track, track.obs.size() - 1, td_obs, eq2, lin, motion))

@@ -53,7 +53,8 @@ public:
   void initialize(State &state, const std::vector<const ovton::core::Feature *> &features, int64_t t_cam_ns,
                   TdObservation td_obs, const VelocityProvider &velocities, SlamStats &stats);
 
-  /// Updates every landmark observed at t_cam_ns (the newest clone) with that observation in each camera of the rig:
+  /// Updates every landmark observed at t_cam_ns (the newest clone) with that observation in the primary camera and,
+  /// with UpdaterSlamOptions::further_cameras, in each further camera of the rig:
   /// one chi-square test per observation (2 dof), the passing ones stacked into one EKF update. A further camera's
   /// observation follows the MSCKF's rule (UpdaterMSCKF::usable_observations): in image-plane modes, or with an offset
   /// of its own, it needs its eq. 2 velocity, else it is left out. Landmarks that can no longer be linearised
