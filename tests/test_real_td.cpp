@@ -25,6 +25,15 @@
 
 namespace {
 
+/// The image stamps' offset drifting from 10 ms at `bias_s_per_s` (`ovton perturb --td-model drift`, its default walk).
+ovton::sim::TdModelOptions drift_from_10ms(double bias_s_per_s) {
+  ovton::sim::TdModelOptions td;
+  td.kind = ovton::sim::TdModelKind::Drift;
+  td.td0_s = 10e-3;
+  td.bias_s_per_s = bias_s_per_s;
+  return td;
+}
+
 struct RealRun {
   double final_td_ms = NAN, td_sigma_ms = NAN, ape_m = NAN, are_deg = NAN;
   ovton::msckf::TdModelStats td_model; ///< what the t_d model did (the model check's switch)
@@ -164,10 +173,7 @@ TEST(RealMovingCut, ReportedCovarianceStaysPositiveAfterDynamicInit) {
 // drift (docs/robustness.md, "An offset that moves"); the same check on sr shows the test can fail.
 TEST(RealMovingCut, ShippedConfigStaysHonestUnderAnUndeclaredDrift) {
   OVTEST_REQUIRE_MOVING_CUT();
-  ovton::sim::TdModelOptions td;
-  td.kind = ovton::sim::TdModelKind::Drift;
-  td.td0_s = 10e-3;
-  td.bias_s_per_s = 2e-3;
+  const ovton::sim::TdModelOptions td = drift_from_10ms(2e-3);
   for (const auto mode : {std::optional<ovton::msckf::TdMode>{}, std::optional(ovton::msckf::TdMode::Sr)}) {
     double truth_ms = NAN;
     // sr as it models t_d, without the model check (RealMovingCut.ModelCheckSwitchesSrToTheDriftState has it).
@@ -191,10 +197,7 @@ TEST(RealMovingCut, ShippedConfigStaysHonestUnderAnUndeclaredDrift) {
 // in sr nor ton (docs/robustness.md, "The model check").
 TEST(RealMovingCut, ModelCheckSwitchesSrToTheDriftStateUnderAnUndeclaredDrift) {
   OVTEST_REQUIRE_MOVING_CUT();
-  ovton::sim::TdModelOptions td;
-  td.kind = ovton::sim::TdModelKind::Drift;
-  td.td0_s = 10e-3;
-  td.bias_s_per_s = 3e-3;
+  const ovton::sim::TdModelOptions td = drift_from_10ms(3e-3);
   double truth_ms = NAN;
   const RealRun r = run_perturbed_cut(td, ovton::msckf::TdMode::Sr, true, &truth_ms);
   const double z = std::abs(r.final_td_ms - truth_ms) / r.td_sigma_ms;

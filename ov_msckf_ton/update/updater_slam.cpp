@@ -274,9 +274,10 @@ void UpdaterSLAM::update(State &state, const ovton::core::FeatureDatabase &db, i
   LandmarkLinearization lin, lin_prev;
   std::vector<int> cols;
   const double rho = opt_.track_correlation;
-  // The rig's further cameras: their calibration views, and eq. 2 for their tracks' velocities (as in the MSCKF).
+  // The rig's further cameras (slam.further_cameras; none otherwise): their calibration views, and eq. 2 for their
+  // tracks' velocities (as in the MSCKF).
   std::vector<UpdaterMSCKF::CameraView> others;
-  for (int cam = 1; cam < msckf_.num_cameras(); ++cam)
+  for (int cam = 1; opt_.further_cameras && cam < msckf_.num_cameras(); ++cam)
     others.push_back(msckf_.camera_view(state, cam));
   const VelocityProvider eq2;
   // One observation's row pair, after its chi-square test, into the stacked system. `track`: the camera's track.
@@ -335,7 +336,7 @@ void UpdaterSLAM::update(State &state, const ovton::core::FeatureDatabase &db, i
     add_row(view, l, *f, velocities);
     // The same landmark in the further cameras' images of this instant (their stamp is the primary's). A row that
     // cannot be linearised there is left out; the landmark stays (the primary camera decides).
-    for (size_t k = 0; opt_.further_cameras && k < f->more.size() && k < others.size(); ++k) {
+    for (size_t k = 0; k < f->more.size() && k < others.size(); ++k) {
       const ovton::core::Feature &track = f->more[k];
       if (track.obs.empty() || track.newest().t_cam_ns != t_cam_ns ||
           !linearize(others[k], state, l, c, track, track.obs.size() - 1, td_obs, eq2, lin, motion))

@@ -241,7 +241,6 @@ int main(int argc, char **argv) {
 
   // ---- data
   const std::vector<ov_core::ImuData> imu = peer_io::load_imu(mav0);
-  auto gt_rows = read_csv(mav0 + "state_groundtruth_estimate0/data.csv");
   const std::vector<peer_io::Image> imgs = peer_io::load_images(mav0, "cam0");
   // stereo: cam1's image of each cam0 stamp (EuRoC's cameras are triggered together: same stamps); a stamp cam1
   // lacks is fed to OpenVINS as a monocular frame of cam0 (its tracker takes one image or a stereo pair)
@@ -252,30 +251,11 @@ int main(int argc, char **argv) {
   int n_pairs = 0;
   // ground truth at the first image (camera clock = IMU clock under the initial guess t_d = 0), linear interpolation
   const int64_t t0 = imgs.front().t;
-  size_t k = 0;
-  while (k + 1 < gt_rows.size() && std::stoll(gt_rows[k + 1][0]) <= t0)
-    k++;
-  if (std::stoll(gt_rows[k][0]) > t0 || k + 1 >= gt_rows.size()) {
+  Eigen::Matrix<double, 17, 1> imustate;
+  if (!peer_io::ground_truth_state(mav0, t0, imustate)) {
     std::cerr << "no ground truth at first image\n";
     return 2;
   }
-  Eigen::Matrix<double, 16, 1> ga, gb;
-  for (int i = 0; i < 16; i++)
-    ga(i) = std::stod(gt_rows[k][1 + i]), gb(i) = std::stod(gt_rows[k + 1][1 + i]);
-  const double u =
-      double(t0 - std::stoll(gt_rows[k][0])) / double(std::stoll(gt_rows[k + 1][0]) - std::stoll(gt_rows[k][0]));
-  Eigen::Matrix<double, 16, 1> g = ga + u * (gb - ga);
-  Eigen::Quaterniond qa(ga(3), ga(4), ga(5), ga(6)), qb(gb(3), gb(4), gb(5), gb(6));
-  if (qa.dot(qb) < 0)
-    qb.coeffs() *= -1;
-  Eigen::Quaterniond q_WB = qa.slerp(u, qb).normalized();
-  Eigen::Matrix<double, 17, 1> imustate;
-  imustate(0) = t0 * 1e-9;
-  imustate.block<4, 1>(1, 0) = ov_core::rot_2_quat(q_WB.toRotationMatrix().transpose()); // JPL q_GtoI
-  imustate.block<3, 1>(5, 0) = g.segment<3>(0);                                          // p_IinG
-  imustate.block<3, 1>(8, 0) = g.segment<3>(7);                                          // v_IinG
-  imustate.block<3, 1>(11, 0) = g.segment<3>(10);                                        // bg
-  imustate.block<3, 1>(14, 0) = g.segment<3>(13);                                        // ba
   sys->initialize_with_gt(imustate);
   sys->set_num_features(params.num_pts / params.state_options.num_cameras);
 

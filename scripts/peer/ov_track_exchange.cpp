@@ -96,31 +96,12 @@ int main(int argc, char **argv) {
       fed[std::stoll(r[0])].emplace_back(std::stoull(r[1]), uv);
     }
   // Ground truth at the first image (linear interpolation), as the shared harness does.
-  auto gt = read_csv(mav0 + "state_groundtruth_estimate0/data.csv");
   const int64_t t0 = imgs.front().t;
-  size_t k = 0;
-  while (k + 1 < gt.size() && std::stoll(gt[k + 1][0]) <= t0)
-    k++;
-  if (std::stoll(gt[k][0]) > t0 || k + 1 >= gt.size()) {
+  Eigen::Matrix<double, 17, 1> s0;
+  if (!peer_io::ground_truth_state(mav0, t0, s0)) {
     std::cerr << "no ground truth at first image\n";
     return 2;
   }
-  Eigen::Matrix<double, 16, 1> ga, gb;
-  for (int i = 0; i < 16; i++)
-    ga(i) = std::stod(gt[k][1 + i]), gb(i) = std::stod(gt[k + 1][1 + i]);
-  const double u = double(t0 - std::stoll(gt[k][0])) / double(std::stoll(gt[k + 1][0]) - std::stoll(gt[k][0]));
-  const Eigen::Matrix<double, 16, 1> g = ga + u * (gb - ga);
-  Eigen::Quaterniond qa(ga(3), ga(4), ga(5), ga(6)), qb(gb(3), gb(4), gb(5), gb(6));
-  if (qa.dot(qb) < 0)
-    qb.coeffs() *= -1;
-  const Eigen::Quaterniond q_WB = qa.slerp(u, qb).normalized();
-  Eigen::Matrix<double, 17, 1> s0;
-  s0(0) = t0 * 1e-9;
-  s0.block<4, 1>(1, 0) = ov_core::rot_2_quat(q_WB.toRotationMatrix().transpose());
-  s0.block<3, 1>(5, 0) = g.segment<3>(0);
-  s0.block<3, 1>(8, 0) = g.segment<3>(7);
-  s0.block<3, 1>(11, 0) = g.segment<3>(10);
-  s0.block<3, 1>(14, 0) = g.segment<3>(13);
   sys->initialize_with_gt(s0);
   sys->set_num_features(num_pts);
 
