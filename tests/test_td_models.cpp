@@ -369,3 +369,42 @@ TEST(TdModels, CloneTrendGivesAnOlderCloneTheOffsetOfItsOwnImage) {
   c.td_ref = s.td;
   EXPECT_NEAR(s.td_offset_at(c), 0.0, 1e-12);
 }
+
+TEST(TdModels, TpnSaysWhenItStartsPredictingAndWhenItsRateIsAtTheBound) {
+  // docs/ton.md "How long TPN takes to learn": no labels while σ(t_d) is above ton.tpn_start_sigma_s, then 5 labels of
+  // 10 images before the first prediction; until then t_d does not move between images. A 3 ms/s ramp asks for three
+  // times time_offset.rate_max, so the propagations after the first prediction sit at the bound.
+  VioOptions o = with_process(TdMode::Tpn, TdProcess::Auto);
+  o.ton.tpn_label_images = 10;
+  o.ton.tpn.min_labels = 5;
+  o.td.adaptive_noise = false;
+  auto m = make_td_model(o);
+  State s = initialised_state(*m, 2e-3);
+  const int64_t t0 = 1'000'000'000, step = 50'000'000;
+  long propagations = 0, clamped_before = -1;
+  for (int k = 0; k < 300; ++k) { // image k + 1
+    if (k > 0) {
+      const double td_end = m->td_at_image(s, t0 + k * step, t0 + (k - 1) * step);
+      if (k < 70)
+        EXPECT_EQ(td_end, s.td) << "image " << k + 1 << ": no prediction yet, t_d must not move";
+      m->propagate(s, td_end, 0.05);
+      ++propagations;
+    }
+    const bool converging = k < 20 || k == 200; // σ 2 ms (above the 1 ms bound) for 20 images, and once at 200
+    s.P(s.td_index, s.td_index) = converging ? 4e-6 : 1e-8;
+    s.td = 0.01 + 3e-3 * 0.05 * k; // the filter's estimate after image k + 1
+    m->after_image(s, t0 + k * step);
+    if (k + 1 == 70)
+      clamped_before = m->stats().rate_clamped;
+  }
+  const TdModelStats &st = m->stats();
+  EXPECT_EQ(st.tpn_first_label_image, 21);
+  EXPECT_EQ(st.tpn_first_prediction_image, 70);
+  EXPECT_EQ(st.tpn_label_restarts, 1);
+  EXPECT_EQ(st.propagations, propagations);
+  EXPECT_EQ(clamped_before, 0);
+  EXPECT_GT(st.rate_clamped, 150) << "a 3 ms/s ramp against a 1 ms/s bound";
+  const std::string line = describe_tpn_learning(st, o.ton.tpn.td_rate_max);
+  EXPECT_NE(line.find("labels from image 21, first prediction after image 70"), std::string::npos) << line;
+  EXPECT_EQ(describe_tpn_learning(make_td_model(with_process(TdMode::Drift, TdProcess::Auto))->stats(), 1e-3), "");
+}

@@ -6,6 +6,7 @@
 #include "ov_eval/init_check.h"
 #include "ov_eval/metrics.h"
 #include "ov_msckf_ton/td/td_model_check.h"
+#include "ov_msckf_ton/td/td_models.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/progress.h"
@@ -189,6 +190,9 @@ int cmd_run(const Args &args) {
     if (const std::string sw = ovton::msckf::describe_model_check(r.report.td_model, r.traj.front().t_ns, req.opt.td);
         !sw.empty())
       std::cout << sw << "\n";
+  if (const std::string tpn = ovton::msckf::describe_tpn_learning(r.report.td_model, req.opt.ton.tpn.td_rate_max);
+      !tpn.empty())
+    std::cout << tpn << "\n";
   if (r.report.td_search && r.report.td_search->weak_excitation)
     std::cout << r.report.td_search->caution() << "\n";
   if (!nees_log.empty()) {

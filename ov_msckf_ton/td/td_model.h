@@ -18,8 +18,13 @@ namespace ovton::msckf {
 
 /// What a model did so far (run summaries, tests).
 struct TdModelStats {
-  long rate_clamped = 0;      ///< propagations whose rate hit time_offset.rate_max (tpn)
-  long learning_steps = 0;    ///< TPN trainings
+  long rate_clamped = 0;   ///< propagations whose rate hit time_offset.rate_max (tpn)
+  long learning_steps = 0; ///< TPN trainings
+  /// TPN's start (1-based image counts; -1: not yet): the first image whose t̂_d became a label (its σ below
+  /// ton.tpn_start_sigma_s), the image after which TPN first predicted (until then t_d's rate is 0: a random walk),
+  /// and how often the labels started over because σ rose above that bound again.
+  long tpn_first_label_image = -1, tpn_first_prediction_image = -1, tpn_label_restarts = 0;
+  long propagations = 0;      ///< propagations over a positive interval (tpn: the denominator of rate_clamped)
   double process_sigma = 0.0; ///< current process noise [s/sqrt(s)] on t_d (adaptive models change it)
   /// The model check (td_model_check.h): IMU time at which t_d went to the drift state (-1: never), the smaller of
   /// the two stretches' sums in sigmas, and what the corrections moved t_d by over both [s].

@@ -58,6 +58,15 @@ public:
   void after_image(const State &s, int64_t t_cam_ns) override {
     active().after_image(s, t_cam_ns);
     stats_ = active().stats();
+    if (drift_) { // what TPN learned before the switch stays on record
+      const TdModelStats &in = inner_->stats();
+      stats_.learning_steps = in.learning_steps;
+      stats_.tpn_first_label_image = in.tpn_first_label_image;
+      stats_.tpn_first_prediction_image = in.tpn_first_prediction_image;
+      stats_.tpn_label_restarts = in.tpn_label_restarts;
+      stats_.rate_clamped = in.rate_clamped;
+      stats_.propagations = in.propagations;
+    }
     stats_.switched_ns = switched_ns_;
     stats_.check_z = check_z_;
     stats_.check_moved_s = check_moved_s_;

@@ -3,6 +3,8 @@
 #include "ov_msckf_ton/td/td_model.h"
 #include "ov_msckf_ton/ton/tpn_driver.h"
 
+#include <string>
+
 namespace ovton::msckf {
 
 /// t_d constant (q = 0: OpenVINS' model) or a random walk of q [s/sqrt(s)]; t_d at an image is the current mean.
@@ -18,6 +20,10 @@ std::unique_ptr<TdModel> make_drift_model(const TimeOffsetOptions &o);
 std::unique_ptr<TdModel> make_tpn_model(const TimeOffsetOptions &o, const TonOptions &ton);
 /// The TPN driver of a model made by make_tpn_model, nullptr for any other model.
 const TpnDriver *tpn_driver_of(const TdModel &m);
+/// The line a run's summary says TPN's start with ("" for a model that never ran TPN): from which image it had labels,
+/// after which image it first predicted (until then t_d is a random walk), its trainings, restarts, and how often its
+/// rate sat at the bound `rate_max_s_per_s` (time_offset.rate_max).
+std::string describe_tpn_learning(const TdModelStats &st, double rate_max_s_per_s);
 
 /// Mode oracle: t_d is the truth at every image (not estimated).
 std::unique_ptr<TdModel> make_oracle_model(std::function<double(int64_t)> truth);

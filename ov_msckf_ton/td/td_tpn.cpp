@@ -9,6 +9,7 @@
 #include "ov_msckf_ton/td/td_noise_adapter.h"
 
 #include <optional>
+#include <sstream>
 
 namespace ovton::msckf {
 
@@ -43,6 +44,7 @@ public:
 
   void propagate(State &s, double td_end, double dt_s) override {
     stats_.rate_clamped += last_clamped_ ? 1 : 0;
+    stats_.propagations += dt_s > 0 ? 1 : 0;
     last_clamped_ = false;
     // The IMU-clock interval differs from the camera interval by the change in t_d itself: the rate is taken over
     // the interval actually propagated.
@@ -72,12 +74,17 @@ public:
       stats_.process_sigma = adapter_->q();
     }
     dt_since_image_ = 0.0;
+    ++images_;
     // The labels are the filter's own estimates: while t_d is still converging (σ above tpn_start_sigma_s) they
     // trace the convergence transient, not the offset's motion, and a network trained on them extrapolates the
     // transient: on a constant offset t_d then overshoots and the trajectory can diverge (docs/ton.md).
     if (s.td_sigma() > start_sigma_s_) {
       // Converging again: the block labels start over, and t_d is not driven at the last labels' rate meanwhile.
       start_block();
+      if (stats_.tpn_first_label_image > 0 && !restarting_) {
+        ++stats_.tpn_label_restarts;
+        restarting_ = true;
+      }
       if (label_images_ > 1 && has_label_) {
         has_label_ = false;
         label_spacing_s_ = 0.0;
@@ -85,9 +92,11 @@ public:
       }
       return;
     }
+    restarting_ = false;
+    if (stats_.tpn_first_label_image < 0)
+      stats_.tpn_first_label_image = images_;
     if (label_images_ == 1) {
-      driver_.step(s.td);
-      ++stats_.learning_steps;
+      learned(driver_.step(s.td));
       return;
     }
     if (first_image_ns_ < 0)
@@ -102,11 +111,15 @@ public:
     last_label_t_ = t_label;
     has_label_ = true;
     start_block();
-    driver_.step(label);
-    ++stats_.learning_steps;
+    learned(driver_.step(label));
   }
 
 private:
+  void learned(bool predicts) {
+    ++stats_.learning_steps;
+    if (predicts && stats_.tpn_first_prediction_image < 0)
+      stats_.tpn_first_prediction_image = images_;
+  }
   void start_block() {
     block_n_ = 0;
     block_td_ = block_t_ = 0.0;
@@ -123,14 +136,30 @@ private:
   double trend_tau_s_ = 0.0, trend_ = 0.0;
   double block_td_ = 0.0, block_t_ = 0.0;
   double last_label_ = 0.0, last_label_t_ = 0.0, label_spacing_s_ = 0.0;
-  bool has_label_ = false;
+  bool has_label_ = false, restarting_ = false;
   int64_t first_image_ns_ = -1;
+  long images_ = 0;
 };
 
 } // namespace
 
 std::unique_ptr<TdModel> make_tpn_model(const TimeOffsetOptions &o, const TonOptions &ton) {
   return std::make_unique<TpnTdModel>(o, ton);
+}
+
+std::string describe_tpn_learning(const TdModelStats &st, double rate_max_s_per_s) {
+  if (st.tpn_first_label_image < 0 && st.learning_steps == 0)
+    return "";
+  std::ostringstream s;
+  s << "TPN: labels from image " << st.tpn_first_label_image << ", first prediction after image ";
+  if (st.tpn_first_prediction_image < 0)
+    s << "(none)";
+  else
+    s << st.tpn_first_prediction_image;
+  s << " (t_d a random walk until then); " << st.learning_steps << " trainings, labels restarted "
+    << st.tpn_label_restarts << " times; rate at its bound (time_offset.rate_max " << rate_max_s_per_s * 1e3
+    << " ms/s) in " << st.rate_clamped << " of " << st.propagations << " propagations";
+  return s.str();
 }
 
 const TpnDriver *tpn_driver_of(const TdModel &m) {
