@@ -174,6 +174,7 @@ std::vector<Field> fields(VioOptions &o) {
       field(U, "max_features", up.msckf.max_features),
       field(U, "track_correlation", up.msckf.track_correlation),
       field(U, "covariance_track_correlation", up.msckf.covariance_track_correlation),
+      field(U, "covariance_camera_correlation", up.msckf.covariance_camera_correlation),
       field(L, "max_features", o.slam.max_features),
       field(L, "max_init_per_frame", o.slam.max_init_per_frame),
       field(L, "chi2_multiplier", o.slam.updater.chi2_multiplier),
@@ -318,6 +319,8 @@ void validate_vio_options(const VioOptions &o) {
   require(u.max_features >= 0, "update.max_features must be >= 0 (0 = no limit)");
   require(u.covariance_track_correlation >= 0 && u.covariance_track_correlation < 1,
           "update.covariance_track_correlation must lie in [0, 1)");
+  require(u.covariance_camera_correlation >= 0 && u.covariance_camera_correlation < 1,
+          "update.covariance_camera_correlation must lie in [0, 1)");
   require((u.covariance_track_correlation == 0 && sl.covariance_sigma_px == 0) ||
               (u.track_correlation == 0 && sl.track_correlation == 0),
           "update.covariance_track_correlation and slam.covariance_sigma_px are for the independent weights: they "

@@ -9,6 +9,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 namespace ovton::msckf {
 
@@ -62,6 +63,38 @@ Eigen::MatrixXd UpdaterMSCKF::projected_track_noise_factor(const FeatureQR &qr, 
   Eigen::MatrixXd L = track_noise_factor(rows, rho);
   L.applyOnTheLeft(qr.householderQ().adjoint());
   return L.bottomRows(rows - 3);
+}
+
+Eigen::MatrixXd UpdaterMSCKF::rig_track_correlation(const FeatureLinearization &lin, double rho, double rho_cam) {
+  if (!(rho >= 0 && rho < 1) || !(rho_cam >= 0 && rho_cam < 1))
+    throw ovton::core::UsageError("rig_track_correlation: need 0 <= rho, rho_cam < 1");
+  const Eigen::Index m = static_cast<Eigen::Index>(lin.obs.size());
+  std::vector<int64_t> times;
+  times.reserve(lin.obs.size());
+  for (const auto &o : lin.obs)
+    times.push_back(o.clone->t_cam_ns);
+  std::sort(times.begin(), times.end());
+  times.erase(std::unique(times.begin(), times.end()), times.end());
+  std::vector<Eigen::Index> k(lin.obs.size());
+  for (size_t a = 0; a < lin.obs.size(); ++a)
+    k[a] = std::lower_bound(times.begin(), times.end(), lin.obs[a].clone->t_cam_ns) - times.begin();
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(2 * m, 2 * m);
+  for (Eigen::Index a = 0; a < m; ++a)
+    for (Eigen::Index b = 0; b < m; ++b) {
+      const double c = std::pow(rho, static_cast<double>(std::abs(k[a] - k[b]))) *
+                       (lin.obs[a].cam == lin.obs[b].cam ? 1.0 : rho_cam);
+      C(2 * a, 2 * b) = c;
+      C(2 * a + 1, 2 * b + 1) = c;
+    }
+  return C;
+}
+
+Eigen::MatrixXd UpdaterMSCKF::projected_rig_track_covariance(const FeatureQR &qr, Eigen::MatrixXd C) {
+  if (C.rows() != qr.rows() || C.cols() != qr.rows())
+    throw ovton::core::UsageError("projected_rig_track_covariance: C and the QR differ in size");
+  C.applyOnTheLeft(qr.householderQ().adjoint());
+  C.applyOnTheRight(qr.householderQ());
+  return C;
 }
 
 void UpdaterMSCKF::whiten_track_rows(Eigen::Ref<Eigen::MatrixXd> M, double rho) {

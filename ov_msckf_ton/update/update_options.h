@@ -25,6 +25,12 @@ struct UpdaterMSCKFOptions {
   /// covariance overconfident. 0: off. Only with track_correlation 0. Needs a state with a reported covariance
   /// (VioManager keeps one then).
   double covariance_track_correlation = 0.0;
+  /// A rig's cross-camera correlation in that model: a further camera finds its features by KLT from the primary's
+  /// image at the same instant (ov_core/track/track_stereo.h), so the cameras' errors of one feature are correlated.
+  /// Rows of observations at a feature's image times k and j correlate by ρ^|k − j| per coordinate, times this when
+  /// two cameras made them (separable, so positive definite). 0: the cameras independent. Acts only with
+  /// covariance_track_correlation on and only on features seen by more than one camera (monocular runs unchanged).
+  double covariance_camera_correlation = 0.0;
   /// Image-plane t_d rows: take out the bias a tracked velocity puts into t̂_d. The t_d column V_k of a row is a
   /// difference of the track's measured points, so its noise correlates with the residuals' (errors in variables):
   /// eq. 2's V_k contains observation k's own noise, the central difference its neighbours', and the nullspace

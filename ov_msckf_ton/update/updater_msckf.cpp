@@ -55,6 +55,8 @@ UpdaterMSCKF::UpdaterMSCKF(const ovton::core::CameraCalib &calib, const UpdaterM
   if (opt_.covariance_track_correlation != 0 && opt_.track_correlation != 0)
     throw ovton::core::UsageError("UpdaterMSCKF: covariance_track_correlation is for the independent weight: it needs "
                                   "track_correlation 0");
+  if (!(opt_.covariance_camera_correlation >= 0 && opt_.covariance_camera_correlation < 1))
+    throw ovton::core::UsageError("UpdaterMSCKF: covariance_camera_correlation must be in [0, 1)");
   if (opt_.min_observations < 2)
     throw ovton::core::UsageError("UpdaterMSCKF: min_observations must be at least 2 (two views leave one row)");
   if (!(opt_.min_depth > 0) || !(opt_.max_depth > opt_.min_depth))
@@ -455,9 +457,17 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
       continue;
     }
     if (opt_.covariance_track_correlation != 0.0) {
-      // The projected rows' extra noise under the reported covariance's track model: σ²(B Bᵀ − I).
-      const Eigen::MatrixXd B = projected_track_noise_factor(qr_, opt_.covariance_track_correlation);
-      a.dR = sigma2 * (B * B.transpose());
+      // The projected rows' extra noise under the reported covariance's track model: σ²(B Bᵀ − I); a rig's feature
+      // by its image times and cameras (rig_track_correlation).
+      if (a.repeated_cols) {
+        a.dR =
+            sigma2 * projected_rig_track_covariance(qr_, rig_track_correlation(lin_, opt_.covariance_track_correlation,
+                                                                               opt_.covariance_camera_correlation))
+                         .bottomRightCorner(dof, dof);
+      } else {
+        const Eigen::MatrixXd B = projected_track_noise_factor(qr_, opt_.covariance_track_correlation);
+        a.dR = sigma2 * (B * B.transpose());
+      }
       a.dR.diagonal().array() -= sigma2;
     }
     ++n_acc;

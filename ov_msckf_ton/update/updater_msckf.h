@@ -113,6 +113,15 @@ public:
   /// The noise factor of one feature's nullspace-projected rows for AR(1) errors (covariance_track_correlation):
   /// B = Q₂ᵀ L, so that the projected rows' noise is σ²BBᵀ.
   static Eigen::MatrixXd projected_track_noise_factor(const FeatureQR &qr, double rho);
+  /// The correlation C of a rig's feature's stacked rows (linearize's order) under the reported covariance's model
+  /// (covariance_track_correlation ρ, covariance_camera_correlation ρ_cam): per coordinate
+  /// C = ρ^|k_a − k_b| · (ρ_cam when observations a and b are of different cameras), k the rank of an observation's
+  /// image time among the feature's. A principal block of (1 ρ_cam; ρ_cam 1) ⊗ AR(1), so positive definite. With one
+  /// camera it is track_noise_factor's L Lᵀ when the track has no gaps.
+  static Eigen::MatrixXd rig_track_correlation(const FeatureLinearization &lin, double rho, double rho_cam);
+  /// Qᵀ C Q for the feature's H_f QR (its bottom-right 2m − 3 block: the projected rows' noise over σ²; the top-left
+  /// 3: the rows that fix a landmark's position).
+  static Eigen::MatrixXd projected_rig_track_covariance(const FeatureQR &qr, Eigen::MatrixXd C);
   /// The innovation covariance of the nullspace-projected rows, S = Q₂ᵀ H_x P Hₓᵀ Q₂ + σ²I ((2m − 3) square), from
   /// H_x's structure (linearize's layout: clone k's six columns 6k..6k+5 are non-zero only in rows 2k, 2k + 1; the
   /// columns after 6m are dense): H_x P Hₓᵀ costs O(m²) for the clone blocks instead of O(m·(6m)²) with the

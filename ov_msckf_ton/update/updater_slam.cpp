@@ -133,8 +133,18 @@ UpdaterSLAM::LandmarkBlock UpdaterSLAM::report_initialization(const State &state
   // The window's rows under the MSCKF's track model (AR(1) ρ_c; independent when 0): noise σ²·(QᵀL)(QᵀL)ᵀ split
   // like the rows, σ²B₁B₁ᵀ for the three that fix the landmark. (n₁'s correlation with the rest's noise n₂ is left
   // out.)
+  // A rig's window: by image times and cameras (UpdaterMSCKF::rig_track_correlation).
   const Eigen::Index rows = qr.rows();
-  Eigen::MatrixXd B = UpdaterMSCKF::track_noise_factor(rows, msckf_.options().covariance_track_correlation);
+  const UpdaterMSCKFOptions &mo = msckf_.options();
+  if (std::any_of(lin_.obs.begin(), lin_.obs.end(), [](const auto &o) { return o.cam != 0; })) {
+    const Eigen::MatrixXd M = UpdaterMSCKF::projected_rig_track_covariance(
+        qr,
+        UpdaterMSCKF::rig_track_correlation(lin_, mo.covariance_track_correlation, mo.covariance_camera_correlation));
+    dR2 = sigma2 * M.bottomRightCorner(rows - 3, rows - 3);
+    dR2.diagonal().array() -= sigma2;
+    return landmark_block(state.P_report, cols, H1, R1inv, sigma2 * M.topLeftCorner<3, 3>());
+  }
+  Eigen::MatrixXd B = UpdaterMSCKF::track_noise_factor(rows, mo.covariance_track_correlation);
   B.applyOnTheLeft(qr.householderQ().adjoint());
   dR2 = sigma2 * B.bottomRows(rows - 3) * B.bottomRows(rows - 3).transpose();
   dR2.diagonal().array() -= sigma2;
