@@ -98,6 +98,11 @@ TEST_F(CliRobustness, BadOptionsAndConfigsFailBeforeTheRun) {
   expect_failure(run("run --dataset " + sim() + " --output " + traj + " --max-images 0"), 2, "--max-images");
   expect_failure(run("run --dataset " + sim() + " --output " + traj + " --max-images -5"), 2, "--max-images");
   expect_failure(run("run --dataset " + sim() + " --output -"), 2, "standard output");
+  // A stray word (a config override as the experiment scripts write them, a second dataset) was dropped silently.
+  expect_failure(run("run --dataset " + sim() + " --output " + traj + " time_offset.model_check=false"), 2,
+                 "unexpected argument 'time_offset.model_check=false'");
+  expect_failure(run("compare --dataset " + sim() + " --out " + (tmp_ / "cmp") + " extra"), 2, "unexpected argument");
+  EXPECT_FALSE(fs::exists(traj));
   EXPECT_FALSE(fs::exists("-"));
   expect_failure(run("run --dataset " + sim() + " --output " + traj + " --td-search maybe"), 2, "--td-search");
   expect_failure(run("run --dataset " + sim() + " --output " + traj + " --health-checks 1"), 2, "--health-checks");

@@ -7,7 +7,18 @@ namespace ovton::cli {
 
 bool parse_command_line(const Args &args, const boost::program_options::options_description &desc,
                         boost::program_options::variables_map &vm) {
-  boost::program_options::store(boost::program_options::command_line_parser(args).options(desc).run(), vm);
+  namespace po = boost::program_options;
+  const po::parsed_options parsed = po::command_line_parser(args).options(desc).run();
+  // No subcommand takes positional arguments, and boost drops them silently: a user's `ovton run ... KEY=VALUE` then
+  // ran with the config unchanged and exited 0.
+  for (const std::string &word : po::collect_unrecognized(parsed.options, po::include_positional)) {
+    std::string msg = "unexpected argument '" + word + "': every argument is an option (--help lists them)";
+    if (word.find('=') != std::string::npos && word.find('.') != std::string::npos)
+      msg += "; config values are not set on the command line: put SECTION.KEY in a config file given with --config "
+             "(scripts/config_override.py CONFIG OUT SECTION.KEY=VALUE writes one)";
+    throw ovton::core::UsageError(msg);
+  }
+  po::store(parsed, vm);
   if (vm.count("help")) {
     std::cout << desc << "\n";
     return false;
