@@ -2,7 +2,8 @@
 # Installs the Debian packages the build needs, and any given as arguments (skips apt when everything is already there).
 # --minimal: what the `ovton` binary needs (scripts/quickstart.sh): OpenCV's six modules one by one instead of the
 # libopencv-dev metapackage (every module, with Qt, VTK, FFmpeg, ...), no python3; GoogleTest stays (0.6 MB), so that
-# the build folder is configured as scripts/test.sh configures it. cmake/ovtonOpenCV.cmake finds the modules without
+# the build folder is configured as scripts/test.sh configures it; ninja-build (0.1 MB), with which the quickstart's cold
+# build keeps both cores busy to the end (docs/quickstart.md). cmake/ovtonOpenCV.cmake finds the modules without
 # OpenCVConfig.cmake; what it saves: docs/quickstart.md, "What apt installs".
 # --sanitize adds clang and its runtime libraries (ASan, UBSan, libFuzzer) for scripts/sanitize.sh and scripts/fuzz.sh;
 # other arguments are extra packages a script needs (check_format.sh: clang-format).
@@ -19,7 +20,7 @@ PKGS=(build-essential cmake ccache libeigen3-dev libyaml-cpp-dev libboost-dev li
       libzstd-dev liblz4-dev zlib1g-dev libsqlite3-dev)
 OPENCV_MODULES=(libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-video-dev
                 libopencv-features2d-dev libopencv-calib3d-dev)
-MINIMAL=("${OPENCV_MODULES[@]}" libgtest-dev)
+MINIMAL=("${OPENCV_MODULES[@]}" libgtest-dev ninja-build)
 FULL=(libopencv-dev libgtest-dev python3)
 MINIMAL_ONLY=""
 for a in "$@"; do
