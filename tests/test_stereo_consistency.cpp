@@ -61,12 +61,7 @@ struct RigMonteCarlo {
 RigMonteCarlo rig_monte_carlo(double rho, double rho_cam, double report_cam, int trials, unsigned seed) {
   const Scene sc = make_scene(10, 20, 1.0, 0.0, 21);
   State truth = make_state(sc, 0.0, 0.001, 0.003, 0.01);
-  for (const auto &[ta, a] : truth.clones)
-    for (const auto &[tb, b] : truth.clones)
-      for (int q = 0; q < 3; ++q) {
-        truth.P(a.index + q, b.index + q) += 0.01 * 0.01;
-        truth.P(a.index + 3 + q, b.index + 3 + q) += 0.05 * 0.05;
-      }
+  add_common_clone_prior(truth, 0.01, 0.05);
   const int n = truth.dim();
   const Eigen::MatrixXd L = truth.P.llt().matrixL();
   const ovton::core::CameraCalib cal1 = euroc_cam1();

@@ -39,12 +39,7 @@ UpdateMonteCarlo update_monte_carlo(double noise_px, int trials, double lin_nois
   // them is small. Independent 3 cm errors on a 10 cm baseline would make every triangulation metres off, a regime
   // no linearised update is meant for. Prior: 1 mrad / 3 mm per clone, plus 10 mrad / 5 cm common to all.
   State truth = make_state(sc, 0.0, 0.001, 0.003, 0.01);
-  for (const auto &[ta, a] : truth.clones)
-    for (const auto &[tb, b] : truth.clones)
-      for (int q = 0; q < 3; ++q) {
-        truth.P(a.index + q, b.index + q) += 0.01 * 0.01;
-        truth.P(a.index + 3 + q, b.index + 3 + q) += 0.05 * 0.05;
-      }
+  add_common_clone_prior(truth, 0.01, 0.05);
   const int n = truth.dim();
   const Eigen::MatrixXd L = truth.P.llt().matrixL();
   std::mt19937 rng(seed);

@@ -135,6 +135,17 @@ inline State make_state(const Scene &sc, double td_ref, double sig_th, double si
   return s;
 }
 
+/// A filter's clones share most of their error (they descend from one propagated state): adds an error common to all
+/// clones, sig_th_common [rad] and sig_p_common [m] per axis, to a state's prior (make_state's are independent).
+inline void add_common_clone_prior(State &s, double sig_th_common, double sig_p_common) {
+  for (const auto &[ta, a] : s.clones)
+    for (const auto &[tb, b] : s.clones)
+      for (int q = 0; q < 3; ++q) {
+        s.P(a.index + q, b.index + q) += sig_th_common * sig_th_common;
+        s.P(a.index + 3 + q, b.index + 3 + q) += sig_p_common * sig_p_common;
+      }
+}
+
 /// Observes every point in every image (at IMU time t_cam + td_true) with Gaussian pixel noise.
 inline void observe(const Scene &sc, ovton::core::FeatureDatabase &db, double noise_px, unsigned seed) {
   std::mt19937 rng(seed);

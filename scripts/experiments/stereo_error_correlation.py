@@ -17,6 +17,17 @@ ds, res0, res1 = sys.argv[1], sys.argv[2], sys.argv[3]
 CTRL = float(sys.argv[4]) if len(sys.argv) > 4 else None
 RX = float(sys.argv[5]) if len(sys.argv) > 5 else 0.0
 rng = np.random.default_rng(7)
+def refine_point(X, obs, Rs, ps, iterations=8):
+    """Gauss-Newton on the landmark's position X against its normalised observations; returns X and the residuals."""
+    for _ in range(iterations):
+        J, e = [], []
+        for (cam, t, x, y), R, p in zip(obs, Rs, ps):
+            c = R.T @ (X - p); e += [x - c[0]/c[2], y - c[1]/c[2]]
+            J += [R.T[0]/c[2] - c[0]/c[2]**2 * R.T[2], R.T[1]/c[2] - c[1]/c[2]**2 * R.T[2]]
+        J, e = np.array(J), np.array(e); X = X + np.linalg.lstsq(J, e, rcond=None)[0]
+    return X, e
+
+
 def T_BS(path):
     txt = open(path).read(); m = re.search(r'T_BS:.*?data:\s*\[([^\]]*)\]', txt, re.S)
     T = np.array([float(x) for x in m.group(1).replace('\n', ' ').split(',')]).reshape(4, 4)
@@ -61,12 +72,7 @@ for k in A:
     for (cam, t, x, y), R, p in zip(obs, Rs, ps):
         b = R @ np.array([x, y, 1.0]); b /= np.linalg.norm(b); P = np.eye(3) - np.outer(b, b); M += P; v += P @ p
     X = np.linalg.solve(M, v)
-    for it in range(8):
-        J, e = [], []
-        for (cam, t, x, y), R, p in zip(obs, Rs, ps):
-            c = R.T @ (X - p); e += [x - c[0]/c[2], y - c[1]/c[2]]
-            J += [R.T[0]/c[2] - c[0]/c[2]**2 * R.T[2], R.T[1]/c[2] - c[1]/c[2]**2 * R.T[2]]
-        J, e = np.array(J), np.array(e); X = X + np.linalg.lstsq(J, e, rcond=None)[0]
+    X, e = refine_point(X, obs, Rs, ps)
     if CTRL is not None:  # control: exact projections of the fitted point + independent AR(1) per camera
         tsu = sorted(set(o[1] for o in obs)); ix = {t: i for i, t in enumerate(tsu)}
         noise = {}
@@ -79,12 +85,7 @@ for k in A:
         for (cam, t, x, y), R, p in zip(obs, Rs, ps):
             c = R.T @ (X - p); z = c[:2] / c[2] + noise[cam][ix[t]]; new.append((cam, t, z[0], z[1]))
         obs = new
-        for it in range(8):
-            J, e = [], []
-            for (cam, t, x, y), R, p in zip(obs, Rs, ps):
-                c = R.T @ (X - p); e += [x - c[0]/c[2], y - c[1]/c[2]]
-                J += [R.T[0]/c[2] - c[0]/c[2]**2 * R.T[2], R.T[1]/c[2] - c[1]/c[2]**2 * R.T[2]]
-            J, e = np.array(J), np.array(e); X = X + np.linalg.lstsq(J, e, rcond=None)[0]
+        X, e = refine_point(X, obs, Rs, ps)
     e = e.reshape(-1, 2) * fx
     if np.abs(e).max() > 5: continue
     E = {(cam, t): ei for (cam, t, x, y), ei in zip(obs, e)}
