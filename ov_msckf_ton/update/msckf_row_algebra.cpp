@@ -65,6 +65,10 @@ Eigen::MatrixXd UpdaterMSCKF::projected_track_noise_factor(const FeatureQR &qr, 
   return L.bottomRows(rows - 3);
 }
 
+bool UpdaterMSCKF::seen_by_further_camera(const FeatureLinearization &lin) {
+  return std::any_of(lin.obs.begin(), lin.obs.end(), [](const auto &o) { return o.cam != 0; });
+}
+
 Eigen::MatrixXd UpdaterMSCKF::rig_track_correlation(const FeatureLinearization &lin, double rho, double rho_cam) {
   if (!(rho >= 0 && rho < 1) || !(rho_cam >= 0 && rho_cam < 1))
     throw ovton::core::UsageError("rig_track_correlation: need 0 <= rho, rho_cam < 1");

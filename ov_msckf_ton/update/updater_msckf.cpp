@@ -424,7 +424,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
       accepted_.emplace_back();
     Accepted &a = accepted_[n_acc];
     a.cols = lin_.cols;
-    a.repeated_cols = std::any_of(lin_.obs.begin(), lin_.obs.end(), [](const auto &o) { return o.cam != 0; });
+    a.repeated_cols = seen_by_further_camera(lin_);
     a.H = lin_.H_x;
     a.r = lin_.r;
     // Projected copies: lin_ keeps the pre-projection residuals that the log reports. With correlated track errors

@@ -119,6 +119,8 @@ public:
   /// image time among the feature's. A principal block of (1 ρ_cam; ρ_cam 1) ⊗ AR(1), so positive definite. With one
   /// camera it is track_noise_factor's L Lᵀ when the track has no gaps.
   static Eigen::MatrixXd rig_track_correlation(const FeatureLinearization &lin, double rho, double rho_cam);
+  /// Whether a further camera observed the feature (its rows then repeat clone columns and take the rig's track model).
+  static bool seen_by_further_camera(const FeatureLinearization &lin);
   /// Qᵀ C Q for the feature's H_f QR (its bottom-right 2m − 3 block: the projected rows' noise over σ²; the top-left
   /// 3: the rows that fix a landmark's position).
   static Eigen::MatrixXd projected_rig_track_covariance(const FeatureQR &qr, Eigen::MatrixXd C);

@@ -136,7 +136,7 @@ UpdaterSLAM::LandmarkBlock UpdaterSLAM::report_initialization(const State &state
   // A rig's window: by image times and cameras (UpdaterMSCKF::rig_track_correlation).
   const Eigen::Index rows = qr.rows();
   const UpdaterMSCKFOptions &mo = msckf_.options();
-  if (std::any_of(lin_.obs.begin(), lin_.obs.end(), [](const auto &o) { return o.cam != 0; })) {
+  if (UpdaterMSCKF::seen_by_further_camera(lin_)) {
     const Eigen::MatrixXd M = UpdaterMSCKF::projected_rig_track_covariance(
         qr,
         UpdaterMSCKF::rig_track_correlation(lin_, mo.covariance_track_correlation, mo.covariance_camera_correlation));
