@@ -8,6 +8,9 @@
 #   scripts/experiments/fresh_quickstart.sh WORKDIR [COMMIT]      (COMMIT: default HEAD of this clone)
 # WORKDIR/base.tar keeps the bootstrapped system between runs (delete it to bootstrap again); every run unpacks it
 # into WORKDIR/root afresh. The quickstart's own log: WORKDIR/quickstart.log; the times: WORKDIR/times.txt.
+# Environment: APT_DL_LIMIT_KBPS=N caps apt's download rate inside the system (Acquire::http::Dl-Limit, kB/s; 12500 is
+# a 100 Mbit/s link), since this sandbox's mirror answers at >100 MB/s; FRESH_CMD replaces the command run inside
+# (e.g. 'time scripts/install_deps.sh --minimal' to time the install step alone).
 set -euo pipefail
 WORK=${1:?usage: fresh_quickstart.sh WORKDIR [COMMIT]}
 COMMIT=${2:-HEAD}
@@ -43,16 +46,21 @@ rm -rf "$ROOT"
 mkdir -p "$ROOT"
 tar -C "$ROOT" -xf "$WORK/base.tar"
 cp /etc/resolv.conf "$ROOT/etc/resolv.conf"
+if [ -n "${APT_DL_LIMIT_KBPS:-}" ]; then
+  echo "Acquire::http::Dl-Limit \"$APT_DL_LIMIT_KBPS\";" >"$ROOT/etc/apt/apt.conf.d/99dl-limit"
+fi
+FRESH_CMD=${FRESH_CMD:-scripts/quickstart.sh}
 mount -t proc proc "$ROOT/proc"
 mount --rbind /sys "$ROOT/sys"
 mount --rbind /dev "$ROOT/dev"
 # The clone a user would have: the commit's tree only (no build folder, no out/, no ccache).
 mkdir -p "$ROOT/root/ov_msckf_ton"
 git -C "$SRC" archive "$COMMIT" | tar -C "$ROOT/root/ov_msckf_ton" -x
-echo "== quickstart in the fresh system: commit $(git -C "$SRC" rev-parse --short "$COMMIT"), $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg) =="
+echo "== $FRESH_CMD in the fresh system: commit $(git -C "$SRC" rev-parse --short "$COMMIT"), $(nproc) cores," \
+  "load $(cut -d' ' -f1-3 /proc/loadavg), apt download limit ${APT_DL_LIMIT_KBPS:-none} kB/s =="
 START=$(date +%s)
 chroot "$ROOT" /usr/bin/env -i HOME=/root PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
-  LANG=C.UTF-8 DEBIAN_FRONTEND=noninteractive /bin/bash -c 'cd /root/ov_msckf_ton && scripts/quickstart.sh' \
+  LANG=C.UTF-8 DEBIAN_FRONTEND=noninteractive /bin/bash -c "cd /root/ov_msckf_ton && $FRESH_CMD" \
   2>&1 | tee "$WORK/quickstart.log"
 END=$(date +%s)
 {
