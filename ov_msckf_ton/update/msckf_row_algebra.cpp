@@ -69,6 +69,27 @@ bool UpdaterMSCKF::seen_by_further_camera(const FeatureLinearization &lin) {
   return std::any_of(lin.obs.begin(), lin.obs.end(), [](const auto &o) { return o.cam != 0; });
 }
 
+void UpdaterMSCKF::merge_repeated_columns(std::vector<int> &cols, Eigen::MatrixXd &H) {
+  if (H.cols() != static_cast<Eigen::Index>(cols.size()))
+    throw ovton::core::UsageError("merge_repeated_columns: H and its columns differ in size");
+  std::vector<int> distinct;
+  std::vector<Eigen::Index> at(cols.size());
+  for (size_t j = 0; j < cols.size(); ++j) {
+    const auto it = std::find(distinct.begin(), distinct.end(), cols[j]);
+    at[j] = it - distinct.begin();
+    if (it == distinct.end())
+      distinct.push_back(cols[j]);
+  }
+  if (distinct.size() == cols.size())
+    return;
+  // From zero, in column order: the same sums, bit for bit, as adding them into a zeroed stacked system.
+  Eigen::MatrixXd merged = Eigen::MatrixXd::Zero(H.rows(), static_cast<Eigen::Index>(distinct.size()));
+  for (size_t j = 0; j < cols.size(); ++j)
+    merged.col(at[j]) += H.col(static_cast<Eigen::Index>(j));
+  H.swap(merged);
+  cols.swap(distinct);
+}
+
 Eigen::MatrixXd UpdaterMSCKF::rig_track_correlation(const FeatureLinearization &lin, double rho, double rho_cam) {
   if (!(rho >= 0 && rho < 1) || !(rho_cam >= 0 && rho_cam < 1))
     throw ovton::core::UsageError("rig_track_correlation: need 0 <= rho, rho_cam < 1");
@@ -153,21 +174,7 @@ Eigen::MatrixXd UpdaterMSCKF::projected_innovation(const FeatureLinearization &l
 }
 
 void UpdaterMSCKF::merge_repeated_columns(FeatureLinearization &lin) {
-  std::vector<int> cols;
-  std::vector<Eigen::Index> to(lin.cols.size());
-  for (size_t j = 0; j < lin.cols.size(); ++j) {
-    const auto it = std::find(cols.begin(), cols.end(), lin.cols[j]);
-    to[j] = it - cols.begin();
-    if (it == cols.end())
-      cols.push_back(lin.cols[j]);
-  }
-  if (cols.size() == lin.cols.size())
-    return;
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(lin.H_x.rows(), static_cast<Eigen::Index>(cols.size()));
-  for (size_t j = 0; j < lin.cols.size(); ++j)
-    H.col(to[j]) += lin.H_x.col(static_cast<Eigen::Index>(j));
-  lin.H_x.swap(H);
-  lin.cols.swap(cols);
+  merge_repeated_columns(lin.cols, lin.H_x);
 }
 
 double UpdaterMSCKF::td_velocity_bias(const FeatureLinearization &lin, const ovton::core::Feature &feature,

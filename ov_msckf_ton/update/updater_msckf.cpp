@@ -470,6 +470,10 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
       }
       a.dR.diagonal().array() -= sigma2;
     }
+    // A rig's clone columns once each: the stacked system and G below then work on the feature's distinct columns
+    // (half as many for a stereo feature; G's products were the reported covariance's dearest step).
+    if (a.repeated_cols)
+      merge_repeated_columns(a.cols, a.H);
     ++n_acc;
     ++st.features_used;
     td_bias += td_bias_to_remove(lin_, f, velocities, qr_);
@@ -501,14 +505,8 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
   for (size_t k = 0; k < n_acc; ++k) {
     const Accepted &a = accepted_[k];
     const int rows = static_cast<int>(a.r.size());
-    // A rig's clone seen by two cameras repeats its columns: they add.
-    for (size_t j = 0; j < a.cols.size(); ++j) {
-      auto dst = H.block(row, where_[a.cols[j]], rows, 1);
-      if (a.repeated_cols)
-        dst += a.H.col(static_cast<Eigen::Index>(j));
-      else
-        dst = a.H.col(static_cast<Eigen::Index>(j));
-    }
+    for (size_t j = 0; j < a.cols.size(); ++j) // distinct columns (merged above)
+      H.block(row, where_[a.cols[j]], rows, 1) = a.H.col(static_cast<Eigen::Index>(j));
     r.segment(row, rows) = a.r;
     row += rows;
   }

@@ -121,6 +121,9 @@ public:
   static Eigen::MatrixXd rig_track_correlation(const FeatureLinearization &lin, double rho, double rho_cam);
   /// Whether a further camera observed the feature (its rows then repeat clone columns and take the rig's track model).
   static bool seen_by_further_camera(const FeatureLinearization &lin);
+  /// Sums the columns of H that belong to the same state column (a rig's clone seen by several cameras), in their
+  /// order, leaving each state column once in `cols` (in order of first appearance): what stacking them adds anyway.
+  static void merge_repeated_columns(std::vector<int> &cols, Eigen::MatrixXd &H);
   /// Qᵀ C Q for the feature's H_f QR (its bottom-right 2m − 3 block: the projected rows' noise over σ²; the top-left
   /// 3: the rows that fix a landmark's position).
   static Eigen::MatrixXd projected_rig_track_covariance(const FeatureQR &qr, Eigen::MatrixXd C);
