@@ -6,7 +6,10 @@
 #include "ov_core/io/kalibr_writer.h"
 #include "test_util.h"
 
+#include <fstream>
 #include <gtest/gtest.h>
+#include <iterator>
+#include <opencv2/core/persistence.hpp>
 
 using namespace ovton::core;
 
@@ -118,4 +121,31 @@ TEST(Kalibr, WrittenFilesReadBack) {
   const KalibrImu j = load_kalibr_imu(d / "imu_out.yaml");
   EXPECT_EQ(j.imu.accel_random_walk, i.imu.accel_random_walk);
   EXPECT_EQ(j.imu.rate_hz, 200.0);
+}
+
+// OpenVINS reads a Kalibr camchain with OpenCV's FileStorage, whose YAML parser is stricter than yaml-cpp: the file
+// ovton writes (calibrate, export) must parse there too, with T_cam_imu as four rows of four, once the "%YAML:1.0"
+// line OpenCV wants first is added (as OpenVINS's own files have it; Kalibr's, like ours, lack it, and Python's yaml
+// refuses it).
+TEST(Kalibr, WrittenCamchainParsesWithOpenCvFileStorage) {
+  ovtest::TempDir d;
+  ovtest::write_text(d / "in.yaml", kTumViCamchain);
+  const KalibrCamera k = load_kalibr_camchain(d / "in.yaml");
+  write_kalibr_camchain(d / "out.yaml", k.cam, 0.0125, "/left");
+  std::ifstream in(d / "out.yaml");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  cv::FileStorage fs;
+  ASSERT_NO_THROW(fs.open("%YAML:1.0\n" + text, cv::FileStorage::READ | cv::FileStorage::MEMORY));
+  ASSERT_TRUE(fs.isOpened());
+  const cv::FileNode T = fs["cam0"]["T_cam_imu"];
+  ASSERT_TRUE(T.isSeq());
+  ASSERT_EQ(T.size(), 4u);
+  const Eigen::Matrix4d T_CI = k.cam.T_BC.inverse();
+  for (int r = 0; r < 4; ++r) {
+    ASSERT_EQ(T[r].size(), 4u);
+    for (int c = 0; c < 4; ++c)
+      EXPECT_NEAR(static_cast<double>(T[r][c]), T_CI(r, c), 1e-12) << r << "," << c;
+  }
+  EXPECT_EQ(static_cast<std::string>(fs["cam0"]["distortion_model"]), "equidistant");
+  EXPECT_DOUBLE_EQ(static_cast<double>(fs["cam0"]["timeshift_cam_imu"]), 0.0125);
 }

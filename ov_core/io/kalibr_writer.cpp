@@ -45,8 +45,10 @@ void write_kalibr_rig(const std::string &file, const std::vector<CameraCalib> &c
     const CameraCalib &cam = cams[k];
     const Eigen::Matrix4d T_CI = cam.T_BC.inverse();
     o << "cam" << k << ":\n  T_cam_imu:\n";
+    // The rows indented under their key: valid YAML either way, but OpenCV's FileStorage (which OpenVINS reads its
+    // camchain with) refuses a block sequence at its key's indentation ("Incorrect indentation").
     for (int r = 0; r < 4; ++r)
-      o << "  - " << list(T_CI.row(r).transpose().eval()) << "\n";
+      o << "    - " << list(T_CI.row(r).transpose().eval()) << "\n";
     o << "  camera_model: pinhole\n"
       << "  distortion_model: " << (cam.distortion == DistortionModel::RadTan ? "radtan" : "equidistant") << "\n"
       << "  distortion_coeffs: " << list(cam.dist_coeffs) << "\n"
