@@ -220,7 +220,7 @@ for m in ("sr", "drift", "rf"):
 for v in ("default_tdcal", "default_td0", "noslam_tdcal", "noslam_td0"):
     f = f"runs/ov_{v}_r1.log"
     if os.path.exists(f):
-        m = [l.strip() for l in open(f) if l.startswith("init=ov")]
+        m = [l[l.find("init=ov:"):].strip() for l in open(f) if "init=ov:" in l]
         if m:
             L.append(f"- OpenVINS {v}: {m[0]}")
 print("\n".join(L))
