@@ -15,6 +15,7 @@
 #   --out DIR       everything goes here (default /tmp/phone37)
 #   --repeats N     timed runs per system variant, alternating; CPU is the median (default 3)
 #   --skip-calibrate  keep OUT/cal and the residual-log runs and diagnoses already there
+#   --summary-only  only rewrite OUT/summary.md from the runs already in OUT
 # The harness is built in OUT/peer_build with `nice -n 10 make -j1` under `flock /work/.build.lock` when that file
 # exists. Every run is `nice -n 10`, one at a time. Writes OUT/summary.md.
 set -euo pipefail
@@ -24,12 +25,14 @@ BIN=$REPO/build/ovton
 OUT=/tmp/phone37
 REPEATS=3
 SKIP_CAL=0
+SUMMARY_ONLY=0
 while [ $# -gt 0 ]; do
   case "$1" in
   --bin) BIN=$(realpath "$2"); shift 2 ;;
   --out) OUT=$2; shift 2 ;;
   --repeats) REPEATS=$2; shift 2 ;;
   --skip-calibrate) SKIP_CAL=1; shift ;;
+  --summary-only) SUMMARY_ONLY=1; shift ;;
   -h | --help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
   *) echo "unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
@@ -46,6 +49,7 @@ N() { nice -n 10 "$@"; }
 T() { local t=$1; shift; nice -n 10 /usr/bin/time -f "%e %U %S" -o "$t" "$@"; } # wall user sys
 
 # ---- 1. calibrate, run with residual logs, diagnose
+if [ "$SUMMARY_ONLY" = 1 ]; then SKIP_CAL=1; fi
 if [ "$SKIP_CAL" = 0 ]; then
   rm -rf cal
   T calibrate.time "$BIN" calibrate -d "$DATA" --out cal > calibrate.log 2>&1
@@ -74,6 +78,8 @@ PY
   fi
 fi
 
+TD_CAL=$(sed -n 's/^ *timeshift_cam_imu: *//p' cal/kalibr/camchain-imucam.yaml)
+if [ "$SUMMARY_ONLY" = 0 ]; then
 # ---- 2. the harness (our copy, scripts/peer), outside the repository
 OV_CXX_FLAGS=$(sed -n 's/^CMAKE_CXX_FLAGS:STRING=//p' "$OV_ROOT/build/CMakeCache.txt" 2>/dev/null || true)
 cmake -S "$REPO/scripts/peer" -B "$OUT/peer_build" -DOV_ROOT="$OV_ROOT" -DCMAKE_BUILD_TYPE=Release \
@@ -82,7 +88,6 @@ LOCK=()
 [ -e /work/.build.lock ] && LOCK=(flock /work/.build.lock)
 "${LOCK[@]}" nice -n 10 make -C "$OUT/peer_build" -j1 ov_euroc_harness > peer_make.log
 H=$OUT/peer_build/ov_euroc_harness
-TD_CAL=$(sed -n 's/^ *timeshift_cam_imu: *//p' cal/kalibr/camchain-imucam.yaml)
 
 # ---- 3. timed runs, alternating: ovton (the peer script's flags) and OpenVINS's variants
 #   default = OpenVINS's own EuRoC choice (50 SLAM features, online extrinsics and intrinsics: the closest to
@@ -123,6 +128,8 @@ for est in runs/ovton_sr_r1.csv runs/ov_*_r1.est.csv; do
   [ "$est" = "$REF_B" ] && continue
   "$BIN" eval --est "$est" --gt "$REF_B" --align posyaw --json "$est.vs_ovdef.posyaw.json" > /dev/null 2>&1 || true
 done
+
+fi # SUMMARY_ONLY
 
 # ---- 5. the table
 python3 - "$OUT" "$REPEATS" "$TD_CAL" "$(git -C "$REPO" rev-parse --short HEAD)" "$BIN" \
@@ -223,6 +230,36 @@ for v in ("default_tdcal", "default_td0", "noslam_tdcal", "noslam_td0"):
         m = [l[l.find("init=ov:"):].strip() for l in open(f) if "init=ov:" in l]
         if m:
             L.append(f"- OpenVINS {v}: {m[0]}")
+# heading: OpenVINS default against ovton sr, yaw difference at the nearest ovton row (unwrapped), and gyro biases
+def rows_q(f):
+    R = list(csv.DictReader(open(f)))
+    return [(int(r["timestamp_ns"]), [float(r[k]) for k in ("qw", "qx", "qy", "qz")],
+             [float(r[k]) for k in ("bgx", "bgy", "bgz")]) for r in R]
+def yaw(q):
+    w, x, y, z = q
+    return math.degrees(math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+A, B = "runs/ovton_sr_r1.csv", "runs/ov_default_tdcal_r1.est.csv"
+if os.path.exists(A) and os.path.exists(B):
+    import bisect
+    a, b = rows_q(A), rows_q(B)
+    ta = [r[0] for r in a]
+    ts, ds, prev = [], [], None
+    for t, q, _ in b:
+        i = min(bisect.bisect_left(ta, t), len(a) - 1)
+        d = yaw(a[i][1]) - yaw(q)
+        if prev is not None:
+            d += 360 * round((prev - d) / 360)
+        prev = d
+        ts.append((t - b[0][0]) * 1e-9); ds.append(d)
+    n = len(ts); mt, md = sum(ts) / n, sum(ds) / n
+    slope = sum((x - mt) * (y - md) for x, y in zip(ts, ds)) / sum((x - mt) ** 2 for x in ts)
+    L.append(f"- heading, ovton sr − OpenVINS default (yaw about the world z, unaligned frames): {ds[0]:.1f} deg at "
+             f"its first row, {ds[-1]:.1f} deg at its last ({ts[-1]:.1f} s later), least-squares slope "
+             f"{slope:.3f} deg/s")
+    for name, r in (("ovton sr", a), ("OpenVINS default", b)):
+        mid, end = r[len(r) // 2][2], r[-1][2]
+        L.append(f"- gyro bias {name}: mid-run ({mid[0]:.4f}, {mid[1]:.4f}, {mid[2]:.4f}), end ({end[0]:.4f}, "
+                 f"{end[1]:.4f}, {end[2]:.4f}) rad/s")
 print("\n".join(L))
 PY
 cat summary.md
