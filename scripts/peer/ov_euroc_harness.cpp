@@ -4,10 +4,19 @@
 // (use_stereo=true, max_cameras=2, cam1's intrinsics, distortion and T_BS from mav0/cam1/sensor.yaml) and feeds the
 // two images of each stamp together (ov_core::CameraData, sensor_ids {0, 1}). Built outside the tree against OV_ROOT
 // (scripts/peer/CMakeLists.txt); no OpenVINS code is part of this file.
+// A folder without ground truth (issue 37's phone recording, written by `ovton calibrate --out`) needs three keys
+// that leave the defaults unchanged: init=ov, camchain=FILE, td0=S.
 // Usage: ov_euroc_harness DATASET OUT_PREFIX [key=value ...]
 //   keys: max_slam (0) num_pts (200) max_clones (11) sigma_px (1) calib_ext (0) calib_int (0) threads (1)
 //   fast_threshold (20)
 //         stereo (0)
+//         init (gt): gt = OpenVINS's state from mav0/state_groundtruth_estimate0 at the first image;
+//                    ov = OpenVINS's own initialiser (init_dyn_use=true: dynamic when moving, static on a jerk
+//                    after stillness); rows are written from the first frame after it succeeded
+//         camchain (none): a Kalibr camchain-imucam.yaml (T_cam_imu or T_imu_cam, intrinsics, radtan distortion,
+//                    timeshift_cam_imu; e.g. ovton calibrate's OUT/kalibr/camchain-imucam.yaml) given to OpenVINS
+//                    as its kalibr_imucam_chain.yaml instead of the one written from mav0/cam0/sensor.yaml (mono)
+//         td0 (none): OpenVINS's initial calib_dt [s] (timeshift_cam_imu; default: the camchain's, else 0)
 // Writes OUT_PREFIX.csv  : timestamp_ns(IMU
 // clock),px,py,pz,qw,qx,qy,qz,vx,vy,vz,bgx,bgy,bgz,bax,bay,baz,td_s,td_sigma_s,
 //                          t_cam_ns,feed_ms,n_clones,n_slam,n_msckf_used,n_tracked
@@ -81,7 +90,8 @@ int main(int argc, char **argv) {
   std::string ds = argv[1], out = argv[2];
   std::map<std::string, std::string> kv = {{"max_slam", "0"}, {"num_pts", "200"},       {"max_clones", "11"},
                                            {"sigma_px", "1"}, {"calib_ext", "0"},       {"calib_int", "0"},
-                                           {"threads", "1"},  {"fast_threshold", "20"}, {"stereo", "0"}};
+                                           {"threads", "1"},  {"fast_threshold", "20"}, {"stereo", "0"},
+                                           {"init", "gt"},    {"camchain", ""},         {"td0", ""}};
   for (int i = 3; i < argc; i++) {
     std::string a = argv[i];
     auto p = a.find('=');
@@ -90,6 +100,10 @@ int main(int argc, char **argv) {
       return 2;
     }
     kv[a.substr(0, p)] = a.substr(p + 1);
+  }
+  if (kv["init"] != "gt" && kv["init"] != "ov") {
+    std::cerr << "init=gt or init=ov\n";
+    return 2;
   }
   const std::string mav0 = ds + "/mav0/";
 
@@ -192,7 +206,8 @@ int main(int argc, char **argv) {
              {"calib_cam_timeoffset", "true"},
              {"max_clones", kv["max_clones"]},
              {"max_slam", kv["max_slam"]},
-             {"init_dyn_use", "false"},
+             {"init_dyn_use", kv["init"] == "ov" ? "true" : "false"},
+             {"init_dyn_mle_max_threads", kv["threads"]},
              {"try_zupt", "false"},
              {"use_klt", "true"},
              {"num_pts", kv["num_pts"]},
@@ -227,6 +242,50 @@ int main(int argc, char **argv) {
     if (stereo)
       cam_block(1, T_I_C1, dist1, intr1, res1, "[0]");
   }
+  if (!kv["camchain"].empty() || !kv["td0"].empty()) {
+    // camchain=FILE: that file's text instead (a "%YAML:1.0" line put first when it lacks one); td0=S: its
+    // timeshift_cam_imu replaced (OpenVINS reads cam0's as calib_camimu_dt, t_imu = t_cam + calib_dt)
+    if (!kv["camchain"].empty() && stereo) {
+      std::cerr << "camchain= is for a monocular run\n";
+      return 2;
+    }
+    const std::string src = kv["camchain"].empty() ? cfg + "/kalibr_imucam_chain.yaml" : kv["camchain"];
+    if (!std::ifstream(src)) {
+      std::cerr << "cannot read " << src << "\n";
+      return 2;
+    }
+    std::string text = yaml_text(src);
+    // A block sequence at its key's indentation ("  T_cam_imu:" then "  - [...]": valid YAML, Kalibr's and ovton
+    // calibrate's layout) is refused by OpenCV's FileStorage ("Incorrect indentation"): indent such items by two.
+    {
+      std::istringstream in(text);
+      std::string line, fixed;
+      size_t key_indent = std::string::npos; // indentation of the last "key:" line without a value
+      while (std::getline(in, line)) {
+        const size_t ind = line.find_first_not_of(' ');
+        if (ind != std::string::npos && line.compare(ind, 2, "- ") == 0) {
+          if (key_indent != std::string::npos && ind <= key_indent)
+            line.insert(0, key_indent + 2 - ind, ' ');
+        } else if (ind != std::string::npos && line.back() == ':') {
+          key_indent = ind;
+        } else if (ind != std::string::npos) {
+          key_indent = std::string::npos;
+        }
+        fixed += line + "\n";
+      }
+      text = fixed;
+    }
+    if (!kv["td0"].empty()) {
+      const size_t k = text.find("timeshift_cam_imu:");
+      if (k == std::string::npos) {
+        std::cerr << "no timeshift_cam_imu in the camchain\n";
+        return 2;
+      }
+      const size_t e = text.find('\n', k);
+      text.replace(k, (e == std::string::npos ? text.size() : e) - k, "timeshift_cam_imu: " + kv["td0"]);
+    }
+    std::ofstream(cfg + "/kalibr_imucam_chain.yaml") << text;
+  }
   auto parser = std::make_shared<ov_core::YamlParser>(cfg + "/estimator_config.yaml");
   std::string verbosity = "WARNING";
   parser->parse_config("verbosity", verbosity);
@@ -251,13 +310,17 @@ int main(int argc, char **argv) {
   int n_pairs = 0;
   // ground truth at the first image (camera clock = IMU clock under the initial guess t_d = 0), linear interpolation
   const int64_t t0 = imgs.front().t;
-  Eigen::Matrix<double, 17, 1> imustate;
-  if (!peer_io::ground_truth_state(mav0, t0, imustate)) {
-    std::cerr << "no ground truth at first image\n";
-    return 2;
+  const bool own_init = kv["init"] == "ov";
+  if (!own_init) {
+    Eigen::Matrix<double, 17, 1> imustate;
+    if (!peer_io::ground_truth_state(mav0, t0, imustate)) {
+      std::cerr << "no ground truth at first image (init=ov: OpenVINS's own initialiser)\n";
+      return 2;
+    }
+    sys->initialize_with_gt(imustate);
+    sys->set_num_features(params.num_pts / params.state_options.num_cameras);
   }
-  sys->initialize_with_gt(imustate);
-  sys->set_num_features(params.num_pts / params.state_options.num_cameras);
+  int n_before_init = 0; // init=ov: frames fed before OpenVINS's initialiser succeeded (no rows)
 
   // ---- replay in time order (images queued until an IMU sample past t_cam + calib_dt exists, as the OpenVINS ROS node
   // does)
@@ -314,6 +377,11 @@ int main(int argc, char **argv) {
     feed_total += f;
     feed_ms_all.push_back(f);
     n_frames++;
+    if (own_init && !sys->initialized()) {
+      n_before_init++;
+      ci++;
+      continue;
+    }
     state = sys->get_state();
     const double td = state->_calib_dt_CAMtoIMU->value()(0);
     std::vector<std::shared_ptr<ov_type::Type>> vars = {state->_calib_dt_CAMtoIMU};
@@ -337,6 +405,8 @@ int main(int argc, char **argv) {
   std::sort(feed_ms_all.begin(), feed_ms_all.end());
   if (stereo)
     std::cout << "stereo pairs " << n_pairs << " of " << n_frames << " frames\n";
+  if (own_init)
+    std::cout << "init=ov: " << n_before_init << " frames before OpenVINS's initialiser succeeded\n";
   std::ofstream t(out + "_timing.txt");
   snprintf(buf, sizeof(buf),
            "frames %d\nfeed_measurement_camera ms/frame mean %.3f median %.3f p95 %.3f\nimage load ms/frame %.3f\n"
