@@ -126,11 +126,13 @@ def main():
     yn = lambda b: "pass" if b else "**fail**"
     print("calibrate (before): error against the truth, in brackets |error|/σ (rotation: the largest axis)")
     print()
-    print("| case | planted r [deg] | focal | t_d0 / t_r [ms] | rot [deg] | focal [%] | t_d [ms] | t_r [ms] | ≤ 3σ |")
+    print("| case | planted r [deg] | focal | t_d0 / t_r [ms] "
+          "| rot [deg] | focal [%] | t_d [ms] | t_r [ms] | ≤ 3σ |")
     print("|---|---|---|---|---|---|---|---|---|")
     for r in R:
         rv = ", ".join("%g" % round(x, 2) + "" for x in r["rot_deg"])
-        print("| %s | (%s) | %+.0f %% | %+.0f / %.0f | %.2f (%.1f) | %+.2f (%.1f) | %+.2f (%.1f) | %+.2f (%.1f) | %s |" % (
+        print("| %s | (%s) | %+.0f %% | %+.0f / %.0f "
+              "| %.2f (%.1f) | %+.2f (%.1f) | %+.2f (%.1f) | %+.2f (%.1f) | %s |" % (
             r["name"], rv, r["focal_pct"], r["td0_ms"], r["ro_ms"], r["b_rot"], r["b_rot_sig"], r["b_f"],
             r["b_f_sig"], r["b_td"], r["b_td_sig"], r["b_ro"], r["b_ro_sig"], yn(r["b_pass"])))
     print()
@@ -149,7 +151,8 @@ def main():
     n = len(R)
     a = [r for r in R if r["after"]]
     print()
-    print("calibrate within 3σ on all quantities: %d of %d;\nafter the filter: rotation ≤ 0.3° %d, focal ≤ 1 %% %d, "
+    print("calibrate within 3σ on all quantities: %d of %d;\n"
+          "after the filter: rotation ≤ 0.3° %d, focal ≤ 1 %% %d, "
           "t_d ≤ 1 ms %d, all three %d of %d" % (
               sum(r["b_pass"] for r in R), n, sum(r["a_pass_rot"] for r in a), sum(r["a_pass_f"] for r in a),
               sum(r["a_pass_td"] for r in a), sum(r["a_pass_rot"] and r["a_pass_f"] and r["a_pass_td"] for r in a), n))

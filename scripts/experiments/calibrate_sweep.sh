@@ -60,10 +60,12 @@ one() { # name rot focal td readout
   mkdir -p "$OUT/$name"
   echo "$name: rot $rot deg, focal $focal %, td0 $td ms, readout $ro ms" | tee "$OUT/$name/case.txt"
   nice -n 10 "$BIN" simulate -o "$sim" --duration-s 12 --td0-ms "$td" --focal-error-pct "$focal" \
-    --extrinsic-rot-deg "$rot" --readout-ms "$ro" --cam-yaml "$OUT/cam.yaml" --agility 1 -q >"$OUT/$name/simulate.log" 2>&1
+    --extrinsic-rot-deg "$rot" --readout-ms "$ro" --cam-yaml "$OUT/cam.yaml" --agility 1 -q \
+    >"$OUT/$name/simulate.log" 2>&1
   rm -f "$sim/mav0/cam0/sensor.yaml" "$sim/mav0/imu0/sensor.yaml"
   nice -n 10 "$BIN" calibrate -d "$sim" --out "$cal" >"$OUT/$name/calibrate.log" 2>&1 ||
     echo "calibrate exit $?" >>"$OUT/$name/case.txt"
+  mkdir -p "$cal/mav0" # (calibrate failed: the run below fails and says so)
   ln -s "$sim/mav0/state_groundtruth_estimate0" "$cal/mav0/state_groundtruth_estimate0"
   ln -s "$sim/mav0/td_truth" "$cal/mav0/td_truth"
   local rc=0
