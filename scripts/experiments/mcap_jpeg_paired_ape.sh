@@ -46,12 +46,12 @@ run_args() { # data -> ovton run's arguments
 pairing() { # data, Q: seed 1's JPEG file against its raw file
   local F
   F=$(folder "$1")
-  node "$TOOLS/write_mcap.mjs" --folder "$F" --out "$SCRATCH/p.mcap" --images raw --compression none --dither 1 \
-    >/dev/null
+  nice -n 10 node "$TOOLS/write_mcap.mjs" --folder "$F" --out "$SCRATCH/p.mcap" --images raw --compression none \
+    --dither 1 >/dev/null
   rm -rf "$SCRATCH/pj"
-  node "$TOOLS/write_mcap.mjs" --folder "$F" --out "$SCRATCH/pj.mcap" --images jpeg --jpeg-quality "$2" --dither 1 \
-    --dump-jpeg "$SCRATCH/pj" >/dev/null
-  echo "$1, seed 1, q$2: $(node scripts/experiments/mcap_jpeg_pairing.mjs "$TOOLS" "$F" "$SCRATCH/p.mcap" \
+  nice -n 10 node "$TOOLS/write_mcap.mjs" --folder "$F" --out "$SCRATCH/pj.mcap" --images jpeg --jpeg-quality "$2" \
+    --dither 1 --dump-jpeg "$SCRATCH/pj" >/dev/null
+  echo "$1, seed 1, q$2: $(nice -n 10 node scripts/experiments/mcap_jpeg_pairing.mjs "$TOOLS" "$F" "$SCRATCH/p.mcap" \
     "$SCRATCH/pj" "$2")" >> "$OUT/pairing.txt"
   rm -rf "$SCRATCH/pj" "$SCRATCH/p.mcap" "$SCRATCH/pj.mcap"
 }
@@ -62,10 +62,10 @@ arm() { # data, seed, arm (raw or qNN): write, replay, score; appends a row to r
   GT=$F/mav0/state_groundtruth_estimate0/data.csv
   t0=$(date +%s.%N)
   if [ "$a" = raw ]; then
-    node "$TOOLS/write_mcap.mjs" --folder "$F" --out "$SCRATCH/d.mcap" --images raw --dither "$k" >/dev/null
+    nice -n 10 node "$TOOLS/write_mcap.mjs" --folder "$F" --out "$SCRATCH/d.mcap" --images raw --dither "$k" >/dev/null
   else
-    node "$TOOLS/write_mcap.mjs" --folder "$F" --out "$SCRATCH/d.mcap" --images jpeg --jpeg-quality "${a#q}" \
-      --dither "$k" >/dev/null
+    nice -n 10 node "$TOOLS/write_mcap.mjs" --folder "$F" --out "$SCRATCH/d.mcap" --images jpeg \
+      --jpeg-quality "${a#q}" --dither "$k" >/dev/null
   fi
   # shellcheck disable=SC2046
   nice -n 10 "$BIN" $(run_args "$data") --dataset "$SCRATCH/d.mcap" --calib "$F" -o "$SCRATCH/d.csv" >/dev/null 2>&1
@@ -86,8 +86,8 @@ for k in $(seq 1 "$K_RENDER"); do arm render "$k" raw; arm render "$k" "q${QR[0]
 for q in "${QM[@]:1}"; do for k in $(seq 1 "$K_MOVING"); do arm moving "$k" "q$q"; done; done
 for q in "${QR[@]:1}"; do for k in $(seq 1 "$K_RENDER"); do arm render "$k" "q$q"; done; done
 {
-  echo "Made by \`scripts/experiments/mcap_jpeg_paired_ape.sh $OUT $K_MOVING $K_RENDER \"$QS_MOVING\" \"$QS_RENDER\"\`" \
-    "($(date -u +%F), script at $(git rev-parse --short HEAD), binary $BIN)."
+  echo "Made by \`scripts/experiments/mcap_jpeg_paired_ape.sh $OUT $K_MOVING $K_RENDER \"$QS_MOVING\"" \
+    "\"$QS_RENDER\"\` ($(date -u +%F), script at $(git rev-parse --short HEAD), binary $BIN)."
   echo
   python3 scripts/experiments/mcap_jpeg_paired_stats.py "$OUT/runs.csv"
   echo
