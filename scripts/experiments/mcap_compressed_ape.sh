@@ -7,17 +7,21 @@
 #   - how far the APE moves with any change of the pixels: K runs each of raw and JPEG images dithered by +-1 grey
 #     level (seeded, write_mcap.mjs --dither), their mean and spread.
 # Writes OUT/summary.md. Needs node with scripts/mcap_tools' npm packages (npm ci --prefix scripts/mcap_tools),
-# python3 and ../shared/data. Usage: scripts/experiments/mcap_compressed_ape.sh [OUT] [K] [Q]  (~25 min, 2 busy cores)
+# python3 and ../shared/data. Usage: [OVTON_BIN=build/ovton] scripts/experiments/mcap_compressed_ape.sh [OUT] [K] [Q]
+# (~25 min, 2 busy cores). The paired version with enough seeds to decide the 5 % bar: mcap_jpeg_paired_ape.sh.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 OUT=${1:-results/mcap_compressed_ape}
 K=${2:-6}
 Q=${3:-95}
-BIN=$PWD/build/ovton
+BIN=${OVTON_BIN:-$PWD/build/ovton}
 TOOLS=$PWD/scripts/mcap_tools
 SCRATCH=$(mktemp -d /tmp/ovton_mcap_ape.XXXXXX)
 trap 'rm -rf "$SCRATCH"' EXIT
-[ -x "$BIN" ] || scripts/build.sh
+if [ ! -x "$BIN" ]; then
+  [ -z "${OVTON_BIN:-}" ] || { echo "OVTON_BIN=$OVTON_BIN is not executable" >&2; exit 1; }
+  scripts/build.sh
+fi
 [ -d "$TOOLS/node_modules/@mcap/core" ] || npm ci --prefix "$TOOLS" --no-audit --no-fund
 mkdir -p "$OUT"
 SAMPLE="$SCRATCH/sample"
