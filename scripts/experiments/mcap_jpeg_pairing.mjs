@@ -10,6 +10,7 @@
 import fs from "node:fs";
 import path from "node:path";
 import { createRequire } from "node:module";
+import { FileReadable } from "../mcap_tools/file_readable.mjs";
 
 const [tools, folder, rawFile, jpegDir, q] = process.argv.slice(2);
 const require = createRequire(path.resolve(tools, "package.json"));
@@ -18,21 +19,6 @@ const { parse } = require("@foxglove/rosmsg");
 const { MessageReader } = require("@foxglove/rosmsg2-serialization");
 const jpeg = require("jpeg-js");
 const { PNG } = require("pngjs");
-
-class FileReadable {
-  constructor(file) {
-    this.fd = fs.openSync(file, "r");
-    this.bytes = BigInt(fs.fstatSync(this.fd).size);
-  }
-  async size() {
-    return this.bytes;
-  }
-  async read(offset, length) {
-    const out = new Uint8Array(Number(length));
-    fs.readSync(this.fd, out, 0, out.length, Number(offset));
-    return out;
-  }
-}
 
 const mav0 = fs.existsSync(path.join(folder, "mav0")) ? path.join(folder, "mav0") : folder;
 const names = new Map(

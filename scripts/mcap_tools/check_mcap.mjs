@@ -14,21 +14,7 @@ import { MessageReader } from "@foxglove/rosmsg2-serialization";
 import zstd from "@foxglove/wasm-zstd";
 import lz4 from "@foxglove/wasm-lz4";
 import { crc32 } from "@foxglove/crc";
-
-class FileReadable {
-  constructor(file) {
-    this.fd = fs.openSync(file, "r");
-    this.bytes = BigInt(fs.fstatSync(this.fd).size);
-  }
-  async size() {
-    return this.bytes;
-  }
-  async read(offset, length) {
-    const out = new Uint8Array(Number(length));
-    fs.readSync(this.fd, out, 0, out.length, Number(offset));
-    return out;
-  }
-}
+import { FileReadable } from "./file_readable.mjs";
 
 function brief(v) {
   if (v instanceof Uint8Array || (ArrayBuffer.isView(v) && v.length > 16)) return `<${v.length} values>`;
