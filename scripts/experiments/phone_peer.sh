@@ -20,6 +20,8 @@
 # exists. Every run is `nice -n 10`, one at a time. Writes OUT/summary.md.
 set -euo pipefail
 REPO=$(cd "$(dirname "$0")/../.." && pwd)
+# shellcheck source=scripts/peer/peer_common.sh
+. "$REPO/scripts/peer/peer_common.sh"
 DATA=$REPO/../shared/data/android_phone_walk
 BIN=$REPO/build/ovton
 OUT=/tmp/phone37
@@ -81,22 +83,19 @@ fi
 TD_CAL=$(sed -n 's/^ *timeshift_cam_imu: *//p' cal/kalibr/camchain-imucam.yaml)
 if [ "$SUMMARY_ONLY" = 0 ]; then
 # ---- 2. the harness (our copy, scripts/peer), outside the repository
-OV_CXX_FLAGS=$(sed -n 's/^CMAKE_CXX_FLAGS:STRING=//p' "$OV_ROOT/build/CMakeCache.txt" 2>/dev/null || true)
-cmake -S "$REPO/scripts/peer" -B "$OUT/peer_build" -DOV_ROOT="$OV_ROOT" -DCMAKE_BUILD_TYPE=Release \
-  -DPython3_EXECUTABLE=/usr/bin/python3 -DCMAKE_CXX_FLAGS="$OV_CXX_FLAGS" > peer_cmake.log
 LOCK=()
 [ -e /work/.build.lock ] && LOCK=(flock /work/.build.lock)
-"${LOCK[@]}" nice -n 10 make -C "$OUT/peer_build" -j1 ov_euroc_harness > peer_make.log
+build_peer_harness "$OV_ROOT" "$OUT/peer_build" 1 "${LOCK[@]}"
 H=$OUT/peer_build/ov_euroc_harness
 
 # ---- 3. timed runs, alternating: ovton (the peer script's flags) and OpenVINS's variants
 #   default = OpenVINS's own EuRoC choice (50 SLAM features, online extrinsics and intrinsics: the closest to
 #   ovton's written config, which also estimates intrinsics, extrinsics and readout); noslam = the harness default
 declare -A OVARGS=(
-  [default_tdcal]="max_slam=50 calib_ext=1 calib_int=1"
-  [default_td0]="max_slam=50 calib_ext=1 calib_int=1 td0=0"
-  [noslam_tdcal]=""
-  [noslam_td0]="td0=0"
+  [default_tdcal]="$(ov_args default)"
+  [default_td0]="$(ov_args default) td0=0"
+  [noslam_tdcal]="$(ov_args noslam)"
+  [noslam_td0]="$(ov_args noslam) td0=0"
 )
 OVV=(default_tdcal default_td0 noslam_tdcal noslam_td0)
 mkdir -p runs

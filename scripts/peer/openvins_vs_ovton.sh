@@ -43,6 +43,8 @@
 # + update. CPU [s] is the whole process (user + sys), PNG decode and CSV parsing included.
 set -euo pipefail
 REPO=$(cd "$(dirname "$0")/../.." && pwd)
+# shellcheck source=scripts/peer/peer_common.sh
+. "$REPO/scripts/peer/peer_common.sh"
 HARNESS=$REPO/../shared/peer/openvins_harness
 BUILD=/tmp/ovton_peer_build
 OUT=/tmp/ovton_peer
@@ -92,19 +94,14 @@ OUT=$(realpath "$OUT")
 JOBS=${JOBS:-2}
 
 # ---- build OpenVINS's library (if missing) and the harness, outside the repository
-# OpenVINS's CMake finds Debian's ament_cmake, whose templates need the system Python's ament_package (a pyenv or
-# venv python3 first on PATH lacks it). The harness takes the library's own CXX flags: with Eigen in its interface,
-# a harness built for another instruction set than the library crashes (e.g. a -march=native library).
-PY_ARGS=()
-[ -x /usr/bin/python3 ] && PY_ARGS=(-DPython3_EXECUTABLE=/usr/bin/python3)
+# (PY_ARGS and the harness's CXX flags: scripts/peer/peer_common.sh.)
 if [ ! -f "$OV_ROOT/build/libov_msckf_lib.so" ]; then
   echo "building OpenVINS ov_msckf_lib in $OV_ROOT/build (tens of minutes)" >&2
   cmake -S "$OV_ROOT/ov_msckf" -B "$OV_ROOT/build" -DENABLE_ROS=OFF -DCMAKE_BUILD_TYPE=Release "${PY_ARGS[@]}" >/dev/null
   nice -n 10 make -C "$OV_ROOT/build" -j"$JOBS" ov_msckf_lib >/dev/null
 fi
-OV_CXX_FLAGS=$(sed -n 's/^CMAKE_CXX_FLAGS:STRING=//p' "$OV_ROOT/build/CMakeCache.txt" 2>/dev/null || true)
 cmake -S "$HARNESS" -B "$BUILD/harness" -DOV_ROOT="$OV_ROOT" -DCMAKE_BUILD_TYPE=Release "${PY_ARGS[@]}" \
-  -DCMAKE_CXX_FLAGS="$OV_CXX_FLAGS" >/dev/null
+  -DCMAKE_CXX_FLAGS="$(ov_cxx_flags "$OV_ROOT")" >/dev/null
 nice -n 10 make -C "$BUILD/harness" -j"$JOBS" >/dev/null
 HB=$BUILD/harness/ov_euroc_harness
 if [ "$EXCHANGE" = 1 ]; then
@@ -113,22 +110,10 @@ if [ "$EXCHANGE" = 1 ]; then
 fi
 XB=$BUILD/exchange/ov_track_exchange
 if [ "$STEREO" = 1 ]; then # our harness copy, which adds stereo=1 (its mono is the shared harness's)
-  cmake -S "$REPO/scripts/peer" -B "$BUILD/peer" -DOV_ROOT="$OV_ROOT" -DCMAKE_BUILD_TYPE=Release \
-    -DCMAKE_CXX_FLAGS="$OV_CXX_FLAGS" >/dev/null
-  nice -n 10 make -C "$BUILD/peer" -j"$JOBS" ov_euroc_harness >/dev/null
+  build_peer_harness "$OV_ROOT" "$BUILD/peer" "$JOBS"
 fi
 HS=$BUILD/peer/ov_euroc_harness
 has_cam1() { [ -f "$1/mav0/cam1/data.csv" ] && [ -f "$1/mav0/cam1/sensor.yaml" ]; }
-
-ov_args() {
-  if [[ $1 == *@pts* ]]; then local n=${1##*@pts}; echo -n "num_pts=${n%%@*} "; fi
-  case "${1%%@*}" in
-  noslam) echo "" ;;
-  default) echo "max_slam=50 calib_ext=1 calib_int=1" ;;
-  matched) echo "max_clones=20 sigma_px=0.5" ;;
-  *) echo "unknown OpenVINS variant $1" >&2; exit 2 ;;
-  esac
-}
 
 RES=$OUT/results.csv
 mkdir -p "$OUT"
