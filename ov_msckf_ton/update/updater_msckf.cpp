@@ -424,7 +424,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
       accepted_.emplace_back();
     Accepted &a = accepted_[n_acc];
     a.cols = lin_.cols;
-    a.repeated_cols = seen_by_further_camera(lin_);
+    const bool rig = seen_by_further_camera(lin_); // its rows repeat clone columns (merged once it is accepted)
     a.H = lin_.H_x;
     a.r = lin_.r;
     // Projected copies: lin_ keeps the pre-projection residuals that the log reports. With correlated track errors
@@ -459,7 +459,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
     if (opt_.covariance_track_correlation != 0.0) {
       // The projected rows' extra noise under the reported covariance's track model: σ²(B Bᵀ − I); a rig's feature
       // by its image times and cameras (rig_track_correlation).
-      if (a.repeated_cols) {
+      if (rig) {
         a.dR =
             sigma2 * projected_rig_track_covariance(qr_, rig_track_correlation(lin_, opt_.covariance_track_correlation,
                                                                                opt_.covariance_camera_correlation))
@@ -472,7 +472,7 @@ UpdateStats UpdaterMSCKF::update(State &state, const std::vector<const ovton::co
     }
     // A rig's clone columns once each: the stacked system and G below then work on the feature's distinct columns
     // (half as many for a stereo feature; G's products were the reported covariance's dearest step).
-    if (a.repeated_cols)
+    if (rig)
       merge_repeated_columns(a.cols, a.H);
     ++n_acc;
     ++st.features_used;

@@ -228,7 +228,6 @@ private:
   FeatureQR qr_;                                       ///< the feature's H_f QR, kept to reuse its storage
   struct Accepted {
     std::vector<int> cols;
-    bool repeated_cols = false; ///< a rig's observations: some clone's columns appear twice
     Eigen::MatrixXd H;
     Eigen::VectorXd r;
     Eigen::MatrixXd dR; ///< the projected rows' extra noise for the reported covariance (covariance_track_correlation)

@@ -255,8 +255,8 @@ int main(int argc, char **argv) {
       return 2;
     }
     std::string text = yaml_text(src);
-    // A block sequence at its key's indentation ("  T_cam_imu:" then "  - [...]": valid YAML, Kalibr's and ovton
-    // calibrate's layout) is refused by OpenCV's FileStorage ("Incorrect indentation"): indent such items by two.
+    // A block sequence at its key's indentation ("  T_cam_imu:" then "  - [...]": valid YAML, Kalibr's layout, and
+    // ovton's before 60d91f7) is refused by OpenCV's FileStorage ("Incorrect indentation"): indent such items by two.
     {
       std::istringstream in(text);
       std::string line, fixed;
