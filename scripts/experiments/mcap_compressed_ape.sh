@@ -14,15 +14,10 @@ cd "$(dirname "$0")/../.."
 OUT=${1:-results/mcap_compressed_ape}
 K=${2:-6}
 Q=${3:-95}
-BIN=${OVTON_BIN:-$PWD/build/ovton}
-TOOLS=$PWD/scripts/mcap_tools
 SCRATCH=$(mktemp -d /tmp/ovton_mcap_ape.XXXXXX)
 trap 'rm -rf "$SCRATCH"' EXIT
-if [ ! -x "$BIN" ]; then
-  [ -z "${OVTON_BIN:-}" ] || { echo "OVTON_BIN=$OVTON_BIN is not executable" >&2; exit 1; }
-  scripts/build.sh
-fi
-[ -d "$TOOLS/node_modules/@mcap/core" ] || npm ci --prefix "$TOOLS" --no-audit --no-fund
+# shellcheck source=scripts/experiments/mcap_experiment_setup.sh
+. scripts/experiments/mcap_experiment_setup.sh
 mkdir -p "$OUT"
 SAMPLE="$SCRATCH/sample"
 nice -n 10 "$BIN" simulate --builtin --duration-s 20 --td0-ms 10 --seed 1 --out "$SAMPLE" -q >/dev/null

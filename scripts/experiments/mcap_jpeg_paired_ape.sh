@@ -21,15 +21,10 @@ K_MOVING=${2:-80}
 K_RENDER=${3:-40}
 QS_MOVING=${4:-95 80}
 QS_RENDER=${5:-95}
-BIN=${OVTON_BIN:-$PWD/build/ovton}
-TOOLS=$PWD/scripts/mcap_tools
 SCRATCH=$(mktemp -d /tmp/ovton_jpeg_paired.XXXXXX)
 trap 'rm -rf "$SCRATCH"' EXIT
-if [ ! -x "$BIN" ]; then
-  [ -z "${OVTON_BIN:-}" ] || { echo "OVTON_BIN=$OVTON_BIN is not executable" >&2; exit 1; }
-  scripts/build.sh
-fi
-[ -d "$TOOLS/node_modules/@mcap/core" ] || npm ci --prefix "$TOOLS" --no-audit --no-fund
+# shellcheck source=scripts/experiments/mcap_experiment_setup.sh
+. scripts/experiments/mcap_experiment_setup.sh
 mkdir -p "$OUT"
 [ -f "$OUT/runs.csv" ] || echo "data,seed,arm,ape_m,wall_s" > "$OUT/runs.csv"
 SAMPLE="$SCRATCH/sample"
